@@ -1,0 +1,49 @@
+//! Number formats and limits of the kernel, in one place.
+//!
+//! Every range check the kernel makes at set-up comes from these constants,
+//! and every overflow argument in the per-step loop rests on them. The README
+//! has a table of them.
+
+/// Fractional bits of the per-step fixed-point values: the minor coordinate,
+/// the ray height and their increments are `I16F16` (range ±32768, step
+/// 1/65536 voxel).
+pub const COORD_FRAC_BITS: u32 = 16;
+
+/// Fractional bits of a stored height: heights are unsigned U12.4 in a `u16`
+/// (0 to 4095.9375 voxels in steps of 1/16).
+pub const HEIGHT_FRAC_BITS: u32 = 4;
+
+/// Bits of a subvoxel weight: the fraction of the minor coordinate, taken by
+/// shift and mask, in 1/256 of a voxel.
+pub const WEIGHT_BITS: u32 = 8;
+
+/// Largest map side in voxels. The minor coordinate must stay inside
+/// `I16F16`, and a voxel index must fit a 32-bit `usize`.
+pub const MAX_MAP_SIDE: u32 = 32_767;
+
+/// Largest |x| and |y| of the eye, in voxels (the eye may be outside the map).
+pub const MAX_EYE_COORD: f32 = 32_000.0;
+
+/// Largest |z| of the eye, in voxels. With [`MAX_RAY_SLOPE`] and the largest
+/// height this keeps every ray height inside `I16F16`.
+pub const MAX_EYE_HEIGHT: f32 = 16_000.0;
+
+/// Steepest ray slope, in height units per major-axis step. Steeper rays
+/// (within 0.007° of vertical) are clamped to it; they hit within two steps.
+pub const MAX_RAY_SLOPE: i32 = 8_192;
+
+/// Largest image side in pixels.
+pub const MAX_IMAGE_SIDE: u32 = 8_192;
+
+/// Narrowest and widest horizontal field of view, in degrees.
+pub const HFOV_RANGE_DEG: (f32, f32) = (1.0, 160.0);
+
+/// Largest vertical half-angle tangent (`tan(hfov/2) · H / W`). Bounds the ray
+/// direction vectors so their fixed-point forms cannot overflow.
+pub const MAX_VERTICAL_TANGENT: f32 = 64.0;
+
+/// Pitch range in degrees: −89 (looking up) to +90 (straight down).
+pub const PITCH_RANGE_DEG: (f32, f32) = (-89.0, 90.0);
+
+/// Default sky color of the view contract.
+pub const DEFAULT_SKY: crate::Rgb = [135, 185, 235];

@@ -1,0 +1,47 @@
+//! # terracast
+//!
+//! A `no_std`, fixed-point, allocation-free terrain flythrough kernel: the
+//! discrete ray caster of Cohen-Or et al. (1996), with the accuracy
+//! refinements of Qu et al. (1998).
+//!
+//! Data flows one way: **terrain → view → columns → sink**.
+//!
+//! ```
+//! use terracast::{render, Camera, CountingProbe, Framebuffer, RenderOptions, Terrain, View};
+//!
+//! // A 4 x 4 map rising toward +x, every voxel green.
+//! let heights: [u16; 16] = core::array::from_fn(|i| (i % 4) as u16 * 16);
+//! let colors = [[0, 200, 0]; 16];
+//! let terrain = Terrain::new(4, 4, &heights, &colors)?;
+//!
+//! let camera = Camera { eye: [-2.0, 1.5, 5.0], pitch_deg: 30.0, ..Camera::default() };
+//! let view = View::new(&camera, 8, 6)?;
+//! let mut pixels = [[0u8; 3]; 8 * 6];
+//! let mut frame = Framebuffer::new(&mut pixels, 8, 6)?;
+//! let mut probe = CountingProbe::default();
+//! render(&terrain, &view, &RenderOptions::default(), &mut frame, &mut probe);
+//!
+//! assert_eq!(pixels[8 * 5 + 4], [0, 200, 0]); // bottom middle sees the ground
+//! assert_eq!(pixels[4], [135, 185, 235]);     // top middle sees sky
+//! assert_eq!(probe.rays, 48);
+//! # Ok::<(), Box<dyn core::error::Error>>(())
+//! ```
+#![cfg_attr(not(test), no_std)]
+#![deny(missing_docs, unsafe_code, missing_debug_implementations)]
+#![deny(rustdoc::broken_intra_doc_links)]
+
+pub mod config;
+mod column;
+mod probe;
+mod sink;
+mod terrain;
+mod view;
+
+/// An 8-bit RGB color.
+pub type Rgb = [u8; 3];
+
+pub use column::{render, render_column, RenderOptions};
+pub use probe::{CountingProbe, NoProbe, Probe};
+pub use sink::{Framebuffer, FramebufferError, Sample, Sink};
+pub use terrain::{Terrain, TerrainError};
+pub use view::{Camera, View, ViewError};

@@ -1,0 +1,125 @@
+//! Where finished pixels go.
+
+use crate::Rgb;
+use core::fmt;
+
+/// What a ray saw: a color and how far away along the ray's major axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sample {
+    /// Pixel color.
+    pub color: Rgb,
+    /// Distance from the eye to the hit, measured along the ray's major axis
+    /// (x or y, whichever the ray moves along faster), in U16.16 voxels;
+    /// [`Sample::SKY`] when the ray saw sky. Multiply by `|d| / |d_major|`
+    /// for the Euclidean distance.
+    pub distance: u32,
+}
+
+impl Sample {
+    /// The distance of a ray that saw sky.
+    pub const SKY: u32 = u32::MAX;
+
+    /// Whether the ray saw sky.
+    pub fn is_sky(&self) -> bool {
+        self.distance == Self::SKY
+    }
+}
+
+/// Receives pixels column by column, each column bottom to top.
+pub trait Sink {
+    /// Pixel `(x, y)` (y = 0 at the top) is finished. Out-of-range pixels are
+    /// the sink's to discard; they must never panic.
+    fn put(&mut self, x: u32, y: u32, sample: Sample);
+}
+
+/// A caller-provided framebuffer: a color per pixel, optionally a distance
+/// per pixel, row-major with y = 0 at the top.
+#[derive(Debug)]
+pub struct Framebuffer<'a> {
+    colors: &'a mut [Rgb],
+    distances: Option<&'a mut [u32]>,
+    width: u32,
+    height: u32,
+}
+
+/// Why a framebuffer could not be made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FramebufferError {
+    /// A buffer is shorter than width × height.
+    TooSmall,
+}
+
+impl fmt::Display for FramebufferError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("framebuffer is smaller than width x height")
+    }
+}
+
+impl core::error::Error for FramebufferError {}
+
+impl<'a> Framebuffer<'a> {
+    /// A color-only framebuffer.
+    pub fn new(colors: &'a mut [Rgb], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        if colors.len() < width as usize * height as usize {
+            return Err(FramebufferError::TooSmall);
+        }
+        Ok(Self {
+            colors,
+            distances: None,
+            width,
+            height,
+        })
+    }
+
+    /// A framebuffer that also keeps each pixel's [`Sample::distance`].
+    pub fn with_distances(
+        colors: &'a mut [Rgb],
+        distances: &'a mut [u32],
+        width: u32,
+        height: u32,
+    ) -> Result<Self, FramebufferError> {
+        if distances.len() < width as usize * height as usize {
+            return Err(FramebufferError::TooSmall);
+        }
+        let mut fb = Self::new(colors, width, height)?;
+        fb.distances = Some(distances);
+        Ok(fb)
+    }
+}
+
+impl Sink for Framebuffer<'_> {
+    #[inline]
+    fn put(&mut self, x: u32, y: u32, sample: Sample) {
+        if x >= self.width || y >= self.height {
+            return;
+        }
+        let index = y as usize * self.width as usize + x as usize;
+        if let Some(pixel) = self.colors.get_mut(index) {
+            *pixel = sample.color;
+        }
+        if let Some(d) = self.distances.as_deref_mut().and_then(|d| d.get_mut(index)) {
+            *d = sample.distance;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn out_of_range_pixels_are_discarded() {
+        let mut colors = [[0u8; 3]; 6];
+        let mut fb = Framebuffer::new(&mut colors, 3, 2).unwrap();
+        let s = Sample { color: [9, 9, 9], distance: 5 };
+        fb.put(3, 0, s);
+        fb.put(0, 2, s);
+        fb.put(u32::MAX, u32::MAX, s);
+        fb.put(2, 1, s);
+        assert_eq!(colors, [[0; 3], [0; 3], [0; 3], [0; 3], [0; 3], [9, 9, 9]]);
+        assert_eq!(
+            Framebuffer::new(&mut [[0; 3]; 5], 3, 2).unwrap_err(),
+            FramebufferError::TooSmall
+        );
+    }
+}
