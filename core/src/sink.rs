@@ -13,6 +13,10 @@ pub struct Sample {
     /// [`Sample::SKY`] when the ray saw sky. Multiply by `|d| / |d_major|`
     /// for the Euclidean distance.
     pub distance: u32,
+    /// Height of the hit point, I16.16 voxels (0 for sky). With `distance`
+    /// it fixes the hit on the ray; for steep rays it is the better
+    /// conditioned of the two.
+    pub elevation: i32,
 }
 
 impl Sample {
@@ -111,7 +115,7 @@ mod tests {
     fn out_of_range_pixels_are_discarded() {
         let mut colors = [[0u8; 3]; 6];
         let mut fb = Framebuffer::new(&mut colors, 3, 2).unwrap();
-        let s = Sample { color: [9, 9, 9], distance: 5 };
+        let s = Sample { color: [9, 9, 9], distance: 5, elevation: 0 };
         fb.put(3, 0, s);
         fb.put(0, 2, s);
         fb.put(u32::MAX, u32::MAX, s);

@@ -1,1 +1,18 @@
-pub fn _x(){}
+//! # terracast-sim
+//!
+//! The host side of terracast: loads real terrain or generates a scene,
+//! runs the `no_std` kernel on the host, renders the exact reference that
+//! accuracy is measured against, and provides the `terracast-sim` command.
+#![deny(missing_docs, unsafe_code)]
+
+pub mod camera;
+pub mod cli;
+pub mod error;
+pub mod frame;
+pub mod kernel;
+pub mod metrics;
+pub mod output;
+pub mod reference;
+pub mod scene;
+
+pub use error::{Error, Result};

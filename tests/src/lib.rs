@@ -1,1 +1,57 @@
+//! Shared helpers of the terracast integration tests: where the real data
+//! lives, loading a Comanche pair, and rendering kernel and reference views.
 
+use std::path::PathBuf;
+use terracast::{Camera, RenderOptions};
+use terracast_sim::frame::{Frame, RenderStats};
+use terracast_sim::kernel::render_kernel;
+use terracast_sim::reference::{Reference, ReferenceOptions};
+use terracast_sim::scene::{load_colors, load_heights, KernelScene, Scene};
+
+/// The shared data folder: `$TERRACAST_DATA`, or `../shared/data` beside the
+/// repository. The tests that need it fail with a clear message if it is
+/// missing: the accuracy figures are meaningless without real terrain.
+pub fn data_dir() -> PathBuf {
+    let dir = std::env::var_os("TERRACAST_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
+    assert!(
+        dir.join("comanche").is_dir(),
+        "real terrain not found at {}: set TERRACAST_DATA to the shared data folder",
+        dir.display()
+    );
+    dir
+}
+
+/// Loads Comanche color map `C{color}.png` over height map `D{height}.png`.
+pub fn comanche(color: &str, height: &str) -> Scene {
+    let dir = data_dir().join("comanche");
+    let (w, d, heights) = load_heights(&dir.join(format!("D{height}.png")), 1.0).expect("height map");
+    let colors = load_colors(&dir.join(format!("C{color}.png")), w, d).expect("color map");
+    Scene::new(w, d, heights, colors).expect("scene")
+}
+
+/// A camera with the contract's default field of view.
+pub fn camera(eye: [f32; 3], yaw: f32, pitch: f32) -> Camera {
+    Camera {
+        eye,
+        yaw_deg: yaw,
+        pitch_deg: pitch,
+        roll_deg: 0.0,
+        hfov_deg: 60.0,
+    }
+}
+
+/// Renders with the kernel at its default settings, or with coherence off.
+pub fn kernel_view(scene: &KernelScene, cam: &Camera, size: (u32, u32), coherence: bool) -> (Frame, RenderStats) {
+    let options = RenderOptions {
+        coherence,
+        ..RenderOptions::default()
+    };
+    render_kernel(scene, cam, size.0, size.1, &options).expect("kernel render")
+}
+
+/// Renders the exact reference at 4 × 4 rays a pixel.
+pub fn reference_view(reference: &Reference<'_>, cam: &Camera, size: (u32, u32)) -> Frame {
+    reference.render(cam, size.0, size.1, &ReferenceOptions::default()).0
+}

@@ -84,6 +84,7 @@ fn sky(options: &RenderOptions) -> Sample {
     Sample {
         color: options.sky,
         distance: Sample::SKY,
+        elevation: 0,
     }
 }
 
@@ -158,7 +159,7 @@ fn shade<P: Probe>(
     let Some(on_hit_line) = line_color(colors, &hit, strides, probe) else {
         return sky(options);
     };
-    let (color, distance) = match above {
+    let (color, distance, back) = match above {
         Some(above) => {
             let t = crossing_fraction(above, below);
             let before = ray.cursor(hit.k - 1, strides);
@@ -166,14 +167,17 @@ fn shade<P: Probe>(
                 Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
                 None => on_hit_line,
             };
-            let back = i64::from(256 - t) << 8;
-            (color, ray.distance(hit.k) - back)
+            let back = i64::from(256 - t);
+            (color, ray.distance(hit.k) - (back << 8), back)
         }
-        None => (on_hit_line, ray.distance(hit.k)),
+        None => (on_hit_line, ray.distance(hit.k), 0),
     };
+    // The crossing lies `back`/256 of a step before the hit sample.
+    let elevation = i64::from(hit.z.to_bits()) - ((back * i64::from(ray.dz.to_bits())) >> 8);
     Sample {
         color,
         distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
+        elevation: elevation.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32,
     }
 }
 

@@ -1,0 +1,211 @@
+//! The `terracast-sim` command line (spec/view-contract.md).
+
+use crate::error::{Error, Result};
+use crate::kernel::render_kernel;
+use crate::output::{stats_json, write_pfm, write_png, write_stats};
+use crate::reference::{Reference, ReferenceOptions};
+use crate::scene::{color_by_height_and_slope, load_colors, load_heights, procedural, Scene};
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+use terracast::{Camera, RenderOptions, Rgb, View, ViewError};
+
+/// Real-time terrain flythrough: the terracast kernel on the host.
+#[derive(Debug, Parser)]
+#[command(name = "terracast-sim", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Render one view to a PNG (with optional depth and stats).
+    Render(RenderArgs),
+}
+
+/// Which renderer draws the view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Method {
+    /// The fixed-point kernel.
+    Kernel,
+    /// The exact float reference (bilinear surface, supersampled).
+    Reference,
+}
+
+#[derive(Debug, clap::Args)]
+struct RenderArgs {
+    /// Height map: 8/16-bit grayscale PNG or SRTM .hgt. Without it, the
+    /// built-in procedural scene is rendered.
+    #[arg(long, value_name = "H.png")]
+    height: Option<PathBuf>,
+    /// Color map: RGB, RGBA, gray or palette PNG. Without it, real heights
+    /// are colored by height and slope.
+    #[arg(long, value_name = "C.png")]
+    color: Option<PathBuf>,
+    /// World height of one height-map unit, in voxels.
+    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    height_scale: f32,
+    /// Eye position in voxels [default: a view over the middle of the map].
+    #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    eye: Option<[f32; 3]>,
+    /// Heading in degrees, from +x toward +y.
+    #[arg(long, default_value_t = 90.0, allow_negative_numbers = true, value_name = "DEG")]
+    yaw: f32,
+    /// Degrees below the horizon (positive looks down), -89 to 90.
+    #[arg(long, default_value_t = 12.0, allow_negative_numbers = true, value_name = "DEG")]
+    pitch: f32,
+    /// Bank in degrees, positive = right wing down.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_name = "DEG")]
+    roll: f32,
+    /// Full horizontal field of view in degrees.
+    #[arg(long, default_value_t = 60.0, value_name = "DEG")]
+    hfov: f32,
+    /// Image size.
+    #[arg(long, default_value = "640x360", value_parser = parse_size, value_name = "WxH")]
+    size: (u32, u32),
+    /// Sky color.
+    #[arg(long, value_parser = parse_rgb, value_name = "R,G,B")]
+    sky: Option<Rgb>,
+    /// Renderer.
+    #[arg(long, value_enum, default_value_t = Method::Kernel)]
+    method: Method,
+    /// Kernel: cast every ray from the eye (no vertical ray coherence).
+    #[arg(long)]
+    no_coherence: bool,
+    /// Reference: rays per pixel side (n x n rays a pixel).
+    #[arg(long, default_value_t = 4, value_name = "N")]
+    supersample: u32,
+    /// Side of the procedural scene, used when no --height is given.
+    #[arg(long, default_value_t = 1024, value_name = "N")]
+    procedural_size: u32,
+    /// Seed of the procedural scene.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    seed: u64,
+    /// Output image (8-bit RGB PNG).
+    #[arg(long, value_name = "OUT.png")]
+    out: PathBuf,
+    /// Output depth (grayscale PFM: Euclidean distance, +inf for sky).
+    #[arg(long, value_name = "OUT.pfm")]
+    depth: Option<PathBuf>,
+    /// Output statistics (JSON).
+    #[arg(long, value_name = "OUT.json")]
+    stats: Option<PathBuf>,
+}
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Render(args) => render_command(args),
+    }
+}
+
+fn render_command(args: RenderArgs) -> Result<()> {
+    let (width, height) = args.size;
+    let scene = load_scene(&args)?;
+    let camera = Camera {
+        eye: args.eye.unwrap_or_else(|| default_eye(&scene)),
+        yaw_deg: args.yaw,
+        pitch_deg: args.pitch,
+        roll_deg: args.roll,
+        hfov_deg: args.hfov,
+    };
+    let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
+    let (frame, stats) = match args.method {
+        Method::Kernel => {
+            View::new(&camera, width, height).map_err(view_error)?;
+            let kernel = scene.to_kernel()?;
+            let options = RenderOptions { coherence: !args.no_coherence, sky };
+            render_kernel(&kernel, &camera, width, height, &options)?
+        }
+        Method::Reference => {
+            // The reference shares the kernel's camera limits but can roll.
+            View::new(&Camera { roll_deg: 0.0, ..camera }, width, height).map_err(view_error)?;
+            if !args.roll.is_finite() {
+                return Err(view_error(ViewError::NotFinite));
+            }
+            if args.supersample == 0 || args.supersample > 16 {
+                return Err(Error::new("--supersample must be between 1 and 16"));
+            }
+            let options = ReferenceOptions { supersample: args.supersample, sky };
+            Reference::new(&scene).render(&camera, width, height, &options)
+        }
+    };
+    write_png(&args.out, &frame)?;
+    if let Some(path) = &args.depth {
+        write_pfm(path, &frame)?;
+    }
+    if let Some(path) = &args.stats {
+        let sky_pixels = frame.depth.iter().filter(|d| d.is_infinite()).count();
+        write_stats(path, &stats_json(&stats, width, height, sky_pixels))?;
+    }
+    Ok(())
+}
+
+fn load_scene(args: &RenderArgs) -> Result<Scene> {
+    match (&args.height, &args.color) {
+        (None, Some(_)) => Err(Error::new("--color needs --height")),
+        (None, None) => {
+            if !(2..=8192).contains(&args.procedural_size) {
+                return Err(Error::new("--procedural-size must be between 2 and 8192"));
+            }
+            Ok(procedural(args.procedural_size, args.seed))
+        }
+        (Some(h), color) => {
+            let (w, d, heights) = load_heights(h, args.height_scale)?;
+            let colors = match color {
+                Some(c) => load_colors(c, w, d)?,
+                None => color_by_height_and_slope(w, d, &heights, args.seed),
+            };
+            Scene::new(w, d, heights, colors)
+        }
+    }
+}
+
+/// A view from the middle of the map's south edge, a little above the
+/// highest terrain, toward +y.
+fn default_eye(scene: &Scene) -> [f32; 3] {
+    let (w, d) = (scene.width as f32, scene.depth as f32);
+    [w * 0.5, d * 0.12, scene.max_height() + 0.04 * w.min(d)]
+}
+
+fn view_error(e: ViewError) -> Error {
+    Error::new(format!("bad camera: {e}"))
+}
+
+fn parse_triple(s: &str) -> std::result::Result<[f32; 3], String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("expected X,Y,Z, got '{s}'"));
+    }
+    let mut out = [0.0; 3];
+    for (o, p) in out.iter_mut().zip(parts) {
+        *o = p.trim().parse::<f32>().map_err(|_| format!("'{p}' is not a number"))?;
+        if !o.is_finite() {
+            return Err(format!("'{p}' is not a finite number"));
+        }
+    }
+    Ok(out)
+}
+
+fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, got '{s}'"))?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("width '{w}' is not a whole number"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("height '{h}' is not a whole number"))?;
+    if w == 0 || h == 0 || w > 8192 || h > 8192 {
+        return Err(format!("size {w}x{h} is outside 1x1..8192x8192"));
+    }
+    Ok((w, h))
+}
+
+fn parse_rgb(s: &str) -> std::result::Result<Rgb, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("expected R,G,B, got '{s}'"));
+    }
+    let mut out = [0u8; 3];
+    for (o, p) in out.iter_mut().zip(parts) {
+        *o = p.trim().parse().map_err(|_| format!("'{p}' is not a color value 0-255"))?;
+    }
+    Ok(out)
+}
+

@@ -1,0 +1,46 @@
+//! A rendered image with its per-pixel depth and the render's statistics.
+
+use terracast::Rgb;
+
+/// An image and the Euclidean depth of each pixel's center ray.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Row-major colors, y = 0 at the top.
+    pub colors: Vec<Rgb>,
+    /// Row-major distances from the eye in voxels; +inf where the ray saw sky.
+    pub depth: Vec<f32>,
+}
+
+impl Frame {
+    /// A black frame with infinite depth.
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            colors: vec![[0; 3]; n],
+            depth: vec![f32::INFINITY; n],
+        }
+    }
+}
+
+/// What a render cost, for `--stats`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RenderStats {
+    /// Renderer name.
+    pub method: &'static str,
+    /// Pixels rendered.
+    pub pixels: u64,
+    /// Rays cast.
+    pub rays: u64,
+    /// Voxel visits of the traversal (for the reference: mipmap nodes).
+    pub steps: u64,
+    /// Terrain bytes the renderer held for the frame.
+    pub resident_bytes: u64,
+    /// Time of the render call alone.
+    pub render_ns: u64,
+}

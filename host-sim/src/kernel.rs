@@ -1,0 +1,82 @@
+//! Runs the fixed-point kernel on the host and converts what it reports.
+
+use crate::camera::{length, ContractCamera};
+use crate::error::{Error, Result};
+use crate::frame::{Frame, RenderStats};
+use crate::scene::KernelScene;
+use std::time::Instant;
+use terracast::{render, Camera, CountingProbe, RenderOptions, Sample, Sink, View};
+
+/// A sink that keeps every sample of the frame.
+#[derive(Debug)]
+pub struct SampleBuffer {
+    width: u32,
+    height: u32,
+    /// Row-major samples, y = 0 at the top.
+    pub samples: Vec<Sample>,
+}
+
+impl SampleBuffer {
+    /// A buffer of sky samples.
+    pub fn new(width: u32, height: u32) -> Self {
+        let sky = Sample { color: [0; 3], distance: Sample::SKY, elevation: 0 };
+        Self { width, height, samples: vec![sky; width as usize * height as usize] }
+    }
+}
+
+impl Sink for SampleBuffer {
+    #[inline]
+    fn put(&mut self, x: u32, y: u32, sample: Sample) {
+        if x < self.width && y < self.height {
+            self.samples[y as usize * self.width as usize + x as usize] = sample;
+        }
+    }
+}
+
+/// Renders with the kernel; the Euclidean depth of each pixel comes from
+/// the kernel's hit (major-axis distance or height, whichever the ray's
+/// direction conditions better).
+pub fn render_kernel(
+    scene: &KernelScene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    options: &RenderOptions,
+) -> Result<(Frame, RenderStats)> {
+    let terrain = scene.terrain()?;
+    let view = View::new(camera, width, height).map_err(|e| Error::new(format!("bad view: {e}")))?;
+    let mut buffer = SampleBuffer::new(width, height);
+    let mut probe = CountingProbe::default();
+    let started = Instant::now();
+    render(&terrain, &view, options, &mut buffer, &mut probe);
+    let render_ns = started.elapsed().as_nanos() as u64;
+
+    let rays = ContractCamera::new(camera, width, height);
+    let mut frame = Frame::new(width, height);
+    for (i, sample) in buffer.samples.iter().enumerate() {
+        frame.colors[i] = sample.color;
+        if sample.is_sky() {
+            continue;
+        }
+        let (px, py) = ((i % width as usize) as f64, (i / width as usize) as f64);
+        let d = rays.direction(px + 0.5, py + 0.5);
+        let major = d[0].abs().max(d[1].abs());
+        let per_unit = length(d);
+        const ONE: f64 = 65536.0;
+        frame.depth[i] = if major >= d[2].abs() {
+            f64::from(sample.distance) / ONE * per_unit / major
+        } else {
+            (rays.eye[2] - f64::from(sample.elevation) / ONE).abs() * per_unit / d[2].abs()
+        } as f32;
+    }
+    let pixels = u64::from(width) * u64::from(height);
+    let stats = RenderStats {
+        method: if options.coherence { "kernel" } else { "kernel-no-coherence" },
+        pixels,
+        rays: probe.rays,
+        steps: probe.steps,
+        resident_bytes: terrain.bytes() as u64,
+        render_ns,
+    };
+    Ok((frame, stats))
+}

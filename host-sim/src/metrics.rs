@@ -1,0 +1,74 @@
+//! Image and depth comparisons against the reference.
+
+use terracast::Rgb;
+
+/// Peak signal-to-noise ratio over all RGB channels, in dB (infinite for
+/// identical images).
+pub fn psnr(test: &[Rgb], reference: &[Rgb]) -> f64 {
+    let n = test.len().min(reference.len()) * 3;
+    let sum: f64 = test
+        .iter()
+        .zip(reference)
+        .flat_map(|(a, b)| (0..3).map(move |k| (f64::from(a[k]) - f64::from(b[k])).powi(2)))
+        .sum();
+    if sum == 0.0 {
+        return f64::INFINITY;
+    }
+    10.0 * (255.0f64 * 255.0 / (sum / n as f64)).log10()
+}
+
+/// Fraction of pixels on which both depth maps agree about sky (infinite)
+/// versus terrain (finite).
+pub fn sky_agreement(test: &[f32], reference: &[f32]) -> f64 {
+    let agree = test
+        .iter()
+        .zip(reference)
+        .filter(|(a, b)| a.is_finite() == b.is_finite())
+        .count();
+    agree as f64 / test.len().max(1) as f64
+}
+
+/// Median of |test − reference| / reference over pixels where both see
+/// terrain; `None` if there are none.
+pub fn median_relative_depth_error(test: &[f32], reference: &[f32]) -> Option<f64> {
+    let mut errors: Vec<f64> = test
+        .iter()
+        .zip(reference)
+        .filter(|(a, b)| a.is_finite() && b.is_finite() && **b > 0.0)
+        .map(|(a, b)| (f64::from(*a) - f64::from(*b)).abs() / f64::from(*b))
+        .collect();
+    if errors.is_empty() {
+        return None;
+    }
+    let mid = errors.len() / 2;
+    let (_, median, _) = errors.select_nth_unstable_by(mid, f64::total_cmp);
+    Some(*median)
+}
+
+/// Number of pixels whose colors differ.
+pub fn differing_pixels(a: &[Rgb], b: &[Rgb]) -> usize {
+    a.iter().zip(b).filter(|(x, y)| x != y).count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn psnr_of_known_error() {
+        let a = vec![[10u8, 10, 10]; 4];
+        let b = vec![[11u8, 10, 10]; 4];
+        // MSE = 1/3 per channel.
+        let expect = 10.0 * (255.0f64 * 255.0 * 3.0).log10();
+        assert!((psnr(&a, &b) - expect).abs() < 1e-9);
+        assert!(psnr(&a, &a).is_infinite());
+    }
+
+    #[test]
+    fn depth_metrics() {
+        let r = [10.0, 20.0, f32::INFINITY, 40.0];
+        let t = [11.0, 20.0, f32::INFINITY, f32::INFINITY];
+        assert_eq!(sky_agreement(&t, &r), 0.75);
+        assert_eq!(median_relative_depth_error(&t, &r), Some(0.1));
+    }
+}

@@ -1,0 +1,294 @@
+//! The exact reference renderer, against which every accuracy figure is
+//! measured: the first intersection of each ray with the bilinear surface
+//! (solved analytically per cell), bilinear color at the hit, pixels
+//! supersampled on a regular grid (box filter).
+//!
+//! Acceleration: a max-height mipmap over the cells. A ray skips a node
+//! whenever it stays above the node's highest point over the node's extent,
+//! climbs a level after a skip and descends where it cannot skip, so a ray
+//! costs about log(n) node visits per empty stretch.
+
+use crate::camera::{length, ContractCamera};
+use crate::frame::{Frame, RenderStats};
+use crate::scene::Scene;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+use terracast::{Camera, Rgb};
+
+/// The exact renderer for one scene.
+#[derive(Debug)]
+pub struct Reference<'s> {
+    scene: &'s Scene,
+    /// `levels[l]` holds the highest height of each 2^l × 2^l block of cells.
+    levels: Vec<MaxLevel>,
+}
+
+#[derive(Debug)]
+struct MaxLevel {
+    width: usize,
+    depth: usize,
+    max: Vec<f32>,
+}
+
+/// Where a ray first meets the surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceHit {
+    /// Ray parameter: the hit is at `origin + t·direction`.
+    pub t: f64,
+    /// World x and y of the hit.
+    pub x: f64,
+    /// World y of the hit.
+    pub y: f64,
+}
+
+/// Settings of the reference.
+#[derive(Debug, Clone, Copy)]
+pub struct ReferenceOptions {
+    /// Rays per pixel side: `n × n` rays a pixel.
+    pub supersample: u32,
+    /// Color of rays that miss.
+    pub sky: Rgb,
+}
+
+impl Default for ReferenceOptions {
+    fn default() -> Self {
+        Self {
+            supersample: 4,
+            sky: terracast::config::DEFAULT_SKY,
+        }
+    }
+}
+
+impl<'s> Reference<'s> {
+    /// Builds the max-height mipmap.
+    pub fn new(scene: &'s Scene) -> Self {
+        let (cw, cd) = (scene.width as usize - 1, scene.depth as usize - 1);
+        let mut base = Vec::with_capacity(cw * cd);
+        for j in 0..cd {
+            for i in 0..cw {
+                let h = scene
+                    .height(i, j)
+                    .max(scene.height(i + 1, j))
+                    .max(scene.height(i, j + 1))
+                    .max(scene.height(i + 1, j + 1));
+                base.push(h);
+            }
+        }
+        let mut levels = vec![MaxLevel { width: cw, depth: cd, max: base }];
+        while let Some(last) = levels.last().filter(|l| l.width > 1 || l.depth > 1) {
+            let (w, d) = (last.width.div_ceil(2), last.depth.div_ceil(2));
+            let mut max = vec![f32::MIN; w * d];
+            for j in 0..last.depth {
+                for i in 0..last.width {
+                    let m = &mut max[(j / 2) * w + i / 2];
+                    *m = m.max(last.max[j * last.width + i]);
+                }
+            }
+            levels.push(MaxLevel { width: w, depth: d, max });
+        }
+        Self { scene, levels }
+    }
+
+    /// The first point where the ray `origin + t·direction`, t ≥ 0, is at or
+    /// below the bilinear surface inside the map; `None` if it never is.
+    /// `visits` counts the mipmap nodes the search looked at.
+    pub fn intersect(&self, origin: [f64; 3], dir: [f64; 3], visits: &mut u64) -> Option<SurfaceHit> {
+        let extent = [f64::from(self.scene.width - 1), f64::from(self.scene.depth - 1)];
+        let (mut t, mut t_end) = (0.0f64, f64::INFINITY);
+        for axis in 0..2 {
+            if dir[axis] == 0.0 {
+                if origin[axis] < 0.0 || origin[axis] > extent[axis] {
+                    return None;
+                }
+            } else {
+                let a = (0.0 - origin[axis]) / dir[axis];
+                let b = (extent[axis] - origin[axis]) / dir[axis];
+                t = t.max(a.min(b));
+                t_end = t_end.min(a.max(b));
+            }
+        }
+        let top = self.levels.len() - 1;
+        let mut level = top;
+        while t <= t_end {
+            *visits += 1;
+            let node = &self.levels[level];
+            let size = (1u64 << level) as f64;
+            let index = |axis: usize, count: usize| {
+                let q = (origin[axis] + t * dir[axis]) / size;
+                let i = if dir[axis] < 0.0 { q.ceil() - 1.0 } else { q.floor() };
+                (i.max(0.0) as usize).min(count - 1)
+            };
+            let (nx, ny) = (index(0, node.width), index(1, node.depth));
+            let exit_along = |axis: usize, n: usize| {
+                let lo = n as f64 * size;
+                let hi = (lo + size).min(extent[axis]);
+                if dir[axis] > 0.0 {
+                    (hi - origin[axis]) / dir[axis]
+                } else if dir[axis] < 0.0 {
+                    (lo - origin[axis]) / dir[axis]
+                } else {
+                    f64::INFINITY
+                }
+            };
+            let t_exit = exit_along(0, nx).min(exit_along(1, ny)).min(t_end);
+            let lowest = (origin[2] + t * dir[2]).min(origin[2] + t_exit * dir[2]);
+            let step_past = |t_exit: f64| t_exit + 1e-9 * (1.0 + t_exit.abs());
+            if lowest > f64::from(node.max[ny * node.width + nx]) {
+                t = step_past(t_exit);
+                level = (level + 1).min(top);
+            } else if level > 0 {
+                level -= 1;
+            } else if let Some(hit) = self.cell_hit(nx, ny, origin, dir, t, t_exit) {
+                return Some(hit);
+            } else {
+                t = step_past(t_exit);
+                level = 1.min(top);
+            }
+        }
+        None
+    }
+
+    /// Solves ray against the bilinear patch of cell (i, j) for t in [ta, tb]:
+    /// along the ray the patch height is quadratic in t.
+    fn cell_hit(&self, i: usize, j: usize, o: [f64; 3], d: [f64; 3], ta: f64, tb: f64) -> Option<SurfaceHit> {
+        let s = self.scene;
+        let h00 = f64::from(s.height(i, j));
+        let h10 = f64::from(s.height(i + 1, j));
+        let h01 = f64::from(s.height(i, j + 1));
+        let h11 = f64::from(s.height(i + 1, j + 1));
+        let (b, c, dd) = (h10 - h00, h01 - h00, h00 - h10 - h01 + h11);
+        let u0 = o[0] + ta * d[0] - i as f64;
+        let v0 = o[1] + ta * d[1] - j as f64;
+        let za = o[2] + ta * d[2];
+        let qa = -dd * d[0] * d[1];
+        let qb = d[2] - b * d[0] - c * d[1] - dd * (u0 * d[1] + v0 * d[0]);
+        let qc = za - h00 - b * u0 - c * v0 - dd * u0 * v0;
+        let span = tb - ta;
+        let root = if qc <= 0.0 {
+            Some(0.0)
+        } else {
+            smallest_root_in(qa, qb, qc, span)
+        }?;
+        let t = ta + root;
+        Some(SurfaceHit {
+            t,
+            x: o[0] + t * d[0],
+            y: o[1] + t * d[1],
+        })
+    }
+
+    /// Bilinear color of the grid at world (x, y).
+    pub fn color_at(&self, x: f64, y: f64) -> [f64; 3] {
+        let s = self.scene;
+        let (w, d) = (s.width as usize, s.depth as usize);
+        let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (d - 1) as f64));
+        let (i, j) = ((x.floor() as usize).min(w - 2), (y.floor() as usize).min(d - 2));
+        let (fx, fy) = (x - i as f64, y - j as f64);
+        let at = |x: usize, y: usize| s.colors[y * w + x].map(f64::from);
+        let (a, b, c, e) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
+        core::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy)
+    }
+
+    /// Renders a view: colors from `n × n` rays a pixel, depth from the ray
+    /// through the pixel center. Uses every available core.
+    pub fn render(&self, camera: &Camera, width: u32, height: u32, options: &ReferenceOptions) -> (Frame, RenderStats) {
+        let rays = ContractCamera::new(camera, width, height);
+        let n = options.supersample.max(1);
+        let visits = AtomicU64::new(0);
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(height as usize);
+        let started = Instant::now();
+        let mut rows: Vec<(u32, Vec<Rgb>, Vec<f32>)> = std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads)
+                .map(|worker| {
+                    let visits = &visits;
+                    scope.spawn(move || {
+                        let mut done = Vec::new();
+                        let mut count = 0u64;
+                        for py in (worker as u32..height).step_by(threads) {
+                            let mut colors = Vec::with_capacity(width as usize);
+                            let mut depths = Vec::with_capacity(width as usize);
+                            for px in 0..width {
+                                let mut sum = [0.0f64; 3];
+                                for sy in 0..n {
+                                    for sx in 0..n {
+                                        let dir = rays.direction(
+                                            f64::from(px) + (f64::from(sx) + 0.5) / f64::from(n),
+                                            f64::from(py) + (f64::from(sy) + 0.5) / f64::from(n),
+                                        );
+                                        let c = match self.intersect(rays.eye, dir, &mut count) {
+                                            Some(hit) => self.color_at(hit.x, hit.y),
+                                            None => options.sky.map(f64::from),
+                                        };
+                                        (0..3).for_each(|k| sum[k] += c[k]);
+                                    }
+                                }
+                                let samples = f64::from(n * n);
+                                colors.push(sum.map(|s| (s / samples).round().clamp(0.0, 255.0) as u8));
+                                let center = rays.direction(f64::from(px) + 0.5, f64::from(py) + 0.5);
+                                let depth = self
+                                    .intersect(rays.eye, center, &mut count)
+                                    .map_or(f32::INFINITY, |hit| (hit.t * length(center)) as f32);
+                                depths.push(depth);
+                            }
+                            done.push((py, colors, depths));
+                        }
+                        visits.fetch_add(count, Ordering::Relaxed);
+                        done
+                    })
+                })
+                .collect();
+            workers.into_iter().flat_map(|w| w.join().expect("reference worker")).collect()
+        });
+        let render_ns = started.elapsed().as_nanos() as u64;
+        rows.sort_by_key(|r| r.0);
+        let mut frame = Frame::new(width, height);
+        for (py, colors, depths) in rows {
+            let at = py as usize * width as usize;
+            frame.colors[at..at + width as usize].copy_from_slice(&colors);
+            frame.depth[at..at + width as usize].copy_from_slice(&depths);
+        }
+        let pixels = u64::from(width) * u64::from(height);
+        let stats = RenderStats {
+            method: "reference",
+            pixels,
+            rays: pixels * u64::from(n * n + 1),
+            steps: visits.into_inner(),
+            resident_bytes: (self.scene.heights.len() * 4
+                + self.scene.colors.len() * 3
+                + self.levels.iter().map(|l| l.max.len() * 4).sum::<usize>()) as u64,
+            render_ns,
+        };
+        (frame, stats)
+    }
+}
+
+/// The smallest root of `a·s² + b·s + c` in `[0, span]`, given `c > 0`.
+fn smallest_root_in(a: f64, b: f64, c: f64, span: f64) -> Option<f64> {
+    let scale = a.abs().max(b.abs()).max(c.abs());
+    let in_span = |s: f64| (0.0..=span).contains(&s).then_some(s);
+    if a.abs() <= 1e-12 * scale {
+        return if b < 0.0 { in_span(-c / b) } else { None };
+    }
+    let disc = b * b - 4.0 * a * c;
+    if disc < 0.0 {
+        return None;
+    }
+    let q = -0.5 * (b + b.signum() * disc.sqrt());
+    let (r1, r2) = (q / a, if q != 0.0 { c / q } else { f64::INFINITY });
+    let (lo, hi) = (r1.min(r2), r1.max(r2));
+    in_span(lo).or_else(|| in_span(hi))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn smallest_root_picks_the_first_crossing() {
+        // (s-1)(s-3) = s² - 4s + 3
+        assert_eq!(smallest_root_in(1.0, -4.0, 3.0, 10.0), Some(1.0));
+        assert_eq!(smallest_root_in(1.0, -4.0, 3.0, 0.5), None);
+        assert_eq!(smallest_root_in(0.0, -2.0, 1.0, 1.0), Some(0.5));
+        assert_eq!(smallest_root_in(1.0, 0.0, 1.0, 10.0), None);
+    }
+}
