@@ -13,9 +13,14 @@ pub const COORD_FRAC_BITS: u32 = 16;
 /// (0 to 4095.9375 voxels in steps of 1/16).
 pub const HEIGHT_FRAC_BITS: u32 = 4;
 
-/// Bits of a subvoxel weight: the fraction of the minor coordinate, taken by
+/// Bits of a color weight: the fraction of the minor coordinate, taken by
 /// shift and mask, in 1/256 of a voxel.
 pub const WEIGHT_BITS: u32 = 8;
+
+/// Bits of the weight that blends the two heights across a grid line in the
+/// hit test. With U12.4 heights, 12 bits land the blend exactly on I16F16,
+/// and `(h1 − h0)·w` stays inside `i32`.
+pub const HEIGHT_WEIGHT_BITS: u32 = COORD_FRAC_BITS - HEIGHT_FRAC_BITS;
 
 /// Largest map side in voxels. The minor coordinate must stay inside
 /// `I16F16`, and a voxel index must fit a 32-bit `usize`.

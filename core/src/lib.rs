@@ -40,7 +40,7 @@ mod view;
 /// An 8-bit RGB color.
 pub type Rgb = [u8; 3];
 
-pub use column::{render, render_column, RenderOptions};
+pub use column::{render, render_column, Coherence, RenderOptions};
 pub use probe::{CountingProbe, NoProbe, Probe};
 pub use sink::{Framebuffer, FramebufferError, Sample, Sink};
 pub use terrain::{Terrain, TerrainError};

@@ -15,6 +15,7 @@ pub struct Terrain<'a> {
     width: u32,
     depth: u32,
     max_height: u16,
+    max_step: u16,
 }
 
 /// Why a terrain was refused.
@@ -66,12 +67,21 @@ impl<'a> Terrain<'a> {
             return Err(TerrainError::ColorsLength);
         }
         let max_height = heights.iter().copied().max().unwrap_or(0);
+        let w = width as usize;
+        let along_x = heights.windows(2).enumerate().filter(|(i, _)| (i + 1) % w != 0);
+        let along_y = heights.iter().zip(&heights[w..]);
+        let max_step = along_x
+            .map(|(_, p)| p[0].abs_diff(p[1]))
+            .chain(along_y.map(|(a, b)| a.abs_diff(*b)))
+            .max()
+            .unwrap_or(0);
         Ok(Self {
             heights,
             colors,
             width,
             depth,
             max_height,
+            max_step,
         })
     }
 
@@ -109,6 +119,11 @@ impl<'a> Terrain<'a> {
     pub fn max_height(&self) -> u16 {
         self.max_height
     }
+    /// The largest height difference between neighbouring grid points
+    /// (U12.4): the slope bound that makes vertical ray coherence exact.
+    pub fn max_step(&self) -> u16 {
+        self.max_step
+    }
     /// Bytes of terrain this view of the data covers (heights and colors).
     pub fn bytes(&self) -> usize {
         core::mem::size_of_val(self.heights) + core::mem::size_of_val(self.colors)
@@ -134,6 +149,16 @@ mod tests {
             TerrainError::TooLarge
         );
         assert!(Terrain::new(2, 2, &h, &c).is_ok());
+    }
+
+    #[test]
+    fn max_step_looks_along_both_axes_but_not_across_rows() {
+        // 3 x 2: rows [0 5 7] and [1 5 40]; the wrap 7 -> 1 is not a neighbour.
+        let h = [0, 5, 7, 1, 5, 40];
+        let c = [[0u8; 3]; 6];
+        assert_eq!(Terrain::new(3, 2, &h, &c).unwrap().max_step(), 35);
+        let h = [0, 5, 7, 1, 5, 8];
+        assert_eq!(Terrain::new(3, 2, &h, &c).unwrap().max_step(), 6);
     }
 
     #[test]

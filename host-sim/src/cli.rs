@@ -7,7 +7,7 @@ use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{color_by_height_and_slope, load_colors, load_heights, procedural, Scene};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
-use terracast::{Camera, RenderOptions, Rgb, View, ViewError};
+use terracast::{Camera, Coherence, RenderOptions, Rgb, Terrain, View, ViewError};
 
 /// Real-time terrain flythrough: the terracast kernel on the host.
 #[derive(Debug, Parser)]
@@ -21,6 +21,17 @@ pub struct Cli {
 enum Command {
     /// Render one view to a PNG (with optional depth and stats).
     Render(RenderArgs),
+}
+
+/// The kernel's vertical ray coherence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CoherenceArg {
+    /// Every ray from the eye.
+    Off,
+    /// Skip only where no hit can be missed: same image as `off`.
+    Exact,
+    /// Skip assuming a slope bound.
+    Bounded,
 }
 
 /// Which renderer draws the view.
@@ -69,9 +80,14 @@ struct RenderArgs {
     /// Renderer.
     #[arg(long, value_enum, default_value_t = Method::Kernel)]
     method: Method,
-    /// Kernel: cast every ray from the eye (no vertical ray coherence).
-    #[arg(long)]
-    no_coherence: bool,
+    /// Kernel: vertical ray coherence. `exact` gives the same image as `off`
+    /// (every ray cast from the eye); `bounded` assumes terrain no steeper
+    /// than --coherence-slope and is faster under pitch.
+    #[arg(long, value_enum, default_value_t = CoherenceArg::Bounded)]
+    coherence: CoherenceArg,
+    /// Kernel: the slope (height per voxel) that `--coherence bounded` assumes.
+    #[arg(long, default_value_t = 2.0, value_name = "SLOPE")]
+    coherence_slope: f32,
     /// Reference: rays per pixel side (n x n rays a pixel).
     #[arg(long, default_value_t = 4, value_name = "N")]
     supersample: u32,
@@ -114,7 +130,16 @@ fn render_command(args: RenderArgs) -> Result<()> {
         Method::Kernel => {
             View::new(&camera, width, height).map_err(view_error)?;
             let kernel = scene.to_kernel()?;
-            let options = RenderOptions { coherence: !args.no_coherence, sky };
+            let coherence = match args.coherence {
+                CoherenceArg::Off => Coherence::Off,
+                CoherenceArg::Exact => Coherence::Exact,
+                CoherenceArg::Bounded => {
+                    let slope = Terrain::quantize_height(args.coherence_slope)
+                        .ok_or_else(|| Error::new("--coherence-slope must be between 0 and 4095"))?;
+                    Coherence::Bounded { slope }
+                }
+            };
+            let options = RenderOptions { coherence, sky };
             render_kernel(&kernel, &camera, width, height, &options)?
         }
         Method::Reference => {

@@ -5,7 +5,7 @@ use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
-use terracast::{render, Camera, CountingProbe, RenderOptions, Sample, Sink, View};
+use terracast::{render, Camera, Coherence, CountingProbe, RenderOptions, Sample, Sink, View};
 
 /// A sink that keeps every sample of the frame.
 #[derive(Debug)]
@@ -71,7 +71,11 @@ pub fn render_kernel(
     }
     let pixels = u64::from(width) * u64::from(height);
     let stats = RenderStats {
-        method: if options.coherence { "kernel" } else { "kernel-no-coherence" },
+        method: match options.coherence {
+            Coherence::Off => "kernel-no-coherence",
+            Coherence::Exact => "kernel-exact-coherence",
+            Coherence::Bounded { .. } => "kernel",
+        },
         pixels,
         rays: probe.rays,
         steps: probe.steps,

@@ -2,7 +2,7 @@
 //! lives, loading a Comanche pair, and rendering kernel and reference views.
 
 use std::path::PathBuf;
-use terracast::{Camera, RenderOptions};
+use terracast::{Camera, Coherence, RenderOptions};
 use terracast_sim::frame::{Frame, RenderStats};
 use terracast_sim::kernel::render_kernel;
 use terracast_sim::reference::{Reference, ReferenceOptions};
@@ -42,8 +42,8 @@ pub fn camera(eye: [f32; 3], yaw: f32, pitch: f32) -> Camera {
     }
 }
 
-/// Renders with the kernel at its default settings, or with coherence off.
-pub fn kernel_view(scene: &KernelScene, cam: &Camera, size: (u32, u32), coherence: bool) -> (Frame, RenderStats) {
+/// Renders with the kernel at the given coherence.
+pub fn kernel_view(scene: &KernelScene, cam: &Camera, size: (u32, u32), coherence: Coherence) -> (Frame, RenderStats) {
     let options = RenderOptions {
         coherence,
         ..RenderOptions::default()

@@ -4,6 +4,7 @@
 //! PSNR ≥ 32 dB, sky/terrain agreement ≥ 99.5 %, median relative depth
 //! error ≤ 0.5 %, on every view.
 
+use terracast::Coherence;
 use terracast_sim::metrics::{median_relative_depth_error, psnr, sky_agreement};
 use terracast_sim::reference::Reference;
 use terracast_tests::{camera, comanche, kernel_view, reference_view};
@@ -28,7 +29,7 @@ fn kernel_matches_reference_on_comanche_maps() {
         let reference = Reference::new(&scene);
         for (eye, yaw, pitch) in VIEWS {
             let cam = camera(eye, yaw, pitch);
-            let (k, _) = kernel_view(&kernel, &cam, SIZE, true);
+            let (k, _) = kernel_view(&kernel, &cam, SIZE, Coherence::DEFAULT);
             let r = reference_view(&reference, &cam, SIZE);
             let p = psnr(&k.colors, &r.colors);
             let agree = sky_agreement(&k.depth, &r.depth);

@@ -2,28 +2,64 @@
 //!
 //! With vertical ray coherence on, each ray starts at the sample where the
 //! ray below it hit (Cohen-Or §2). Under a pitched pinhole camera the rays of
-//! a column are not in one vertical plane, so a resumed ray may start past
-//! its own hit: it then retraces backwards to the last sample above the
-//! surface (Qu et al. §4). The hit is refined between that sample and the
-//! first one below by the ratio of their clearances, and the color is
-//! blended across both grid lines.
+//! a column are not in one vertical plane: the upper ray drifts sideways as
+//! well as rising, and may pass over ground the lower ray never saw. The
+//! caster keeps coherence exact anyway:
+//!
+//! * a ray that rises faster (per step) than the terrain's steepest
+//!   neighbour difference can climb across its sideways drift is above the
+//!   surface wherever the ray below it was, except within a few steps of the
+//!   eye where fixed-point rounding dominates; those few are walked, then
+//!   the ray jumps to the lower ray's hit ([`resume_plan`]);
+//! * any other ray is cast from the eye.
+//!
+//! So the image with coherence equals the image with every ray cast from
+//! the eye, bit for bit (tested). A resumed ray that starts below the
+//! surface retraces backwards to the last sample above it (Qu et al. §4);
+//! the hit is refined between that sample and the first one below by the
+//! ratio of their clearances, and the color blended across both grid lines.
 
 pub(crate) mod walk;
 
+use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS};
 use crate::probe::Probe;
 use crate::sink::{Sample, Sink};
 use crate::terrain::Terrain;
 use crate::view::ray::{Cursor, Ray, RayKey, Strides};
 use crate::view::View;
-use crate::{Rgb, config::DEFAULT_SKY};
+use crate::{config::DEFAULT_SKY, Rgb};
 use walk::{clearance, locate, walk, Walk};
+
+/// How each ray of a column may use the ray below it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coherence {
+    /// Every ray is cast from the eye: the slow baseline.
+    Off,
+    /// A ray skips ahead only where the terrain's steepest neighbour
+    /// difference could not have hidden a hit from it: the image equals
+    /// [`Coherence::Off`]'s bit for bit.
+    Exact,
+    /// As [`Coherence::Exact`], assuming terrain no steeper than `slope`
+    /// (U12.4 height units per voxel). Faster under pitch; where the real
+    /// terrain is steeper, a ray may miss a ridge the ray below it passed
+    /// over (the bound measured in the coherence tests).
+    Bounded {
+        /// Assumed steepest neighbour difference, U12.4 (16 = one voxel
+        /// of height per voxel).
+        slope: u16,
+    },
+}
+
+impl Coherence {
+    /// The default: [`Coherence::Bounded`] at a slope of 2 (about 63°).
+    pub const DEFAULT: Self = Self::Bounded { slope: 32 };
+}
 
 /// Settings of the caster.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RenderOptions {
     /// Vertical ray coherence: each ray resumes where the ray below it hit.
-    /// Off, every ray is cast from the eye (the slow, exact baseline).
-    pub coherence: bool,
+    pub coherence: Coherence,
     /// Color of rays that leave the terrain.
     pub sky: Rgb,
 }
@@ -31,7 +67,7 @@ pub struct RenderOptions {
 impl Default for RenderOptions {
     fn default() -> Self {
         Self {
-            coherence: true,
+            coherence: Coherence::DEFAULT,
             sky: DEFAULT_SKY,
         }
     }
@@ -50,6 +86,17 @@ pub fn render<S: Sink, P: Probe>(
     }
 }
 
+/// What the last cast ray of a column established: it was above the surface
+/// at every sample in `start..k`.
+#[derive(Debug, Clone, Copy)]
+struct Anchor {
+    key: RayKey,
+    start: i32,
+    k: i32,
+    dminor: i32,
+    dz: i32,
+}
+
 /// Renders one image column, bottom to top. Columns are independent: a
 /// column pool may hand them to any number of workers.
 pub fn render_column<S: Sink, P: Probe>(
@@ -60,7 +107,7 @@ pub fn render_column<S: Sink, P: Probe>(
     sink: &mut S,
     probe: &mut P,
 ) {
-    let mut resume: Option<(RayKey, i32)> = None;
+    let mut anchor: Option<Anchor> = None;
     let top_row = view.height() - 1;
     for row in 0..view.height() {
         probe.ray();
@@ -68,16 +115,55 @@ pub fn render_column<S: Sink, P: Probe>(
         let sample = if ray.start > ray.end {
             sky(options)
         } else {
-            let from = match resume {
-                Some((key, k)) if options.coherence && key == ray.key => k.clamp(ray.start, ray.end),
-                _ => ray.start,
+            let slope = match options.coherence {
+                Coherence::Off => None,
+                Coherence::Exact => Some(terrain.max_step()),
+                Coherence::Bounded { slope } => Some(slope.min(terrain.max_step())),
             };
-            let (sample, reached) = cast(terrain, &ray, from, options, probe);
-            resume = Some((ray.key, reached));
+            let plan = anchor
+                .zip(slope)
+                .and_then(|(a, slope)| resume_plan(&a, &ray, slope));
+            let (sample, clear_until) = cast(terrain, &ray, plan, options, probe);
+            anchor = Some(Anchor {
+                key: ray.key,
+                start: ray.start,
+                k: clear_until,
+                dminor: ray.dminor.to_bits(),
+                dz: ray.dz.to_bits(),
+            });
             sample
         };
         sink.put(column, top_row - row, sample);
     }
+}
+
+/// Where a ray may skip to: `(last prefix sample to walk, sample to resume
+/// at)`, or `None` to cast it from the eye.
+///
+/// Let the anchor ray be above the surface at samples `start..k`. At sample
+/// `i`, at distance `s ≥ i` from the eye, this ray is higher by at least
+/// `s·rise − 1` (Q16 bits) and sideways by at most `s·drift + 1`, and the
+/// sampled surface (heights blended by a weight quantized to 1/4096, i.e.
+/// 16 bits) can be higher there by at most `L/16 · (s·drift + 17)`, with `L`
+/// the slope bound in U12.4 per voxel. So this ray is above wherever
+/// `s·(rise − L·drift/16) > 1 + 17·L/16`: everywhere past a short prefix.
+fn resume_plan(anchor: &Anchor, ray: &Ray, slope: u16) -> Option<(i32, i32)> {
+    if anchor.key != ray.key {
+        return None;
+    }
+    let steep = i64::from(slope);
+    let rise = i64::from(ray.dz.to_bits()) - i64::from(anchor.dz);
+    let drift = (i64::from(ray.dminor.to_bits()) - i64::from(anchor.dminor)).abs();
+    let unit = 1i64 << HEIGHT_FRAC_BITS;
+    let margin = rise - (steep * drift + unit - 1) / unit;
+    if margin <= 0 {
+        return None;
+    }
+    let quantum = 1i64 << (COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS);
+    let slack = 1 + ((quantum + 1) * steep + unit - 1) / unit;
+    let unsafe_samples = (slack / margin).min(i64::from(i32::MAX)) as i32;
+    let prefix_end = unsafe_samples.max(anchor.start - 1);
+    (prefix_end + 1 < anchor.k).then_some((prefix_end, anchor.k))
 }
 
 fn sky(options: &RenderOptions) -> Sample {
@@ -88,20 +174,34 @@ fn sky(options: &RenderOptions) -> Sample {
     }
 }
 
-/// Casts one ray from sample `from`; returns what it saw and the sample it
-/// stopped at (where the next ray of the column resumes).
+/// Casts one ray: from its start, or (with a plan) through a prefix and then
+/// from the resume sample. Returns what it saw and the sample up to which
+/// it is known to be above the surface (its hit, or one past its last).
 fn cast<P: Probe>(
     terrain: &Terrain<'_>,
     ray: &Ray,
-    from: i32,
+    plan: Option<(i32, i32)>,
     options: &RenderOptions,
     probe: &mut P,
 ) -> (Sample, i32) {
     let heights = terrain.heights();
     let strides = ray.strides(terrain.width());
-    let start = ray.cursor(from, &strides);
-    match walk(heights, ray, &strides, start, probe) {
-        Walk::Exit { last } => (sky(options), last),
+    let mut outcome = match plan {
+        Some((prefix_end, _)) if prefix_end >= ray.start => {
+            let end = prefix_end.min(ray.end);
+            walk(heights, ray, &strides, ray.cursor(ray.start, &strides), end, probe)
+        }
+        Some(_) => Walk::Exit { last: ray.start - 1 },
+        None => walk(heights, ray, &strides, ray.cursor(ray.start, &strides), ray.end, probe),
+    };
+    if let (Some((_, resume)), Walk::Exit { last }) = (plan, outcome) {
+        if last < ray.end {
+            let from = resume.clamp(last + 1, ray.end);
+            outcome = walk(heights, ray, &strides, ray.cursor(from, &strides), ray.end, probe);
+        }
+    }
+    match outcome {
+        Walk::Exit { last } => (sky(options), last + 1),
         Walk::Hit { at, clearance, above: Some(above) } => {
             (shade(terrain, ray, &strides, at, clearance, Some(above), options, probe), at.k)
         }
@@ -185,7 +285,7 @@ fn shade<P: Probe>(
 /// the subvoxel weight.
 #[inline]
 fn line_color<P: Probe>(colors: &[Rgb], at: &Cursor, strides: &Strides, probe: &mut P) -> Option<Rgb> {
-    let (index, weight) = locate(at, strides);
+    let (index, weight) = locate(at, strides, WEIGHT_BITS);
     let c0 = *colors.get(index as usize)?;
     let c1 = *colors.get((index + strides.minor) as usize)?;
     probe.color(index as usize);

@@ -7,30 +7,28 @@
 //! the `get` that turns an impossible out-of-map index into an exit instead
 //! of a panic.
 
-use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, WEIGHT_BITS};
+use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS, WEIGHT_BITS};
 use crate::probe::Probe;
 use crate::view::ray::{Cursor, Ray, Strides};
 
-/// Bit shift from a blended height (U12.4 times a weight in 1/256) to Q16.
-const BLEND_TO_COORD: u32 = COORD_FRAC_BITS - WEIGHT_BITS - HEIGHT_FRAC_BITS;
-const WEIGHT_MASK: i32 = (1 << WEIGHT_BITS) - 1;
-
-/// The voxel index of a sample's grid-line start and its subvoxel weight.
+/// The voxel index of a sample's grid-line start and its subvoxel weight of
+/// `bits` bits (shift and mask of the minor coordinate).
 #[inline(always)]
-pub(crate) fn locate(at: &Cursor, strides: &Strides) -> (isize, i32) {
-    let bits = at.minor.to_bits();
-    let index = at.base + (bits >> COORD_FRAC_BITS) as isize * strides.minor;
-    (index, (bits >> (COORD_FRAC_BITS - WEIGHT_BITS)) & WEIGHT_MASK)
+pub(crate) fn locate(at: &Cursor, strides: &Strides, bits: u32) -> (isize, i32) {
+    let minor = at.minor.to_bits();
+    let index = at.base + (minor >> COORD_FRAC_BITS) as isize * strides.minor;
+    (index, (minor >> (COORD_FRAC_BITS - bits)) & ((1 << bits) - 1))
 }
 
 /// How far the ray is above the surface at a sample (Q16; ≤ 0 is a hit),
 /// and the voxel fetched. `None` only for an index outside the map.
 #[inline(always)]
 pub(crate) fn clearance(heights: &[u16], at: &Cursor, strides: &Strides) -> Option<(usize, i32)> {
-    let (index, weight) = locate(at, strides);
+    let (index, weight) = locate(at, strides, HEIGHT_WEIGHT_BITS);
     let h0 = i32::from(*heights.get(index as usize)?);
     let h1 = i32::from(*heights.get((index + strides.minor) as usize)?);
-    let surface = ((h0 << WEIGHT_BITS) + (h1 - h0) * weight) << BLEND_TO_COORD;
+    // U12.4 height times a 12-bit weight is exactly I16F16.
+    let surface = (h0 << HEIGHT_WEIGHT_BITS) + (h1 - h0) * weight;
     Some((index as usize, at.z.to_bits().saturating_sub(surface)))
 }
 
@@ -44,30 +42,31 @@ pub(crate) enum Walk {
         clearance: i32,
         above: Option<i32>,
     },
-    /// The ray left the map, or rose above the highest terrain, after
-    /// sample `last`.
+    /// The ray reached its end above the surface: it was above at every
+    /// sample it visited, up to `last`.
     Exit { last: i32 },
 }
 
-/// Walks from `at` along the ray until a hit or the ray's end.
+/// Walks from `at` along the ray until a hit or sample `end`.
 #[inline]
 pub(crate) fn walk<P: Probe>(
     heights: &[u16],
     ray: &Ray,
     strides: &Strides,
     mut at: Cursor,
+    end: i32,
     probe: &mut P,
 ) -> Walk {
     let mut above = None;
     loop {
         let Some((voxel, clearance)) = clearance(heights, &at, strides) else {
-            return Walk::Exit { last: at.k };
+            return Walk::Exit { last: at.k - 1 };
         };
         probe.visit(voxel);
         if clearance <= 0 {
             return Walk::Hit { at, clearance, above };
         }
-        if at.k >= ray.end {
+        if at.k >= end {
             return Walk::Exit { last: at.k };
         }
         above = Some(clearance);
