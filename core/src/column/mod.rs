@@ -21,7 +21,7 @@
 
 pub(crate) mod walk;
 
-use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS};
+use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, WEIGHT_BITS};
 use crate::probe::Probe;
 use crate::sink::{Sample, Sink};
 use crate::terrain::Terrain;

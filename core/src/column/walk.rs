@@ -7,7 +7,7 @@
 //! the `get` that turns an impossible out-of-map index into an exit instead
 //! of a panic.
 
-use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS, WEIGHT_BITS};
+use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS};
 use crate::probe::Probe;
 use crate::view::ray::{Cursor, Ray, Strides};
 
