@@ -54,7 +54,7 @@ struct RenderArgs {
     #[arg(long, value_name = "C.png")]
     color: Option<PathBuf>,
     /// World height of one height-map unit, in voxels.
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_name = "S")]
     height_scale: f32,
     /// Eye position in voxels [default: a view over the middle of the map].
     #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
@@ -69,7 +69,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_name = "DEG")]
     roll: f32,
     /// Full horizontal field of view in degrees.
-    #[arg(long, default_value_t = 60.0, value_name = "DEG")]
+    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true, value_name = "DEG")]
     hfov: f32,
     /// Image size.
     #[arg(long, default_value = "640x360", value_parser = parse_size, value_name = "WxH")]
@@ -117,6 +117,13 @@ pub fn run(cli: Cli) -> Result<()> {
 
 fn render_command(args: RenderArgs) -> Result<()> {
     let (width, height) = args.size;
+    // Refuse unwritable outputs before spending time on a render.
+    for path in [Some(&args.out), args.depth.as_ref(), args.stats.as_ref()].into_iter().flatten() {
+        let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        if !dir.is_dir() {
+            return Err(Error::new(format!("cannot write {}: folder {} does not exist", path.display(), dir.display())));
+        }
+    }
     let scene = load_scene(&args)?;
     let camera = Camera {
         eye: args.eye.unwrap_or_else(|| default_eye(&scene)),
@@ -128,8 +135,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
     let (frame, stats) = match args.method {
         Method::Kernel => {
-            View::new(&camera, width, height).map_err(view_error)?;
             let kernel = scene.to_kernel()?;
+            View::new(&camera, width, height).map_err(view_error)?;
             let coherence = match args.coherence {
                 CoherenceArg::Off => Coherence::Off,
                 CoherenceArg::Exact => Coherence::Exact,

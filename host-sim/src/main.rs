@@ -16,9 +16,12 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Err(e) => {
+            // clap explains over several lines; keep the explanation, drop
+            // the usage, and fold it into one line.
             let text = e.to_string();
-            let first = text.lines().next().unwrap_or("invalid arguments");
-            eprintln!("terracast-sim: {}", first.trim_start_matches("error: "));
+            let explanation = text.split("\n\n").next().unwrap_or("invalid arguments");
+            let line = explanation.split_whitespace().collect::<Vec<_>>().join(" ");
+            eprintln!("terracast-sim: {}", line.trim_start_matches("error: "));
             return ExitCode::from(2);
         }
     };

@@ -1,0 +1,105 @@
+//! The `terracast-sim render` command line: outputs as the view contract
+//! says, and bad input ending in one line, a non-zero exit and no panic.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn sim(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_terracast-sim")).args(args).output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("terracast-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn small_maps() -> (PathBuf, PathBuf) {
+    let (h, c) = (temp("h.png"), temp("c.png"));
+    image::GrayImage::from_fn(16, 16, |x, y| image::Luma([(x * 3 + y) as u8])).save(&h).unwrap();
+    image::RgbImage::from_fn(16, 16, |x, _| image::Rgb([x as u8 * 10, 100, 50])).save(&c).unwrap();
+    (h, c)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn renders_png_depth_and_stats_as_the_contract_says() {
+    let (h, c) = small_maps();
+    let (png, pfm, json) = (temp("v.png"), temp("v.pfm"), temp("v.json"));
+    for method in ["kernel", "reference"] {
+        let (code, _, err) = sim(&[
+            "render", "--height", s(&h), "--color", s(&c), "--eye", "-4,7.5,80", "--yaw", "0", "--pitch", "40",
+            "--size", "32x24", "--method", method, "--out", s(&png), "--depth", s(&pfm), "--stats", s(&json),
+        ]);
+        assert_eq!(code, 0, "{method}: {err}");
+        let image = image::open(&png).unwrap();
+        assert_eq!((image.width(), image.height()), (32, 24));
+        assert!(matches!(image, image::DynamicImage::ImageRgb8(_)));
+        let (w, hh, depth) = terracast_sim::output::read_pfm(&std::fs::read(&pfm).unwrap()).unwrap();
+        assert_eq!((w, hh), (32, 24));
+        assert!(depth[0].is_infinite(), "top-left sees sky");
+        assert!(depth[32 * 23 + 16].is_finite(), "bottom middle sees terrain");
+        let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        for key in ["pixels", "steps", "resident_bytes", "render_ns"] {
+            assert!(stats[key].as_u64().is_some(), "{method}: stats lack {key}");
+        }
+        assert_eq!(stats["pixels"], 32 * 24);
+    }
+}
+
+#[test]
+fn bad_input_gives_one_line_and_a_nonzero_exit() {
+    let (h, c) = small_maps();
+    let big = temp("big.png");
+    image::RgbImage::new(1, 40).save(&big).unwrap();
+    let not_png = temp("not.png");
+    std::fs::write(&not_png, b"not an image").unwrap();
+    let out = temp("bad.png");
+    let base = |extra: &[&str]| {
+        let mut v = vec!["render", "--height", s(&h), "--color", s(&c), "--out", s(&out)];
+        v.extend_from_slice(extra);
+        v.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["render".into(), "--height".into(), "/nonexistent/h.png".into(), "--out".into(), s(&out).into()], "cannot open"),
+        (base(&["--eye", "1,2"]), "X,Y,Z"),
+        (base(&["--eye", "nan,2,3"]), "finite"),
+        (base(&["--yaw", "abc"]), "abc"),
+        (base(&["--size", "0x10"]), "size"),
+        (base(&["--pitch", "120"]), "pitch"),
+        (base(&["--roll", "10"]), "roll"),
+        (base(&["--hfov", "0"]), "field of view"),
+        (base(&["--height-scale", "-1"]), "height-scale"),
+        (base(&["--height-scale", "1000"]), "kernel's range"),
+        (base(&["--sky", "1,2,300"]), "300"),
+        (base(&["--method", "magic"]), "magic"),
+        (vec!["render".into(), "--height".into(), s(&not_png).into(), "--out".into(), s(&out).into()], "decode"),
+        (vec!["render".into(), "--height".into(), s(&h).into(), "--color".into(), s(&big).into(), "--out".into(), s(&out).into()], "too small"),
+        (vec!["render".into(), "--height".into(), s(&h).into(), "--out".into(), "/nonexistent/dir/x.png".into()], "cannot write"),
+        (vec!["render".into()], "--out"),
+    ];
+    for (args, needle) in cases {
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, _, err) = sim(&refs);
+        assert_ne!(code, 0, "{args:?} succeeded");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: not one line: {err}");
+        assert!(!err.contains("panicked") && !err.contains("internal error"), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: '{err}' does not mention '{needle}'");
+    }
+}
+
+#[test]
+fn procedural_scene_needs_no_data() {
+    let png = temp("proc.png");
+    let (code, _, err) = sim(&["render", "--procedural-size", "128", "--size", "64x36", "--out", s(&png)]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(image::open(&png).unwrap().width(), 64);
+}
