@@ -30,8 +30,8 @@
 #![deny(missing_docs, unsafe_code, missing_debug_implementations)]
 #![deny(rustdoc::broken_intra_doc_links)]
 
-pub mod config;
 mod column;
+pub mod config;
 mod probe;
 mod sink;
 mod terrain;

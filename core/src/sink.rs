@@ -115,7 +115,11 @@ mod tests {
     fn out_of_range_pixels_are_discarded() {
         let mut colors = [[0u8; 3]; 6];
         let mut fb = Framebuffer::new(&mut colors, 3, 2).unwrap();
-        let s = Sample { color: [9, 9, 9], distance: 5, elevation: 0 };
+        let s = Sample {
+            color: [9, 9, 9],
+            distance: 5,
+            elevation: 0,
+        };
         fb.put(3, 0, s);
         fb.put(0, 2, s);
         fb.put(u32::MAX, u32::MAX, s);

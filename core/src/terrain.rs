@@ -68,7 +68,10 @@ impl<'a> Terrain<'a> {
         }
         let max_height = heights.iter().copied().max().unwrap_or(0);
         let w = width as usize;
-        let along_x = heights.windows(2).enumerate().filter(|(i, _)| (i + 1) % w != 0);
+        let along_x = heights
+            .windows(2)
+            .enumerate()
+            .filter(|(i, _)| (i + 1) % w != 0);
         let along_y = heights.iter().zip(&heights[w..]);
         let max_step = along_x
             .map(|(_, p)| p[0].abs_diff(p[1]))
@@ -138,8 +141,14 @@ mod tests {
     fn rejects_bad_dimensions() {
         let h = [0u16; 4];
         let c = [[0u8; 3]; 4];
-        assert_eq!(Terrain::new(1, 4, &h, &c).unwrap_err(), TerrainError::TooSmall);
-        assert_eq!(Terrain::new(2, 3, &h, &c).unwrap_err(), TerrainError::HeightsLength);
+        assert_eq!(
+            Terrain::new(1, 4, &h, &c).unwrap_err(),
+            TerrainError::TooSmall
+        );
+        assert_eq!(
+            Terrain::new(2, 3, &h, &c).unwrap_err(),
+            TerrainError::HeightsLength
+        );
         assert_eq!(
             Terrain::new(2, 2, &h, &c[..3]).unwrap_err(),
             TerrainError::ColorsLength
@@ -165,7 +174,10 @@ mod tests {
     fn quantizes_heights_to_sixteenths() {
         assert_eq!(Terrain::quantize_height(0.0), Some(0));
         assert_eq!(Terrain::quantize_height(1.5), Some(24));
-        assert_eq!(Terrain::quantize_height(Terrain::MAX_HEIGHT), Some(u16::MAX));
+        assert_eq!(
+            Terrain::quantize_height(Terrain::MAX_HEIGHT),
+            Some(u16::MAX)
+        );
         assert_eq!(Terrain::quantize_height(4096.0), None);
         assert_eq!(Terrain::quantize_height(-0.5), None);
         assert_eq!(Terrain::quantize_height(f32::NAN), None);

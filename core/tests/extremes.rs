@@ -9,7 +9,10 @@
 //! panic anywhere.
 
 use terracast::config::{MAX_EYE_COORD, MAX_MAP_SIDE};
-use terracast::{render, Camera, Coherence, CountingProbe, Framebuffer, RenderOptions, Sample, Terrain, TerrainError, View};
+use terracast::{
+    render, Camera, Coherence, CountingProbe, Framebuffer, RenderOptions, Sample, Terrain,
+    TerrainError, View,
+};
 
 const PLANE: f64 = 100.0;
 
@@ -20,38 +23,66 @@ fn check_plane(w: u32, d: u32, eye: [f32; 3], yaw: f32) -> (usize, f64) {
     let heights = vec![Terrain::quantize_height(PLANE as f32).unwrap(); n];
     let colors = vec![[50, 120, 60]; n];
     let terrain = Terrain::new(w, d, &heights, &colors).unwrap();
-    let camera = Camera { eye, yaw_deg: yaw, pitch_deg: 0.67, roll_deg: 0.0, hfov_deg: 1.0 };
+    let camera = Camera {
+        eye,
+        yaw_deg: yaw,
+        pitch_deg: 0.67,
+        roll_deg: 0.0,
+        hfov_deg: 1.0,
+    };
     let (iw, ih) = (31, 31);
     let view = View::new(&camera, iw, ih).unwrap();
     let mut pixels = vec![[0u8; 3]; (iw * ih) as usize];
     let mut distances = vec![0u32; (iw * ih) as usize];
     let mut frame = Framebuffer::with_distances(&mut pixels, &mut distances, iw, ih).unwrap();
-    let options = RenderOptions { coherence: Coherence::Exact, ..RenderOptions::default() };
-    render(&terrain, &view, &options, &mut frame, &mut CountingProbe::default());
+    let options = RenderOptions {
+        coherence: Coherence::Exact,
+        ..RenderOptions::default()
+    };
+    render(
+        &terrain,
+        &view,
+        &options,
+        &mut frame,
+        &mut CountingProbe::default(),
+    );
 
     let (mut hits, mut worst) = (0, 0.0f64);
     let (yaw, pitch) = (f64::from(yaw).to_radians(), 0.67f64.to_radians());
     let t = (0.5f64.to_radians()).tan();
     for py in 0..ih {
         let x = 15u32; // middle column: the ray lies in the vertical plane of the yaw
-        let b = (1.0 - 2.0 * (f64::from(py) + 0.5) / f64::from(ih)) * t * f64::from(ih) / f64::from(iw);
+        let b =
+            (1.0 - 2.0 * (f64::from(py) + 0.5) / f64::from(ih)) * t * f64::from(ih) / f64::from(iw);
         // Angle below the horizon of this row's ray.
         let below = pitch - b.atan();
         let index = (py * iw + x) as usize;
         let along = (f64::from(eye[2]) - PLANE) / below.tan(); // horizontal distance to the plane
-        let (hx, hy) = (f64::from(eye[0]) + along * yaw.cos(), f64::from(eye[1]) + along * yaw.sin());
-        let inside = below > 0.0 && (0.0..=f64::from(w - 1)).contains(&hx) && (0.0..=f64::from(d - 1)).contains(&hy);
+        let (hx, hy) = (
+            f64::from(eye[0]) + along * yaw.cos(),
+            f64::from(eye[1]) + along * yaw.sin(),
+        );
+        let inside = below > 0.0
+            && (0.0..=f64::from(w - 1)).contains(&hx)
+            && (0.0..=f64::from(d - 1)).contains(&hy);
         let got = distances[index];
         if !inside {
             // Near the map's far edge the kernel may still catch the plane;
             // it must never report a hit before the map starts.
             if got != Sample::SKY {
                 let major = f64::from(got) / 65536.0;
-                assert!(major > along.min(1e9) * 0.9 || below <= 0.0 || along > 6e4, "row {py}: spurious hit at {major}");
+                assert!(
+                    major > along.min(1e9) * 0.9 || below <= 0.0 || along > 6e4,
+                    "row {py}: spurious hit at {major}"
+                );
             }
             continue;
         }
-        assert_ne!(got, Sample::SKY, "row {py}: missed the plane {along:.0} voxels away");
+        assert_ne!(
+            got,
+            Sample::SKY,
+            "row {py}: missed the plane {along:.0} voxels away"
+        );
         assert_eq!(pixels[index], [50, 120, 60], "row {py}: garbage color");
         let major = f64::from(got) / 65536.0;
         let major_expected = along * yaw.cos().abs().max(yaw.sin().abs());
@@ -76,9 +107,15 @@ fn largest_map_and_farthest_eye_in_every_direction() {
     ];
     for (w, d, eye, yaw) in cases {
         let (hits, worst) = check_plane(w, d, eye, yaw);
-        println!("{w}x{d} eye {eye:?} yaw {yaw}: {hits} hits, worst relative depth error {:.4} %", worst * 100.0);
+        println!(
+            "{w}x{d} eye {eye:?} yaw {yaw}: {hits} hits, worst relative depth error {:.4} %",
+            worst * 100.0
+        );
         assert!(hits >= 8, "too few rows hit the plane");
-        assert!(worst < 0.015, "relative depth error {worst} above the stated 1.5 %");
+        assert!(
+            worst < 0.015,
+            "relative depth error {worst} above the stated 1.5 %"
+        );
     }
 }
 
@@ -86,7 +123,13 @@ fn largest_map_and_farthest_eye_in_every_direction() {
 fn map_sides_beyond_the_format_are_refused() {
     let h = [0u16; 4];
     let c = [[0u8; 3]; 4];
-    assert_eq!(Terrain::new(MAX_MAP_SIDE + 1, 2, &h, &c).unwrap_err(), TerrainError::TooLarge);
-    let eye = Camera { eye: [MAX_EYE_COORD * 1.01, 0.0, 0.0], ..Camera::default() };
+    assert_eq!(
+        Terrain::new(MAX_MAP_SIDE + 1, 2, &h, &c).unwrap_err(),
+        TerrainError::TooLarge
+    );
+    let eye = Camera {
+        eye: [MAX_EYE_COORD * 1.01, 0.0, 0.0],
+        ..Camera::default()
+    };
     assert!(View::new(&eye, 4, 4).is_err());
 }

@@ -24,7 +24,11 @@ impl ContractCamera {
             f64::from(camera.pitch_deg).to_radians(),
             f64::from(camera.roll_deg).to_radians(),
         );
-        let forward = [pitch.cos() * yaw.cos(), pitch.cos() * yaw.sin(), -pitch.sin()];
+        let forward = [
+            pitch.cos() * yaw.cos(),
+            pitch.cos() * yaw.sin(),
+            -pitch.sin(),
+        ];
         let right0 = [-yaw.sin(), yaw.cos(), 0.0];
         let up0 = cross(forward, right0);
         let (sr, cr) = roll.sin_cos();
@@ -52,7 +56,11 @@ impl ContractCamera {
 
 /// Cross product.
 pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 /// Euclidean length.

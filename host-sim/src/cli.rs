@@ -54,22 +54,47 @@ struct RenderArgs {
     #[arg(long, value_name = "C.png")]
     color: Option<PathBuf>,
     /// World height of one height-map unit, in voxels.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_name = "S")]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_negative_numbers = true,
+        value_name = "S"
+    )]
     height_scale: f32,
     /// Eye position in voxels [default: a view over the middle of the map].
     #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
     eye: Option<[f32; 3]>,
     /// Heading in degrees, from +x toward +y.
-    #[arg(long, default_value_t = 90.0, allow_negative_numbers = true, value_name = "DEG")]
+    #[arg(
+        long,
+        default_value_t = 90.0,
+        allow_negative_numbers = true,
+        value_name = "DEG"
+    )]
     yaw: f32,
     /// Degrees below the horizon (positive looks down), -89 to 90.
-    #[arg(long, default_value_t = 12.0, allow_negative_numbers = true, value_name = "DEG")]
+    #[arg(
+        long,
+        default_value_t = 12.0,
+        allow_negative_numbers = true,
+        value_name = "DEG"
+    )]
     pitch: f32,
     /// Bank in degrees, positive = right wing down.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_name = "DEG")]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_negative_numbers = true,
+        value_name = "DEG"
+    )]
     roll: f32,
     /// Full horizontal field of view in degrees.
-    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true, value_name = "DEG")]
+    #[arg(
+        long,
+        default_value_t = 60.0,
+        allow_negative_numbers = true,
+        value_name = "DEG"
+    )]
     hfov: f32,
     /// Image size.
     #[arg(long, default_value = "640x360", value_parser = parse_size, value_name = "WxH")]
@@ -118,10 +143,20 @@ pub fn run(cli: Cli) -> Result<()> {
 fn render_command(args: RenderArgs) -> Result<()> {
     let (width, height) = args.size;
     // Refuse unwritable outputs before spending time on a render.
-    for path in [Some(&args.out), args.depth.as_ref(), args.stats.as_ref()].into_iter().flatten() {
-        let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    for path in [Some(&args.out), args.depth.as_ref(), args.stats.as_ref()]
+        .into_iter()
+        .flatten()
+    {
+        let dir = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(std::path::Path::new("."));
         if !dir.is_dir() {
-            return Err(Error::new(format!("cannot write {}: folder {} does not exist", path.display(), dir.display())));
+            return Err(Error::new(format!(
+                "cannot write {}: folder {} does not exist",
+                path.display(),
+                dir.display()
+            )));
         }
     }
     let scene = load_scene(&args)?;
@@ -141,8 +176,10 @@ fn render_command(args: RenderArgs) -> Result<()> {
                 CoherenceArg::Off => Coherence::Off,
                 CoherenceArg::Exact => Coherence::Exact,
                 CoherenceArg::Bounded => {
-                    let slope = Terrain::quantize_height(args.coherence_slope)
-                        .ok_or_else(|| Error::new("--coherence-slope must be between 0 and 4095"))?;
+                    let slope =
+                        Terrain::quantize_height(args.coherence_slope).ok_or_else(|| {
+                            Error::new("--coherence-slope must be between 0 and 4095")
+                        })?;
                     Coherence::Bounded { slope }
                 }
             };
@@ -151,14 +188,25 @@ fn render_command(args: RenderArgs) -> Result<()> {
         }
         Method::Reference => {
             // The reference shares the kernel's camera limits but can roll.
-            View::new(&Camera { roll_deg: 0.0, ..camera }, width, height).map_err(view_error)?;
+            View::new(
+                &Camera {
+                    roll_deg: 0.0,
+                    ..camera
+                },
+                width,
+                height,
+            )
+            .map_err(view_error)?;
             if !args.roll.is_finite() {
                 return Err(view_error(ViewError::NotFinite));
             }
             if args.supersample == 0 || args.supersample > 16 {
                 return Err(Error::new("--supersample must be between 1 and 16"));
             }
-            let options = ReferenceOptions { supersample: args.supersample, sky };
+            let options = ReferenceOptions {
+                supersample: args.supersample,
+                sky,
+            };
             Reference::new(&scene).render(&camera, width, height, &options)
         }
     };
@@ -211,7 +259,10 @@ fn parse_triple(s: &str) -> std::result::Result<[f32; 3], String> {
     }
     let mut out = [0.0; 3];
     for (o, p) in out.iter_mut().zip(parts) {
-        *o = p.trim().parse::<f32>().map_err(|_| format!("'{p}' is not a number"))?;
+        *o = p
+            .trim()
+            .parse::<f32>()
+            .map_err(|_| format!("'{p}' is not a number"))?;
         if !o.is_finite() {
             return Err(format!("'{p}' is not a finite number"));
         }
@@ -220,9 +271,17 @@ fn parse_triple(s: &str) -> std::result::Result<[f32; 3], String> {
 }
 
 fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("expected WxH, got '{s}'"))?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("width '{w}' is not a whole number"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("height '{h}' is not a whole number"))?;
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, got '{s}'"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("width '{w}' is not a whole number"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("height '{h}' is not a whole number"))?;
     if w == 0 || h == 0 || w > 8192 || h > 8192 {
         return Err(format!("size {w}x{h} is outside 1x1..8192x8192"));
     }
@@ -236,8 +295,10 @@ fn parse_rgb(s: &str) -> std::result::Result<Rgb, String> {
     }
     let mut out = [0u8; 3];
     for (o, p) in out.iter_mut().zip(parts) {
-        *o = p.trim().parse().map_err(|_| format!("'{p}' is not a color value 0-255"))?;
+        *o = p
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{p}' is not a color value 0-255"))?;
     }
     Ok(out)
 }
-

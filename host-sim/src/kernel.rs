@@ -19,8 +19,16 @@ pub struct SampleBuffer {
 impl SampleBuffer {
     /// A buffer of sky samples.
     pub fn new(width: u32, height: u32) -> Self {
-        let sky = Sample { color: [0; 3], distance: Sample::SKY, elevation: 0 };
-        Self { width, height, samples: vec![sky; width as usize * height as usize] }
+        let sky = Sample {
+            color: [0; 3],
+            distance: Sample::SKY,
+            elevation: 0,
+        };
+        Self {
+            width,
+            height,
+            samples: vec![sky; width as usize * height as usize],
+        }
     }
 }
 
@@ -44,7 +52,8 @@ pub fn render_kernel(
     options: &RenderOptions,
 ) -> Result<(Frame, RenderStats)> {
     let terrain = scene.terrain()?;
-    let view = View::new(camera, width, height).map_err(|e| Error::new(format!("bad view: {e}")))?;
+    let view =
+        View::new(camera, width, height).map_err(|e| Error::new(format!("bad view: {e}")))?;
     let mut buffer = SampleBuffer::new(width, height);
     let mut probe = CountingProbe::default();
     let started = Instant::now();

@@ -7,7 +7,10 @@ use terracast_sim::cli::{run, Cli};
 fn main() -> ExitCode {
     // Last resort: a bug must still end in one line, not a backtrace.
     std::panic::set_hook(Box::new(|info| {
-        eprintln!("terracast-sim: internal error: {}", info.to_string().replace('\n', " "));
+        eprintln!(
+            "terracast-sim: internal error: {}",
+            info.to_string().replace('\n', " ")
+        );
     }));
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,

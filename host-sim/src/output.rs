@@ -42,7 +42,10 @@ pub fn read_pfm(bytes: &[u8]) -> Result<(u32, u32, Vec<f32>)> {
         }
         fields.push(std::str::from_utf8(&bytes[start..at]).map_err(|_| bad())?);
     }
-    let (w, h): (u32, u32) = (fields[1].parse().map_err(|_| bad())?, fields[2].parse().map_err(|_| bad())?);
+    let (w, h): (u32, u32) = (
+        fields[1].parse().map_err(|_| bad())?,
+        fields[2].parse().map_err(|_| bad())?,
+    );
     if fields[0] != "Pf" || fields[3] != "-1.0" {
         return Err(bad());
     }
@@ -50,13 +53,21 @@ pub fn read_pfm(bytes: &[u8]) -> Result<(u32, u32, Vec<f32>)> {
     if data.len() != w as usize * h as usize * 4 {
         return Err(bad());
     }
-    let values: Vec<f32> = data.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+    let values: Vec<f32> = data
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
     let depth = values.chunks(w as usize).rev().flatten().copied().collect();
     Ok((w, h, depth))
 }
 
 /// The `--stats` object.
-pub fn stats_json(stats: &RenderStats, width: u32, height: u32, sky_pixels: usize) -> serde_json::Value {
+pub fn stats_json(
+    stats: &RenderStats,
+    width: u32,
+    height: u32,
+    sky_pixels: usize,
+) -> serde_json::Value {
     serde_json::json!({
         "method": stats.method,
         "width": width,

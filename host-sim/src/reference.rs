@@ -74,7 +74,11 @@ impl<'s> Reference<'s> {
                 base.push(h);
             }
         }
-        let mut levels = vec![MaxLevel { width: cw, depth: cd, max: base }];
+        let mut levels = vec![MaxLevel {
+            width: cw,
+            depth: cd,
+            max: base,
+        }];
         while let Some(last) = levels.last().filter(|l| l.width > 1 || l.depth > 1) {
             let (w, d) = (last.width.div_ceil(2), last.depth.div_ceil(2));
             let mut max = vec![f32::MIN; w * d];
@@ -84,7 +88,11 @@ impl<'s> Reference<'s> {
                     *m = m.max(last.max[j * last.width + i]);
                 }
             }
-            levels.push(MaxLevel { width: w, depth: d, max });
+            levels.push(MaxLevel {
+                width: w,
+                depth: d,
+                max,
+            });
         }
         Self { scene, levels }
     }
@@ -92,8 +100,16 @@ impl<'s> Reference<'s> {
     /// The first point where the ray `origin + t·direction`, t ≥ 0, is at or
     /// below the bilinear surface inside the map; `None` if it never is.
     /// `visits` counts the mipmap nodes the search looked at.
-    pub fn intersect(&self, origin: [f64; 3], dir: [f64; 3], visits: &mut u64) -> Option<SurfaceHit> {
-        let extent = [f64::from(self.scene.width - 1), f64::from(self.scene.depth - 1)];
+    pub fn intersect(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        visits: &mut u64,
+    ) -> Option<SurfaceHit> {
+        let extent = [
+            f64::from(self.scene.width - 1),
+            f64::from(self.scene.depth - 1),
+        ];
         let (mut t, mut t_end) = (0.0f64, f64::INFINITY);
         for axis in 0..2 {
             if dir[axis] == 0.0 {
@@ -115,7 +131,11 @@ impl<'s> Reference<'s> {
             let size = (1u64 << level) as f64;
             let index = |axis: usize, count: usize| {
                 let q = (origin[axis] + t * dir[axis]) / size;
-                let i = if dir[axis] < 0.0 { q.ceil() - 1.0 } else { q.floor() };
+                let i = if dir[axis] < 0.0 {
+                    q.ceil() - 1.0
+                } else {
+                    q.floor()
+                };
                 (i.max(0.0) as usize).min(count - 1)
             };
             let (nx, ny) = (index(0, node.width), index(1, node.depth));
@@ -150,7 +170,15 @@ impl<'s> Reference<'s> {
 
     /// Solves ray against the bilinear patch of cell (i, j) for t in [ta, tb]:
     /// along the ray the patch height is quadratic in t.
-    fn cell_hit(&self, i: usize, j: usize, o: [f64; 3], d: [f64; 3], ta: f64, tb: f64) -> Option<SurfaceHit> {
+    fn cell_hit(
+        &self,
+        i: usize,
+        j: usize,
+        o: [f64; 3],
+        d: [f64; 3],
+        ta: f64,
+        tb: f64,
+    ) -> Option<SurfaceHit> {
         let s = self.scene;
         let h00 = f64::from(s.height(i, j));
         let h10 = f64::from(s.height(i + 1, j));
@@ -182,20 +210,33 @@ impl<'s> Reference<'s> {
         let s = self.scene;
         let (w, d) = (s.width as usize, s.depth as usize);
         let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (d - 1) as f64));
-        let (i, j) = ((x.floor() as usize).min(w - 2), (y.floor() as usize).min(d - 2));
+        let (i, j) = (
+            (x.floor() as usize).min(w - 2),
+            (y.floor() as usize).min(d - 2),
+        );
         let (fx, fy) = (x - i as f64, y - j as f64);
         let at = |x: usize, y: usize| s.colors[y * w + x].map(f64::from);
         let (a, b, c, e) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
-        core::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy)
+        core::array::from_fn(|k| {
+            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy
+        })
     }
 
     /// Renders a view: colors from `n × n` rays a pixel, depth from the ray
     /// through the pixel center. Uses every available core.
-    pub fn render(&self, camera: &Camera, width: u32, height: u32, options: &ReferenceOptions) -> (Frame, RenderStats) {
+    pub fn render(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        options: &ReferenceOptions,
+    ) -> (Frame, RenderStats) {
         let rays = ContractCamera::new(camera, width, height);
         let n = options.supersample.max(1);
         let visits = AtomicU64::new(0);
-        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(height as usize);
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(height as usize);
         let started = Instant::now();
         let mut rows: Vec<(u32, Vec<Rgb>, Vec<f32>)> = std::thread::scope(|scope| {
             let workers: Vec<_> = (0..threads)
@@ -223,8 +264,11 @@ impl<'s> Reference<'s> {
                                     }
                                 }
                                 let samples = f64::from(n * n);
-                                colors.push(sum.map(|s| (s / samples).round().clamp(0.0, 255.0) as u8));
-                                let center = rays.direction(f64::from(px) + 0.5, f64::from(py) + 0.5);
+                                colors.push(
+                                    sum.map(|s| (s / samples).round().clamp(0.0, 255.0) as u8),
+                                );
+                                let center =
+                                    rays.direction(f64::from(px) + 0.5, f64::from(py) + 0.5);
                                 let depth = self
                                     .intersect(rays.eye, center, &mut count)
                                     .map_or(f32::INFINITY, |hit| (hit.t * length(center)) as f32);
@@ -237,7 +281,10 @@ impl<'s> Reference<'s> {
                     })
                 })
                 .collect();
-            workers.into_iter().flat_map(|w| w.join().expect("reference worker")).collect()
+            workers
+                .into_iter()
+                .flat_map(|w| w.join().expect("reference worker"))
+                .collect()
         });
         let render_ns = started.elapsed().as_nanos() as u64;
         rows.sort_by_key(|r| r.0);
@@ -255,7 +302,8 @@ impl<'s> Reference<'s> {
             steps: visits.into_inner(),
             resident_bytes: (self.scene.heights.len() * 4
                 + self.scene.colors.len() * 3
-                + self.levels.iter().map(|l| l.max.len() * 4).sum::<usize>()) as u64,
+                + self.levels.iter().map(|l| l.max.len() * 4).sum::<usize>())
+                as u64,
             render_ns,
         };
         (frame, stats)

@@ -39,7 +39,9 @@ impl Scene {
     pub fn new(width: u32, depth: u32, heights: Vec<f32>, colors: Vec<Rgb>) -> Result<Self> {
         let cells = width as usize * depth as usize;
         if width < 2 || depth < 2 {
-            return Err(Error::new(format!("terrain is {width}x{depth}: it needs at least 2x2 grid points")));
+            return Err(Error::new(format!(
+                "terrain is {width}x{depth}: it needs at least 2x2 grid points"
+            )));
         }
         if heights.len() != cells || colors.len() != cells {
             return Err(Error::new("height and color grids differ in size"));
@@ -51,7 +53,12 @@ impl Scene {
                 i / width as usize
             )));
         }
-        Ok(Self { width, depth, heights, colors })
+        Ok(Self {
+            width,
+            depth,
+            heights,
+            colors,
+        })
     }
 
     /// Height of grid point (x, y).

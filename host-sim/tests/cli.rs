@@ -5,7 +5,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn sim(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_terracast-sim")).args(args).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
+        .args(args)
+        .output()
+        .unwrap();
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -21,8 +24,12 @@ fn temp(name: &str) -> PathBuf {
 
 fn small_maps() -> (PathBuf, PathBuf) {
     let (h, c) = (temp("h.png"), temp("c.png"));
-    image::GrayImage::from_fn(16, 16, |x, y| image::Luma([(x * 3 + y) as u8])).save(&h).unwrap();
-    image::RgbImage::from_fn(16, 16, |x, _| image::Rgb([x as u8 * 10, 100, 50])).save(&c).unwrap();
+    image::GrayImage::from_fn(16, 16, |x, y| image::Luma([(x * 3 + y) as u8]))
+        .save(&h)
+        .unwrap();
+    image::RgbImage::from_fn(16, 16, |x, _| image::Rgb([x as u8 * 10, 100, 50]))
+        .save(&c)
+        .unwrap();
     (h, c)
 }
 
@@ -36,18 +43,42 @@ fn renders_png_depth_and_stats_as_the_contract_says() {
     let (png, pfm, json) = (temp("v.png"), temp("v.pfm"), temp("v.json"));
     for method in ["kernel", "reference"] {
         let (code, _, err) = sim(&[
-            "render", "--height", s(&h), "--color", s(&c), "--eye", "-4,7.5,80", "--yaw", "0", "--pitch", "40",
-            "--size", "32x24", "--method", method, "--out", s(&png), "--depth", s(&pfm), "--stats", s(&json),
+            "render",
+            "--height",
+            s(&h),
+            "--color",
+            s(&c),
+            "--eye",
+            "-4,7.5,80",
+            "--yaw",
+            "0",
+            "--pitch",
+            "40",
+            "--size",
+            "32x24",
+            "--method",
+            method,
+            "--out",
+            s(&png),
+            "--depth",
+            s(&pfm),
+            "--stats",
+            s(&json),
         ]);
         assert_eq!(code, 0, "{method}: {err}");
         let image = image::open(&png).unwrap();
         assert_eq!((image.width(), image.height()), (32, 24));
         assert!(matches!(image, image::DynamicImage::ImageRgb8(_)));
-        let (w, hh, depth) = terracast_sim::output::read_pfm(&std::fs::read(&pfm).unwrap()).unwrap();
+        let (w, hh, depth) =
+            terracast_sim::output::read_pfm(&std::fs::read(&pfm).unwrap()).unwrap();
         assert_eq!((w, hh), (32, 24));
         assert!(depth[0].is_infinite(), "top-left sees sky");
-        assert!(depth[32 * 23 + 16].is_finite(), "bottom middle sees terrain");
-        let stats: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        assert!(
+            depth[32 * 23 + 16].is_finite(),
+            "bottom middle sees terrain"
+        );
+        let stats: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
         for key in ["pixels", "steps", "resident_bytes", "render_ns"] {
             assert!(stats[key].as_u64().is_some(), "{method}: stats lack {key}");
         }
@@ -64,12 +95,29 @@ fn bad_input_gives_one_line_and_a_nonzero_exit() {
     std::fs::write(&not_png, b"not an image").unwrap();
     let out = temp("bad.png");
     let base = |extra: &[&str]| {
-        let mut v = vec!["render", "--height", s(&h), "--color", s(&c), "--out", s(&out)];
+        let mut v = vec![
+            "render",
+            "--height",
+            s(&h),
+            "--color",
+            s(&c),
+            "--out",
+            s(&out),
+        ];
         v.extend_from_slice(extra);
         v.into_iter().map(String::from).collect::<Vec<_>>()
     };
     let cases: Vec<(Vec<String>, &str)> = vec![
-        (vec!["render".into(), "--height".into(), "/nonexistent/h.png".into(), "--out".into(), s(&out).into()], "cannot open"),
+        (
+            vec![
+                "render".into(),
+                "--height".into(),
+                "/nonexistent/h.png".into(),
+                "--out".into(),
+                s(&out).into(),
+            ],
+            "cannot open",
+        ),
         (base(&["--eye", "1,2"]), "X,Y,Z"),
         (base(&["--eye", "nan,2,3"]), "finite"),
         (base(&["--yaw", "abc"]), "abc"),
@@ -81,25 +129,72 @@ fn bad_input_gives_one_line_and_a_nonzero_exit() {
         (base(&["--height-scale", "1000"]), "kernel's range"),
         (base(&["--sky", "1,2,300"]), "300"),
         (base(&["--method", "magic"]), "magic"),
-        (vec!["render".into(), "--height".into(), s(&not_png).into(), "--out".into(), s(&out).into()], "decode"),
-        (vec!["render".into(), "--height".into(), s(&h).into(), "--color".into(), s(&big).into(), "--out".into(), s(&out).into()], "too small"),
-        (vec!["render".into(), "--height".into(), s(&h).into(), "--out".into(), "/nonexistent/dir/x.png".into()], "cannot write"),
+        (
+            vec![
+                "render".into(),
+                "--height".into(),
+                s(&not_png).into(),
+                "--out".into(),
+                s(&out).into(),
+            ],
+            "decode",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--height".into(),
+                s(&h).into(),
+                "--color".into(),
+                s(&big).into(),
+                "--out".into(),
+                s(&out).into(),
+            ],
+            "too small",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--height".into(),
+                s(&h).into(),
+                "--out".into(),
+                "/nonexistent/dir/x.png".into(),
+            ],
+            "cannot write",
+        ),
         (vec!["render".into()], "--out"),
     ];
     for (args, needle) in cases {
         let refs: Vec<&str> = args.iter().map(String::as_str).collect();
         let (code, _, err) = sim(&refs);
         assert_ne!(code, 0, "{args:?} succeeded");
-        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: not one line: {err}");
-        assert!(!err.contains("panicked") && !err.contains("internal error"), "{args:?}: {err}");
-        assert!(err.contains(needle), "{args:?}: '{err}' does not mention '{needle}'");
+        assert_eq!(
+            err.trim_end().lines().count(),
+            1,
+            "{args:?}: not one line: {err}"
+        );
+        assert!(
+            !err.contains("panicked") && !err.contains("internal error"),
+            "{args:?}: {err}"
+        );
+        assert!(
+            err.contains(needle),
+            "{args:?}: '{err}' does not mention '{needle}'"
+        );
     }
 }
 
 #[test]
 fn procedural_scene_needs_no_data() {
     let png = temp("proc.png");
-    let (code, _, err) = sim(&["render", "--procedural-size", "128", "--size", "64x36", "--out", s(&png)]);
+    let (code, _, err) = sim(&[
+        "render",
+        "--procedural-size",
+        "128",
+        "--size",
+        "64x36",
+        "--out",
+        s(&png),
+    ]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(image::open(&png).unwrap().width(), 64);
 }

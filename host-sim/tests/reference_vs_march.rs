@@ -6,15 +6,21 @@ use terracast_sim::reference::Reference;
 use terracast_sim::scene::Scene;
 
 fn lcg(state: &mut u64) -> f64 {
-    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (*state >> 11) as f64 / (1u64 << 53) as f64
 }
 
 fn bilinear(scene: &Scene, x: f64, y: f64) -> f64 {
-    let (i, j) = ((x.floor() as usize).min(scene.width as usize - 2), (y.floor() as usize).min(scene.depth as usize - 2));
+    let (i, j) = (
+        (x.floor() as usize).min(scene.width as usize - 2),
+        (y.floor() as usize).min(scene.depth as usize - 2),
+    );
     let (fx, fy) = (x - i as f64, y - j as f64);
     let h = |a, b| f64::from(scene.height(a, b));
-    (h(i, j) * (1.0 - fx) + h(i + 1, j) * fx) * (1.0 - fy) + (h(i, j + 1) * (1.0 - fx) + h(i + 1, j + 1) * fx) * fy
+    (h(i, j) * (1.0 - fx) + h(i + 1, j) * fx) * (1.0 - fy)
+        + (h(i, j + 1) * (1.0 - fx) + h(i + 1, j + 1) * fx) * fy
 }
 
 /// First t with the ray at or below the surface, found with steps of `step`
@@ -37,7 +43,11 @@ fn march(scene: &Scene, o: [f64; 3], d: [f64; 3], step: f64) -> Option<f64> {
                 let (mut lo, mut hi) = (t - step, t);
                 for _ in 0..60 {
                     let mid = 0.5 * (lo + hi);
-                    if below(mid) { hi = mid } else { lo = mid }
+                    if below(mid) {
+                        hi = mid
+                    } else {
+                        lo = mid
+                    }
                 }
                 return Some(hi);
             }
@@ -54,12 +64,18 @@ fn march(scene: &Scene, o: [f64; 3], d: [f64; 3], step: f64) -> Option<f64> {
 fn reference_agrees_with_a_fine_march() {
     let mut rng = 7u64;
     let side = 24u32;
-    let heights: Vec<f32> = (0..side * side).map(|_| (lcg(&mut rng) * 12.0) as f32).collect();
+    let heights: Vec<f32> = (0..side * side)
+        .map(|_| (lcg(&mut rng) * 12.0) as f32)
+        .collect();
     let scene = Scene::new(side, side, heights, vec![[0; 3]; (side * side) as usize]).unwrap();
     let reference = Reference::new(&scene);
     let (mut agree, mut total, mut worst) = (0, 0, 0.0f64);
     for _ in 0..400 {
-        let o = [lcg(&mut rng) * 30.0 - 3.0, lcg(&mut rng) * 30.0 - 3.0, 8.0 + lcg(&mut rng) * 10.0];
+        let o = [
+            lcg(&mut rng) * 30.0 - 3.0,
+            lcg(&mut rng) * 30.0 - 3.0,
+            8.0 + lcg(&mut rng) * 10.0,
+        ];
         let a = lcg(&mut rng) * std::f64::consts::TAU;
         let down = -0.05 - lcg(&mut rng) * 0.8;
         let d = [a.cos(), a.sin(), down];
@@ -76,6 +92,9 @@ fn reference_agrees_with_a_fine_march() {
         }
     }
     println!("{agree}/{total} rays agree on hit or miss; worst |Δt| {worst:.2e}");
-    assert!(agree >= total * 995 / 1000, "only {agree} of {total} rays agree");
+    assert!(
+        agree >= total * 995 / 1000,
+        "only {agree} of {total} rays agree"
+    );
     assert!(worst < 2e-3, "hit positions differ by {worst}");
 }

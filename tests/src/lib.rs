@@ -26,7 +26,8 @@ pub fn data_dir() -> PathBuf {
 /// Loads Comanche color map `C{color}.png` over height map `D{height}.png`.
 pub fn comanche(color: &str, height: &str) -> Scene {
     let dir = data_dir().join("comanche");
-    let (w, d, heights) = load_heights(&dir.join(format!("D{height}.png")), 1.0).expect("height map");
+    let (w, d, heights) =
+        load_heights(&dir.join(format!("D{height}.png")), 1.0).expect("height map");
     let colors = load_colors(&dir.join(format!("C{color}.png")), w, d).expect("color map");
     Scene::new(w, d, heights, colors).expect("scene")
 }
@@ -43,7 +44,12 @@ pub fn camera(eye: [f32; 3], yaw: f32, pitch: f32) -> Camera {
 }
 
 /// Renders with the kernel at the given coherence.
-pub fn kernel_view(scene: &KernelScene, cam: &Camera, size: (u32, u32), coherence: Coherence) -> (Frame, RenderStats) {
+pub fn kernel_view(
+    scene: &KernelScene,
+    cam: &Camera,
+    size: (u32, u32),
+    coherence: Coherence,
+) -> (Frame, RenderStats) {
     let options = RenderOptions {
         coherence,
         ..RenderOptions::default()
@@ -53,5 +59,7 @@ pub fn kernel_view(scene: &KernelScene, cam: &Camera, size: (u32, u32), coherenc
 
 /// Renders the exact reference at 4 × 4 rays a pixel.
 pub fn reference_view(reference: &Reference<'_>, cam: &Camera, size: (u32, u32)) -> Frame {
-    reference.render(cam, size.0, size.1, &ReferenceOptions::default()).0
+    reference
+        .render(cam, size.0, size.1, &ReferenceOptions::default())
+        .0
 }

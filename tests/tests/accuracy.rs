@@ -44,5 +44,8 @@ fn kernel_matches_reference_on_comanche_maps() {
             }
         }
     }
-    assert!(failures.is_empty(), "views below the accuracy bar: {failures:?}");
+    assert!(
+        failures.is_empty(),
+        "views below the accuracy bar: {failures:?}"
+    );
 }

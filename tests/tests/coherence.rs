@@ -26,7 +26,11 @@ fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
         let scene = comanche(color, height).to_kernel().unwrap();
         for (i, yaw) in [15.0f32, 100.0, 190.0, 280.0].into_iter().enumerate() {
             for pitch in [0.0f32, 10.0, 30.0, 60.0, 90.0] {
-                let eye = [300.0 + 120.0 * i as f32, 700.0 - 100.0 * i as f32, 130.0 + 20.0 * i as f32];
+                let eye = [
+                    300.0 + 120.0 * i as f32,
+                    700.0 - 100.0 * i as f32,
+                    130.0 + 20.0 * i as f32,
+                ];
                 let cam = camera(eye, yaw, pitch);
                 let (off, s_off) = kernel_view(&scene, &cam, SIZE, Coherence::Off);
                 let (exact, s_exact) = kernel_view(&scene, &cam, SIZE, Coherence::Exact);
@@ -43,10 +47,14 @@ fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
                 );
                 assert_eq!(exact.depth, off.depth, "exact coherence changed depth");
                 if exact_differ != 0 {
-                    failures.push(format!("exact: C{color} yaw {yaw} pitch {pitch}: {exact_differ} px"));
+                    failures.push(format!(
+                        "exact: C{color} yaw {yaw} pitch {pitch}: {exact_differ} px"
+                    ));
                 }
                 if fraction > 0.001 || p < 38.0 || (pitch == 0.0 && default_differ != 0) {
-                    failures.push(format!("default: C{color} yaw {yaw} pitch {pitch}: {default_differ} px, {p:.1} dB"));
+                    failures.push(format!(
+                        "default: C{color} yaw {yaw} pitch {pitch}: {default_differ} px, {p:.1} dB"
+                    ));
                 }
                 off_steps += s_off.steps;
                 exact_steps += s_exact.steps;
@@ -59,6 +67,9 @@ fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
         off_steps as f64 / exact_steps as f64,
         off_steps as f64 / default_steps as f64
     );
-    assert!(failures.is_empty(), "coherence changed more than its bound: {failures:?}");
+    assert!(
+        failures.is_empty(),
+        "coherence changed more than its bound: {failures:?}"
+    );
     assert!(exact_steps < off_steps && default_steps < exact_steps);
 }

@@ -189,25 +189,69 @@ fn cast<P: Probe>(
     let mut outcome = match plan {
         Some((prefix_end, _)) if prefix_end >= ray.start => {
             let end = prefix_end.min(ray.end);
-            walk(heights, ray, &strides, ray.cursor(ray.start, &strides), end, probe)
+            walk(
+                heights,
+                ray,
+                &strides,
+                ray.cursor(ray.start, &strides),
+                end,
+                probe,
+            )
         }
-        Some(_) => Walk::Exit { last: ray.start - 1 },
-        None => walk(heights, ray, &strides, ray.cursor(ray.start, &strides), ray.end, probe),
+        Some(_) => Walk::Exit {
+            last: ray.start - 1,
+        },
+        None => walk(
+            heights,
+            ray,
+            &strides,
+            ray.cursor(ray.start, &strides),
+            ray.end,
+            probe,
+        ),
     };
     if let (Some((_, resume)), Walk::Exit { last }) = (plan, outcome) {
         if last < ray.end {
             let from = resume.clamp(last + 1, ray.end);
-            outcome = walk(heights, ray, &strides, ray.cursor(from, &strides), ray.end, probe);
+            outcome = walk(
+                heights,
+                ray,
+                &strides,
+                ray.cursor(from, &strides),
+                ray.end,
+                probe,
+            );
         }
     }
     match outcome {
         Walk::Exit { last } => (sky(options), last + 1),
-        Walk::Hit { at, clearance, above: Some(above) } => {
-            (shade(terrain, ray, &strides, at, clearance, Some(above), options, probe), at.k)
-        }
-        Walk::Hit { at, clearance, above: None } => {
+        Walk::Hit {
+            at,
+            clearance,
+            above: Some(above),
+        } => (
+            shade(
+                terrain,
+                ray,
+                &strides,
+                at,
+                clearance,
+                Some(above),
+                options,
+                probe,
+            ),
+            at.k,
+        ),
+        Walk::Hit {
+            at,
+            clearance,
+            above: None,
+        } => {
             let (at, clearance, above) = retrace(heights, ray, &strides, at, clearance, probe);
-            (shade(terrain, ray, &strides, at, clearance, above, options, probe), at.k)
+            (
+                shade(terrain, ray, &strides, at, clearance, above, options, probe),
+                at.k,
+            )
         }
     }
 }
@@ -284,7 +328,12 @@ fn shade<P: Probe>(
 /// The color where a sample's grid line is crossed: two voxels blended by
 /// the subvoxel weight.
 #[inline]
-fn line_color<P: Probe>(colors: &[Rgb], at: &Cursor, strides: &Strides, probe: &mut P) -> Option<Rgb> {
+fn line_color<P: Probe>(
+    colors: &[Rgb],
+    at: &Cursor,
+    strides: &Strides,
+    probe: &mut P,
+) -> Option<Rgb> {
     let (index, weight) = locate(at, strides, WEIGHT_BITS);
     let c0 = *colors.get(index as usize)?;
     let c1 = *colors.get((index + strides.minor) as usize)?;

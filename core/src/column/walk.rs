@@ -17,7 +17,10 @@ use crate::view::ray::{Cursor, Ray, Strides};
 pub(crate) fn locate(at: &Cursor, strides: &Strides, bits: u32) -> (isize, i32) {
     let minor = at.minor.to_bits();
     let index = at.base + (minor >> COORD_FRAC_BITS) as isize * strides.minor;
-    (index, (minor >> (COORD_FRAC_BITS - bits)) & ((1 << bits) - 1))
+    (
+        index,
+        (minor >> (COORD_FRAC_BITS - bits)) & ((1 << bits) - 1),
+    )
 }
 
 /// How far the ray is above the surface at a sample (Q16; ≤ 0 is a hit),
@@ -64,7 +67,11 @@ pub(crate) fn walk<P: Probe>(
         };
         probe.visit(voxel);
         if clearance <= 0 {
-            return Walk::Hit { at, clearance, above };
+            return Walk::Hit {
+                at,
+                clearance,
+                above,
+            };
         }
         if at.k >= end {
             return Walk::Exit { last: at.k };

@@ -144,7 +144,8 @@ impl View {
         // Pixel (c, row j from the bottom) has a = (2c+1)/W − 1 and
         // b = (2j+1)/H − 1, so both advance by 2/W · t per pixel.
         let step = 2.0 * tangent / w;
-        let base = forward + right * (tangent * (1.0 / w - 1.0)) + up * (tangent * (1.0 / w - h / w));
+        let base =
+            forward + right * (tangent * (1.0 / w - 1.0)) + up * (tangent * (1.0 / w - h / w));
         Ok(Self {
             eye: camera.eye.map(|v| I48F16::from_num(v)),
             base: to_fixed(base),
@@ -185,27 +186,82 @@ mod tests {
         let ok = camera();
         assert!(View::new(&ok, 64, 48).is_ok());
         let cases = [
-            (Camera { yaw_deg: f32::NAN, ..ok }, ViewError::NotFinite),
-            (Camera { eye: [0.0, 0.0, f32::INFINITY], ..ok }, ViewError::NotFinite),
-            (Camera { eye: [40_000.0, 0.0, 0.0], ..ok }, ViewError::EyeOutOfRange),
-            (Camera { pitch_deg: 91.0, ..ok }, ViewError::PitchOutOfRange),
-            (Camera { pitch_deg: -90.0, ..ok }, ViewError::PitchOutOfRange),
-            (Camera { roll_deg: 5.0, ..ok }, ViewError::RollUnsupported),
-            (Camera { hfov_deg: 0.0, ..ok }, ViewError::FovOutOfRange),
-            (Camera { hfov_deg: 179.0, ..ok }, ViewError::FovOutOfRange),
+            (
+                Camera {
+                    yaw_deg: f32::NAN,
+                    ..ok
+                },
+                ViewError::NotFinite,
+            ),
+            (
+                Camera {
+                    eye: [0.0, 0.0, f32::INFINITY],
+                    ..ok
+                },
+                ViewError::NotFinite,
+            ),
+            (
+                Camera {
+                    eye: [40_000.0, 0.0, 0.0],
+                    ..ok
+                },
+                ViewError::EyeOutOfRange,
+            ),
+            (
+                Camera {
+                    pitch_deg: 91.0,
+                    ..ok
+                },
+                ViewError::PitchOutOfRange,
+            ),
+            (
+                Camera {
+                    pitch_deg: -90.0,
+                    ..ok
+                },
+                ViewError::PitchOutOfRange,
+            ),
+            (
+                Camera {
+                    roll_deg: 5.0,
+                    ..ok
+                },
+                ViewError::RollUnsupported,
+            ),
+            (
+                Camera {
+                    hfov_deg: 0.0,
+                    ..ok
+                },
+                ViewError::FovOutOfRange,
+            ),
+            (
+                Camera {
+                    hfov_deg: 179.0,
+                    ..ok
+                },
+                ViewError::FovOutOfRange,
+            ),
         ];
         for (cam, err) in cases {
             assert_eq!(View::new(&cam, 64, 48).unwrap_err(), err, "{cam:?}");
         }
         assert_eq!(View::new(&ok, 0, 48).unwrap_err(), ViewError::ImageSize);
         assert_eq!(View::new(&ok, 64, 9000).unwrap_err(), ViewError::ImageSize);
-        assert_eq!(View::new(&ok, 1, 8000).unwrap_err(), ViewError::AspectOutOfRange);
+        assert_eq!(
+            View::new(&ok, 1, 8000).unwrap_err(),
+            ViewError::AspectOutOfRange
+        );
     }
 
     #[test]
     fn center_ray_is_forward() {
         // An odd-sized image has a pixel centered on the optical axis.
-        let cam = Camera { yaw_deg: 90.0, pitch_deg: 30.0, ..camera() };
+        let cam = Camera {
+            yaw_deg: 90.0,
+            pitch_deg: 30.0,
+            ..camera()
+        };
         let view = View::new(&cam, 5, 3).unwrap();
         let d: [f64; 3] = core::array::from_fn(|i| {
             (view.base[i] + view.per_column[i] * 2 + view.per_row[i]).to_num()

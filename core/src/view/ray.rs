@@ -162,7 +162,11 @@ impl Ray {
     /// The voxel-index strides of this ray on a map `width` voxels wide.
     pub fn strides(&self, width: u32) -> Strides {
         let width = width as isize;
-        let (major, minor) = if self.key.x_major { (1, width) } else { (width, 1) };
+        let (major, minor) = if self.key.x_major {
+            (1, width)
+        } else {
+            (width, 1)
+        };
         Strides {
             step: if self.key.forward { major } else { -major },
             minor,
@@ -174,7 +178,11 @@ impl Ray {
     /// resumed ray sees exactly the values it would have reached by walking.
     pub fn cursor(&self, k: i32, strides: &Strides) -> Cursor {
         let k64 = i64::from(k);
-        let major = if self.key.forward { self.major0 + k64 } else { self.major0 - k64 };
+        let major = if self.key.forward {
+            self.major0 + k64
+        } else {
+            self.major0 - k64
+        };
         // Inside [first, end] both values are in range by construction; the
         // clamp keeps an out-of-range request harmless (it reads as far
         // below the surface, or as outside the map).
@@ -257,7 +265,10 @@ mod tests {
                     for k in ray.first..=ray.end {
                         let cur = ray.cursor(k, &s);
                         let idx = cur.base + (cur.minor.to_bits() >> 16) as isize * s.minor;
-                        assert!(idx >= 0 && ((idx + s.minor) as usize) < h.len(), "yaw {yaw} k {k}");
+                        assert!(
+                            idx >= 0 && ((idx + s.minor) as usize) < h.len(),
+                            "yaw {yaw} k {k}"
+                        );
                     }
                 }
             }

@@ -12,7 +12,9 @@ use terracast::Rgb;
 /// Loads a height map: `(width, depth, heights)` with heights = value × scale.
 pub fn load_heights(path: &Path, scale: f32) -> Result<(u32, u32, Vec<f32>)> {
     if !scale.is_finite() || scale <= 0.0 {
-        return Err(Error::new(format!("--height-scale must be a positive number, got {scale}")));
+        return Err(Error::new(format!(
+            "--height-scale must be a positive number, got {scale}"
+        )));
     }
     let is_hgt = path
         .extension()
@@ -23,10 +25,21 @@ pub fn load_heights(path: &Path, scale: f32) -> Result<(u32, u32, Vec<f32>)> {
     let image = open_image(path, "height map")?;
     let (w, h) = (image.width(), image.height());
     let values: Vec<f32> = match image {
-        DynamicImage::ImageLuma8(_) | DynamicImage::ImageLumaA8(_) | DynamicImage::ImageRgb8(_) | DynamicImage::ImageRgba8(_) => {
-            image.to_luma8().into_raw().into_iter().map(f32::from).collect()
-        }
-        _ => image.to_luma16().into_raw().into_iter().map(f32::from).collect(),
+        DynamicImage::ImageLuma8(_)
+        | DynamicImage::ImageLumaA8(_)
+        | DynamicImage::ImageRgb8(_)
+        | DynamicImage::ImageRgba8(_) => image
+            .to_luma8()
+            .into_raw()
+            .into_iter()
+            .map(f32::from)
+            .collect(),
+        _ => image
+            .to_luma16()
+            .into_raw()
+            .into_iter()
+            .map(f32::from)
+            .collect(),
     };
     Ok((w, h, values.into_iter().map(|v| v * scale).collect()))
 }
@@ -76,7 +89,10 @@ pub fn load_colors(path: &Path, width: u32, depth: u32) -> Result<Vec<Rgb>> {
     let sx = f64::from(cw - 1) / f64::from(width - 1);
     let sy = f64::from(cd - 1) / f64::from(depth - 1);
     let pixel = |x: i64, y: i64| {
-        let p = image.get_pixel(x.clamp(0, i64::from(cw) - 1) as u32, y.clamp(0, i64::from(cd) - 1) as u32);
+        let p = image.get_pixel(
+            x.clamp(0, i64::from(cw) - 1) as u32,
+            y.clamp(0, i64::from(cd) - 1) as u32,
+        );
         [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]
     };
     let mut out = Vec::with_capacity(width as usize * depth as usize);
@@ -102,9 +118,15 @@ pub fn load_colors(path: &Path, width: u32, depth: u32) -> Result<Vec<Rgb>> {
                 let (x0, y0) = (cx.floor(), cy.floor());
                 let (fx, fy) = (cx - x0, cy - y0);
                 let (x0, y0) = (x0 as i64, y0 as i64);
-                let (a, b, c, d) = (pixel(x0, y0), pixel(x0 + 1, y0), pixel(x0, y0 + 1), pixel(x0 + 1, y0 + 1));
+                let (a, b, c, d) = (
+                    pixel(x0, y0),
+                    pixel(x0 + 1, y0),
+                    pixel(x0, y0 + 1),
+                    pixel(x0 + 1, y0 + 1),
+                );
                 core::array::from_fn(|i| {
-                    (a[i] * (1.0 - fx) + b[i] * fx) * (1.0 - fy) + (c[i] * (1.0 - fx) + d[i] * fx) * fy
+                    (a[i] * (1.0 - fx) + b[i] * fx) * (1.0 - fy)
+                        + (c[i] * (1.0 - fx) + d[i] * fx) * fy
                 })
             };
             out.push(color.map(|v| v.round().clamp(0.0, 255.0) as u8));

@@ -52,7 +52,7 @@ pub fn color_by_height_and_slope(width: u32, depth: u32, heights: &[f32], seed: 
             let base: [f64; 3] = if h <= WATER_LEVEL + 0.01 && lo < WATER_LEVEL + 0.01 {
                 let depth_tint = 0.8 + 0.4 * patch;
                 [40.0 * depth_tint, 80.0 * depth_tint, 110.0 * depth_tint]
-            } else if rel < 0.16 {
+            } else if h < WATER_LEVEL + 2.5 {
                 [196.0, 180.0, 130.0]
             } else if slope > 1.3 || (rel > 0.62 && slope > 0.6) {
                 [120.0 + 30.0 * patch, 108.0 + 20.0 * patch, 96.0]
@@ -64,14 +64,18 @@ pub fn color_by_height_and_slope(width: u32, depth: u32, heights: &[f32], seed: 
                 [92.0 + 40.0 * patch, 128.0 + 30.0 * patch, 58.0]
             };
             let shade = if h <= WATER_LEVEL + 0.01 { 1.0 } else { light };
-            colors.push(base.map(|c| (c * shade * (1.0 + 0.18 * grain)).round().clamp(0.0, 255.0) as u8));
+            colors.push(
+                base.map(|c| (c * shade * (1.0 + 0.18 * grain)).round().clamp(0.0, 255.0) as u8),
+            );
         }
     }
     colors
 }
 
 fn hash(x: i64, y: i64, seed: u64) -> f64 {
-    let mut h = seed ^ (x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
+    let mut h = seed
+        ^ (x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
     h ^= h >> 31;
     h = h.wrapping_mul(0xBF58_476D_1CE4_E5B9);
     h ^= h >> 29;
@@ -104,7 +108,15 @@ fn fbm(x: f64, y: f64, seed: u64, octaves: u32, gain: f64) -> f64 {
 fn ridged(x: f64, y: f64, seed: u64, octaves: u32) -> f64 {
     let (mut sum, mut amp, mut freq, mut norm, mut weight) = (0.0, 1.0, 1.0, 0.0, 1.0);
     for o in 0..octaves {
-        let n = 1.0 - (2.0 * value_noise(x * freq, y * freq, seed.wrapping_add(u64::from(o) * 104_729)) - 1.0).abs();
+        let n = 1.0
+            - (2.0
+                * value_noise(
+                    x * freq,
+                    y * freq,
+                    seed.wrapping_add(u64::from(o) * 104_729),
+                )
+                - 1.0)
+                .abs();
         let r = n * n * weight;
         weight = (r * 1.5).clamp(0.0, 1.0);
         sum += amp * r;
