@@ -166,8 +166,9 @@ mod tests {
         let h = [0, 5, 7, 1, 5, 40];
         let c = [[0u8; 3]; 6];
         assert_eq!(Terrain::new(3, 2, &h, &c).unwrap().max_step(), 35);
+        // Here the wrap 7 -> 1 (6) would be the largest: it must not count.
         let h = [0, 5, 7, 1, 5, 8];
-        assert_eq!(Terrain::new(3, 2, &h, &c).unwrap().max_step(), 6);
+        assert_eq!(Terrain::new(3, 2, &h, &c).unwrap().max_step(), 5);
     }
 
     #[test]
