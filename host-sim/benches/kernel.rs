@@ -13,7 +13,7 @@ use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
 use terracast::{render, Camera, Coherence, CountingProbe, NoProbe, RenderOptions, View};
 use terracast_sim::kernel::SampleBuffer;
-use terracast_sim::scene::{load_colors, load_heights, procedural, Scene};
+use terracast_sim::scene::{load_pair, procedural, Scene};
 
 const SIZE: (u32, u32) = (640, 480);
 const SETTINGS: [(&str, Coherence); 3] = [
@@ -27,11 +27,8 @@ fn scene() -> (Scene, &'static str) {
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"))
         .join("comanche");
-    match load_heights(&dir.join("D7.png"), 1.0) {
-        Ok((w, d, heights)) => {
-            let colors = load_colors(&dir.join("C7W.png"), w, d).expect("C7W.png");
-            (Scene::new(w, d, heights, colors).expect("scene"), "C7W/D7")
-        }
+    match load_pair(&dir.join("D7.png"), Some(&dir.join("C7W.png")), 1.0, 0) {
+        Ok(scene) => (scene, "C7W/D7"),
         Err(_) => (procedural(1024, 1), "procedural 1024"),
     }
 }

@@ -4,7 +4,7 @@ use crate::error::{Error, Result};
 use crate::kernel::render_kernel;
 use crate::output::{stats_json, write_pfm, write_png, write_stats};
 use crate::reference::{Reference, ReferenceOptions};
-use crate::scene::{color_by_height_and_slope, load_colors, load_heights, procedural, Scene};
+use crate::scene::{load_pair, procedural, Scene};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use terracast::{Camera, Coherence, RenderOptions, Rgb, Terrain, View, ViewError};
@@ -230,14 +230,7 @@ fn load_scene(args: &RenderArgs) -> Result<Scene> {
             }
             Ok(procedural(args.procedural_size, args.seed))
         }
-        (Some(h), color) => {
-            let (w, d, heights) = load_heights(h, args.height_scale)?;
-            let colors = match color {
-                Some(c) => load_colors(c, w, d)?,
-                None => color_by_height_and_slope(w, d, &heights, args.seed),
-            };
-            Scene::new(w, d, heights, colors)
-        }
+        (Some(h), color) => load_pair(h, color.as_deref(), args.height_scale, args.seed),
     }
 }
 

@@ -34,6 +34,22 @@ pub struct KernelScene {
     colors: Vec<Rgb>,
 }
 
+/// Loads a height map and its color map (colored by height and slope when
+/// `color` is `None`) into a checked scene.
+pub fn load_pair(
+    height: &std::path::Path,
+    color: Option<&std::path::Path>,
+    scale: f32,
+    seed: u64,
+) -> Result<Scene> {
+    let (w, d, heights) = load_heights(height, scale)?;
+    let colors = match color {
+        Some(c) => load_colors(c, w, d)?,
+        None => color_by_height_and_slope(w, d, &heights, seed),
+    };
+    Scene::new(w, d, heights, colors)
+}
+
 impl Scene {
     /// Checks that the sizes agree and every height is finite.
     pub fn new(width: u32, depth: u32, heights: Vec<f32>, colors: Vec<Rgb>) -> Result<Self> {

@@ -6,7 +6,7 @@ use terracast::{Camera, Coherence, RenderOptions};
 use terracast_sim::frame::{Frame, RenderStats};
 use terracast_sim::kernel::render_kernel;
 use terracast_sim::reference::{Reference, ReferenceOptions};
-use terracast_sim::scene::{load_colors, load_heights, KernelScene, Scene};
+use terracast_sim::scene::{load_pair, KernelScene, Scene};
 
 /// The shared data folder: `$TERRACAST_DATA`, or `../shared/data` beside the
 /// repository. The tests that need it fail with a clear message if it is
@@ -26,10 +26,11 @@ pub fn data_dir() -> PathBuf {
 /// Loads Comanche color map `C{color}.png` over height map `D{height}.png`.
 pub fn comanche(color: &str, height: &str) -> Scene {
     let dir = data_dir().join("comanche");
-    let (w, d, heights) =
-        load_heights(&dir.join(format!("D{height}.png")), 1.0).expect("height map");
-    let colors = load_colors(&dir.join(format!("C{color}.png")), w, d).expect("color map");
-    Scene::new(w, d, heights, colors).expect("scene")
+    let (h, c) = (
+        dir.join(format!("D{height}.png")),
+        dir.join(format!("C{color}.png")),
+    );
+    load_pair(&h, Some(&c), 1.0, 0).expect("Comanche maps")
 }
 
 /// A camera with the contract's default field of view.
