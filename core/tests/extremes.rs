@@ -67,13 +67,25 @@ fn check_plane(w: u32, d: u32, eye: [f32; 3], yaw: f32) -> (usize, f64) {
             && (0.0..=f64::from(d - 1)).contains(&hy);
         let got = distances[index];
         if !inside {
-            // Near the map's far edge the kernel may still catch the plane;
-            // it must never report a hit before the map starts.
-            if got != Sample::SKY {
+            // Distances along the major axis from the eye to the map's near
+            // and far edges.
+            let (e, len, sign) = if yaw.cos().abs() > 0.5 {
+                (f64::from(eye[0]), f64::from(w - 1), yaw.cos().signum())
+            } else {
+                (f64::from(eye[1]), f64::from(d - 1), yaw.sin().signum())
+            };
+            let (to0, to_end) = (-e * sign, (len - e) * sign);
+            let (near, far) = (to0.min(to_end).max(0.0), to0.max(to_end));
+            let major_expected = along * yaw.cos().abs().max(yaw.sin().abs());
+            if below <= 0.0 || major_expected > far * 1.02 {
+                // Rising, or meeting the plane beyond the map: sky.
+                assert_eq!(got, Sample::SKY, "row {py}: hit where there is no terrain");
+            } else if major_expected < near {
+                // Enters the map already below the plane: hit at the near edge.
                 let major = f64::from(got) / 65536.0;
                 assert!(
-                    major > along.min(1e9) * 0.9 || below <= 0.0 || along > 6e4,
-                    "row {py}: spurious hit at {major}"
+                    (major - near).abs() <= 1.0,
+                    "row {py}: hit at {major}, near edge at {near}"
                 );
             }
             continue;

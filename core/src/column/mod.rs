@@ -107,6 +107,13 @@ pub fn render_column<S: Sink, P: Probe>(
     sink: &mut S,
     probe: &mut P,
 ) {
+    // The slope bound the resume proof assumes; `None` casts every ray from
+    // the eye.
+    let slope = match options.coherence {
+        Coherence::Off => None,
+        Coherence::Exact => Some(terrain.max_step()),
+        Coherence::Bounded { slope } => Some(slope.min(terrain.max_step())),
+    };
     let mut anchor: Option<Anchor> = None;
     let top_row = view.height() - 1;
     for row in 0..view.height() {
@@ -115,11 +122,6 @@ pub fn render_column<S: Sink, P: Probe>(
         let sample = if ray.start > ray.end {
             sky(options)
         } else {
-            let slope = match options.coherence {
-                Coherence::Off => None,
-                Coherence::Exact => Some(terrain.max_step()),
-                Coherence::Bounded { slope } => Some(slope.min(terrain.max_step())),
-            };
             let plan = anchor
                 .zip(slope)
                 .and_then(|(a, slope)| resume_plan(&a, &ray, slope));
@@ -143,8 +145,9 @@ pub fn render_column<S: Sink, P: Probe>(
 /// Let the anchor ray be above the surface at samples `start..k`. At sample
 /// `i`, at distance `s ≥ i` from the eye, this ray is higher by at least
 /// `s·rise − 1` (Q16 bits) and sideways by at most `s·drift + 1`, and the
-/// sampled surface (heights blended by a weight quantized to 1/4096, i.e.
-/// 16 bits) can be higher there by at most `L/16 · (s·drift + 17)`, with `L`
+/// sampled surface (heights blended by a 12-bit weight, so positions are
+/// quantized to 16 Q16 bits) can be higher there by at most
+/// `L/16 · (s·drift + 17)`, with `L`
 /// the slope bound in U12.4 per voxel. So this ray is above wherever
 /// `s·(rise − L·drift/16) > 1 + 17·L/16`: everywhere past a short prefix.
 fn resume_plan(anchor: &Anchor, ray: &Ray, slope: u16) -> Option<(i32, i32)> {
@@ -186,29 +189,21 @@ fn cast<P: Probe>(
 ) -> (Sample, i32) {
     let heights = terrain.heights();
     let strides = ray.strides(terrain.width());
-    let mut outcome = match plan {
-        Some((prefix_end, _)) if prefix_end >= ray.start => {
-            let end = prefix_end.min(ray.end);
-            walk(
-                heights,
-                ray,
-                &strides,
-                ray.cursor(ray.start, &strides),
-                end,
-                probe,
-            )
-        }
-        Some(_) => Walk::Exit {
-            last: ray.start - 1,
-        },
-        None => walk(
+    // With a plan, walk only the prefix the proof does not cover first.
+    let first_end = plan.map_or(ray.end, |(prefix_end, _)| prefix_end.min(ray.end));
+    let mut outcome = if first_end >= ray.start {
+        walk(
             heights,
             ray,
             &strides,
             ray.cursor(ray.start, &strides),
-            ray.end,
+            first_end,
             probe,
-        ),
+        )
+    } else {
+        Walk::Exit {
+            last: ray.start - 1,
+        }
     };
     if let (Some((_, resume)), Walk::Exit { last }) = (plan, outcome) {
         if last < ray.end {
