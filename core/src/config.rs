@@ -37,6 +37,16 @@ pub const MAX_EYE_HEIGHT: f32 = 16_000.0;
 /// (within 0.007° of vertical) are clamped to it; they hit within two steps.
 pub const MAX_RAY_SLOPE: i32 = 8_192;
 
+/// Highest level a pyramid can have: a map of [`MAX_MAP_SIDE`] has levels
+/// 0 to 15.
+pub const MAX_LEVEL: u32 = 15;
+
+/// Highest level the caster steps on. A step there is `2^14` voxels, which
+/// keeps the doubled minor increment inside `I16F16`; rays steeper than
+/// `2^(13 − l)` (height units per voxel) stop doubling before level `l` so
+/// their height increment stays in range too.
+pub const MAX_WALK_LEVEL: u32 = 14;
+
 /// Largest image side in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 8_192;
 

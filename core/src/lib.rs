@@ -7,19 +7,29 @@
 //! Data flows one way: **terrain → view → columns → sink**.
 //!
 //! ```
-//! use terracast::{render, Camera, CountingProbe, Framebuffer, RenderOptions, Terrain, View};
+//! use terracast::{
+//!     pyramid_cells, pyramid_points, render, Camera, CountingProbe, Framebuffer, HeightFilter,
+//!     Pyramid, RenderOptions, Terrain, View,
+//! };
 //!
 //! // A 4 x 4 map rising toward +x, every voxel green.
 //! let heights: [u16; 16] = core::array::from_fn(|i| (i % 4) as u16 * 16);
 //! let colors = [[0, 200, 0]; 16];
 //! let terrain = Terrain::new(4, 4, &heights, &colors)?;
 //!
+//! // Its coarser levels, in storage sized at compile time.
+//! const POINTS: usize = pyramid_points(4, 4);
+//! let (mut coarse_heights, mut coarse_colors) = ([0u16; POINTS], [[0u8; 3]; POINTS]);
+//! let mut bounds = [0u16; pyramid_cells(4, 4)];
+//! Pyramid::build(&terrain, HeightFilter::Mean, &mut coarse_heights, &mut coarse_colors, &mut bounds)?;
+//! let pyramid = Pyramid::new(terrain, &coarse_heights, &coarse_colors, &bounds)?;
+//!
 //! let camera = Camera { eye: [-2.0, 1.5, 5.0], pitch_deg: 30.0, ..Camera::default() };
 //! let view = View::new(&camera, 8, 6)?;
 //! let mut pixels = [[0u8; 3]; 8 * 6];
 //! let mut frame = Framebuffer::new(&mut pixels, 8, 6)?;
 //! let mut probe = CountingProbe::default();
-//! render(&terrain, &view, &RenderOptions::default(), &mut frame, &mut probe);
+//! render(&pyramid, &view, &RenderOptions::default(), &mut frame, &mut probe);
 //!
 //! assert_eq!(pixels[8 * 5 + 4], [0, 200, 0]); // bottom middle sees the ground
 //! assert_eq!(pixels[4], [135, 185, 235]);     // top middle sees sky
@@ -33,6 +43,7 @@
 mod column;
 pub mod config;
 mod probe;
+mod pyramid;
 mod sink;
 mod terrain;
 mod view;
@@ -40,8 +51,13 @@ mod view;
 /// An 8-bit RGB color.
 pub type Rgb = [u8; 3];
 
-pub use column::{render, render_column, Coherence, RenderOptions};
+pub use column::{render, render_column, Coherence, RenderOptions, Resolution, VerticalSamples};
+pub use fixed::types::U8F8;
 pub use probe::{CountingProbe, NoProbe, Probe};
+pub use pyramid::{
+    level_count, level_side, pyramid_bytes, pyramid_cells, pyramid_points, HeightFilter, Pyramid,
+    PyramidError, MAX_LEVELS,
+};
 pub use sink::{Framebuffer, FramebufferError, Sample, Sink};
 pub use terrain::{Terrain, TerrainError};
 pub use view::{Camera, View, ViewError};

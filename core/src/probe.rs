@@ -3,21 +3,35 @@
 //! The simulator turns these events into time and traffic; tests count them.
 //! Every method has an empty default body, so [`NoProbe`] compiles to nothing.
 
+use crate::pyramid::MAX_LEVELS;
+
 /// Receives the caster's memory events.
 pub trait Probe {
-    /// One traversal step: the heights of voxel `voxel` and of its neighbour
-    /// across the minor grid line were fetched and compared with the ray.
+    /// One traversal step on pyramid level `level`: the heights of voxel
+    /// `voxel` of that level and of its neighbour across the minor grid line
+    /// were fetched and compared with the ray.
     #[inline(always)]
-    fn visit(&mut self, voxel: usize) {
-        let _ = voxel;
+    fn visit(&mut self, level: u8, voxel: usize) {
+        let _ = (level, voxel);
     }
-    /// The colors of voxel `voxel` and its minor-axis neighbour were fetched
-    /// to shade a pixel.
+    /// One step of the hierarchical first hit: the height bound of cell
+    /// `cell` of level `level` was compared with the ray.
     #[inline(always)]
-    fn color(&mut self, voxel: usize) {
-        let _ = voxel;
+    fn bound(&mut self, level: u8, cell: usize) {
+        let _ = (level, cell);
     }
-    /// A ray was set up (one per pixel).
+    /// The colors of voxel `voxel` of level `level` and its minor-axis
+    /// neighbour were fetched to shade a pixel (and the level below's).
+    #[inline(always)]
+    fn color(&mut self, level: u8, voxel: usize) {
+        let _ = (level, voxel);
+    }
+    /// A ray hit the terrain on level `level`.
+    #[inline(always)]
+    fn hit(&mut self, level: u8) {
+        let _ = level;
+    }
+    /// A ray was set up (one per pixel, or per vertical subsample).
     #[inline(always)]
     fn ray(&mut self) {}
 }
@@ -28,25 +42,47 @@ pub struct NoProbe;
 
 impl Probe for NoProbe {}
 
-/// Counts events: steps (voxel visits), color fetches and rays.
+/// Counts events: steps, color fetches, rays, and steps and hits by level.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct CountingProbe {
-    /// Traversal steps (height fetches compared with a ray).
+    /// Traversal steps: walk steps plus first-hit bound tests.
     pub steps: u64,
+    /// Of `steps`, the first-hit bound tests.
+    pub bound_tests: u64,
     /// Color fetches (one per shaded grid-line sample).
     pub color_fetches: u64,
     /// Rays set up.
     pub rays: u64,
+    /// Walk steps on each pyramid level.
+    pub steps_by_level: [u64; MAX_LEVELS],
+    /// Rays that hit on each pyramid level.
+    pub hits_by_level: [u64; MAX_LEVELS],
+}
+
+/// Adds one to slot `level` (the last slot for anything higher).
+#[inline(always)]
+fn count(slots: &mut [u64; MAX_LEVELS], level: u8) {
+    slots[usize::from(level).min(MAX_LEVELS - 1)] += 1;
 }
 
 impl Probe for CountingProbe {
     #[inline(always)]
-    fn visit(&mut self, _voxel: usize) {
+    fn visit(&mut self, level: u8, _voxel: usize) {
         self.steps += 1;
+        count(&mut self.steps_by_level, level);
     }
     #[inline(always)]
-    fn color(&mut self, _voxel: usize) {
+    fn bound(&mut self, _level: u8, _cell: usize) {
+        self.steps += 1;
+        self.bound_tests += 1;
+    }
+    #[inline(always)]
+    fn color(&mut self, _level: u8, _voxel: usize) {
         self.color_fetches += 1;
+    }
+    #[inline(always)]
+    fn hit(&mut self, level: u8) {
+        count(&mut self.hits_by_level, level);
     }
     #[inline(always)]
     fn ray(&mut self) {

@@ -88,6 +88,26 @@ impl<'a> Terrain<'a> {
         })
     }
 
+    /// A level of a pyramid, whose height bound and slope bound are known
+    /// from the level below (see [`crate::Pyramid::new`]).
+    pub(crate) fn coarse(
+        width: u32,
+        depth: u32,
+        heights: &'a [u16],
+        colors: &'a [Rgb],
+        max_height: u16,
+        max_step: u16,
+    ) -> Self {
+        Self {
+            heights,
+            colors,
+            width,
+            depth,
+            max_height,
+            max_step,
+        }
+    }
+
     /// Converts a height in voxels to the stored U12.4 form, rounding to the
     /// nearest 1/16. `None` for NaN, negative heights and heights above
     /// [`Terrain::MAX_HEIGHT`].

@@ -10,7 +10,7 @@
 
 use terracast::config::{MAX_EYE_COORD, MAX_MAP_SIDE};
 use terracast::{
-    render, Camera, Coherence, CountingProbe, Framebuffer, RenderOptions, Sample, Terrain,
+    render, Camera, Coherence, CountingProbe, Framebuffer, Pyramid, RenderOptions, Sample, Terrain,
     TerrainError, View,
 };
 
@@ -40,7 +40,7 @@ fn check_plane(w: u32, d: u32, eye: [f32; 3], yaw: f32) -> (usize, f64) {
         ..RenderOptions::default()
     };
     render(
-        &terrain,
+        &Pyramid::flat(terrain),
         &view,
         &options,
         &mut frame,

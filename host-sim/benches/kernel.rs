@@ -1,26 +1,28 @@
 //! Kernel speed at 640 × 480 on a Comanche map (C7W/D7; the procedural
-//! scene when the shared data is absent): Mpx/s and steps per pixel with
-//! coherence off, exact and at its default, and the speed-up ratios measured
-//! in this one run.
+//! scene when the shared data is absent), all in one run:
+//!
+//! * `settings`: the accelerations one by one (coherence off, exact, the
+//!   default single resolution, the default pyramid), with speed-up ratios
+//!   against coherence off;
+//! * `pitch`: the default pyramid and single resolution at pitch 2° to 90°
+//!   from one eye, with steps per pixel and the frame-time stability ratio
+//!   (slowest over fastest pitch) of each.
 //!
 //!     cargo bench -p terracast-sim --bench kernel
 //!
 //! Criterion reports the time and throughput (Melem/s = Mpx/s) of each; the
-//! summary at the end gives steps per pixel and the ratios against
-//! coherence off, from criterion's own estimates of this run.
+//! tables at the end come from criterion's own estimates of this run.
 
 use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
-use terracast::{render, Camera, Coherence, CountingProbe, NoProbe, RenderOptions, View};
+use terracast::{
+    render, Camera, Coherence, CountingProbe, NoProbe, Pyramid, RenderOptions, Resolution, View,
+};
 use terracast_sim::kernel::SampleBuffer;
 use terracast_sim::scene::{load_pair, procedural, Scene};
 
 const SIZE: (u32, u32) = (640, 480);
-const SETTINGS: [(&str, Coherence); 3] = [
-    ("coherence-off", Coherence::Off),
-    ("coherence-exact", Coherence::Exact),
-    ("coherence-default", Coherence::DEFAULT),
-];
+const PITCHES: [f32; 6] = [2.0, 5.0, 15.0, 30.0, 60.0, 90.0];
 
 fn scene() -> (Scene, &'static str) {
     let dir = std::env::var_os("TERRACAST_DATA")
@@ -33,78 +35,171 @@ fn scene() -> (Scene, &'static str) {
     }
 }
 
+fn camera(pitch: f32) -> Camera {
+    Camera {
+        eye: [300.0, 700.0, 170.0],
+        yaw_deg: 20.0,
+        pitch_deg: pitch,
+        roll_deg: 0.0,
+        hfov_deg: 60.0,
+    }
+}
+
+/// One benchmarked render.
+struct Case {
+    group: &'static str,
+    label: String,
+    camera: Camera,
+    options: RenderOptions,
+}
+
+fn options(coherence: Coherence, resolution: Resolution, first_hit: bool) -> RenderOptions {
+    RenderOptions {
+        coherence,
+        resolution,
+        hierarchical_first_hit: first_hit,
+        ..RenderOptions::default()
+    }
+}
+
+fn cases() -> Vec<Case> {
+    let single = Resolution::Single;
+    let multi = Resolution::DEFAULT;
+    let mut cases: Vec<Case> = [
+        ("coherence-off", options(Coherence::Off, single, false)),
+        ("coherence-exact", options(Coherence::Exact, single, false)),
+        ("default-single", options(Coherence::DEFAULT, single, true)),
+        ("default-pyramid", RenderOptions::default()),
+    ]
+    .into_iter()
+    .map(|(label, options)| Case {
+        group: "settings",
+        label: label.into(),
+        camera: camera(15.0),
+        options,
+    })
+    .collect();
+    for (name, resolution) in [("pyramid", multi), ("single", single)] {
+        for pitch in PITCHES {
+            cases.push(Case {
+                group: "pitch",
+                label: format!("{name}-{pitch}"),
+                camera: camera(pitch),
+                options: options(Coherence::DEFAULT, resolution, true),
+            });
+        }
+    }
+    cases
+}
+
 fn main() {
     let (scene, name) = scene();
     let kernel = scene.to_kernel().expect("kernel scene");
-    let terrain = kernel.terrain().expect("terrain");
-    let camera = Camera {
-        eye: [300.0, 700.0, 170.0],
-        yaw_deg: 20.0,
-        pitch_deg: 15.0,
-        roll_deg: 0.0,
-        hfov_deg: 60.0,
-    };
-    let view = View::new(&camera, SIZE.0, SIZE.1).expect("view");
+    let pyramid = kernel.pyramid().expect("pyramid");
+    let flat = Pyramid::flat(*pyramid.base());
     let pixels = u64::from(SIZE.0 * SIZE.1);
     let out_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/criterion-kernel");
+    let cases = cases();
+    // Renders without the first hit or levels hold level 0 only.
+    let levels_for = |o: &RenderOptions| {
+        if o.resolution == Resolution::Single && !o.hierarchical_first_hit {
+            &flat
+        } else {
+            &pyramid
+        }
+    };
 
     let mut criterion = Criterion::default()
         .output_directory(&out_dir)
         .configure_from_args();
-    let mut group = criterion.benchmark_group("kernel_640x480");
-    group.throughput(Throughput::Elements(pixels));
-    group.sample_size(10);
-    for (label, coherence) in SETTINGS {
-        let options = RenderOptions {
-            coherence,
-            ..RenderOptions::default()
-        };
-        let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
-        group.bench_function(BenchmarkId::from_parameter(label), |b| {
-            b.iter(|| render(&terrain, &view, &options, &mut buffer, &mut NoProbe))
-        });
+    for group_name in ["settings", "pitch"] {
+        let mut group = criterion.benchmark_group(group_name);
+        group.throughput(Throughput::Elements(pixels));
+        group.sample_size(10);
+        for case in cases.iter().filter(|c| c.group == group_name) {
+            let view = View::new(&case.camera, SIZE.0, SIZE.1).expect("view");
+            let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+            let levels = levels_for(&case.options);
+            group.bench_function(BenchmarkId::from_parameter(&case.label), |b| {
+                b.iter(|| render(levels, &view, &case.options, &mut buffer, &mut NoProbe))
+            });
+        }
+        group.finish();
     }
-    group.finish();
     criterion.final_summary();
 
-    println!(
-        "\nkernel at {}x{} on {name}, eye {:?} yaw {} pitch {}:",
-        SIZE.0, SIZE.1, camera.eye, camera.yaw_deg, camera.pitch_deg
-    );
-    println!("| setting | steps/pixel | Mpx/s | speed-up vs off |");
-    println!("|---|---|---|---|");
-    let mean_ns = |label: &str| -> Option<f64> {
-        let path = out_dir
-            .join("kernel_640x480")
-            .join(label)
-            .join("new/estimates.json");
+    let mean_ns = |group: &str, label: &str| -> Option<f64> {
+        let path = out_dir.join(group).join(label).join("new/estimates.json");
         let json: serde_json::Value = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
         json["mean"]["point_estimate"].as_f64()
     };
-    let base = mean_ns("coherence-off");
-    for (label, coherence) in SETTINGS {
-        let options = RenderOptions {
-            coherence,
-            ..RenderOptions::default()
-        };
+    let steps_per_pixel = |case: &Case| {
+        let view = View::new(&case.camera, SIZE.0, SIZE.1).expect("view");
         let mut probe = CountingProbe::default();
+        let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
         render(
-            &terrain,
+            levels_for(&case.options),
             &view,
-            &options,
-            &mut SampleBuffer::new(SIZE.0, SIZE.1),
+            &case.options,
+            &mut buffer,
             &mut probe,
         );
-        let spp = probe.steps as f64 / pixels as f64;
-        match (mean_ns(label), base) {
-            (Some(ns), Some(base)) => {
-                println!(
-                    "| {label} | {spp:.2} | {:.2} | {:.2}x |",
-                    pixels as f64 / ns * 1e3,
-                    base / ns
-                )
+        probe.steps as f64 / pixels as f64
+    };
+    let mpx = |ns: f64| pixels as f64 / ns * 1e3;
+
+    let eye = camera(0.0).eye;
+    println!(
+        "\nkernel at {}x{} on {name}, eye {eye:?} yaw 20:",
+        SIZE.0, SIZE.1
+    );
+    println!("\n| setting (pitch 15) | steps/pixel | Mpx/s | speed-up vs off |");
+    println!("|---|---|---|---|");
+    let base = mean_ns("settings", "coherence-off");
+    for case in cases.iter().filter(|c| c.group == "settings") {
+        let spp = steps_per_pixel(case);
+        match (mean_ns("settings", &case.label), base) {
+            (Some(ns), Some(base)) => println!(
+                "| {} | {spp:.2} | {:.2} | {:.2}x |",
+                case.label,
+                mpx(ns),
+                base / ns
+            ),
+            _ => println!(
+                "| {} | {spp:.2} | (not measured in this run) | |",
+                case.label
+            ),
+        }
+    }
+
+    println!(
+        "\n| pitch | pyramid steps/pixel | pyramid Mpx/s | single steps/pixel | single Mpx/s |"
+    );
+    println!("|---|---|---|---|---|");
+    let mut times = [Vec::new(), Vec::new()];
+    for pitch in PITCHES {
+        let mut row = format!("| {pitch} |");
+        for (i, name) in ["pyramid", "single"].into_iter().enumerate() {
+            let label = format!("{name}-{pitch}");
+            let case = cases.iter().find(|c| c.label == label).expect("case");
+            let spp = steps_per_pixel(case);
+            match mean_ns("pitch", &label) {
+                Some(ns) => {
+                    times[i].push(ns);
+                    row += &format!(" {spp:.2} | {:.2} |", mpx(ns));
+                }
+                None => row += &format!(" {spp:.2} | - |"),
             }
-            _ => println!("| {label} | {spp:.2} | (not measured in this run) | |"),
+        }
+        println!("{row}");
+    }
+    for (i, name) in ["pyramid", "single"].into_iter().enumerate() {
+        let t = &times[i];
+        if t.len() == PITCHES.len() {
+            let (lo, hi) = t
+                .iter()
+                .fold((f64::MAX, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+            println!("{name}: frame time max/min across pitches = {:.2}", hi / lo);
         }
     }
 }

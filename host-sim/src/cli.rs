@@ -7,7 +7,10 @@ use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{load_pair, procedural, Scene};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
-use terracast::{Camera, Coherence, RenderOptions, Rgb, Terrain, View, ViewError};
+use terracast::{
+    Camera, Coherence, HeightFilter, RenderOptions, Resolution, Rgb, Terrain, VerticalSamples,
+    View, ViewError, U8F8,
+};
 
 /// Real-time terrain flythrough: the terracast kernel on the host.
 #[derive(Debug, Parser)]
@@ -32,6 +35,33 @@ pub enum CoherenceArg {
     Exact,
     /// Skip assuming a slope bound.
     Bounded,
+}
+
+/// Which pyramid levels the kernel steps on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ResolutionArg {
+    /// Every level, switching by the pixel-to-voxel ratio.
+    Multi,
+    /// Level 0 only.
+    Single,
+}
+
+/// How the pyramid's coarse heights are filtered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum HeightFilterArg {
+    /// Tent-weighted mean of the nine finer points.
+    Mean,
+    /// Largest of the nine finer points.
+    Max,
+}
+
+/// How rays cast from the eye find their first hit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FirstHitArg {
+    /// Top-down through the pyramid's height bounds.
+    Hierarchical,
+    /// Voxel by voxel from the eye.
+    Walk,
 }
 
 /// Which renderer draws the view.
@@ -113,6 +143,24 @@ struct RenderArgs {
     /// Kernel: the slope (height per voxel) that `--coherence bounded` assumes.
     #[arg(long, default_value_t = 2.0, value_name = "SLOPE")]
     coherence_slope: f32,
+    /// Kernel: step on the pyramid's coarser levels in the distance
+    /// (`multi`), or on the full-resolution map only (`single`).
+    #[arg(long, value_enum, default_value_t = ResolutionArg::Multi)]
+    resolution: ResolutionArg,
+    /// Kernel: the pixel-to-voxel ratio of the level switch. A level is left
+    /// where its voxels get narrower than 1/RATIO pixels: higher is faster
+    /// and blurrier.
+    #[arg(long, default_value_t = 1.0, value_name = "RATIO")]
+    pixel_to_voxel: f32,
+    /// Kernel: how the pyramid's coarse heights are made.
+    #[arg(long, value_enum, default_value_t = HeightFilterArg::Mean)]
+    height_filter: HeightFilterArg,
+    /// Kernel: how rays cast from the eye find their first hit.
+    #[arg(long, value_enum, default_value_t = FirstHitArg::Hierarchical)]
+    first_hit: FirstHitArg,
+    /// Kernel: rays per pixel, spread over its height (1, 2, 4 or 8).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    vertical_samples: u32,
     /// Reference: rays per pixel side (n x n rays a pixel).
     #[arg(long, default_value_t = 4, value_name = "N")]
     supersample: u32,
@@ -170,20 +218,13 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
     let (frame, stats) = match args.method {
         Method::Kernel => {
-            let kernel = scene.to_kernel()?;
-            View::new(&camera, width, height).map_err(view_error)?;
-            let coherence = match args.coherence {
-                CoherenceArg::Off => Coherence::Off,
-                CoherenceArg::Exact => Coherence::Exact,
-                CoherenceArg::Bounded => {
-                    let slope =
-                        Terrain::quantize_height(args.coherence_slope).ok_or_else(|| {
-                            Error::new("--coherence-slope must be between 0 and 4095")
-                        })?;
-                    Coherence::Bounded { slope }
-                }
+            let options = kernel_options(&args, sky)?;
+            let filter = match args.height_filter {
+                HeightFilterArg::Mean => HeightFilter::Mean,
+                HeightFilterArg::Max => HeightFilter::Max,
             };
-            let options = RenderOptions { coherence, sky };
+            let kernel = scene.to_kernel_with(filter)?;
+            View::new(&camera, width, height).map_err(view_error)?;
             render_kernel(&kernel, &camera, width, height, &options)?
         }
         Method::Reference => {
@@ -219,6 +260,51 @@ fn render_command(args: RenderArgs) -> Result<()> {
         write_stats(path, &stats_json(&stats, width, height, sky_pixels))?;
     }
     Ok(())
+}
+
+/// The kernel's options from the flags, each checked.
+fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
+    let coherence = match args.coherence {
+        CoherenceArg::Off => Coherence::Off,
+        CoherenceArg::Exact => Coherence::Exact,
+        CoherenceArg::Bounded => {
+            let slope = Terrain::quantize_height(args.coherence_slope)
+                .ok_or_else(|| Error::new("--coherence-slope must be between 0 and 4095"))?;
+            Coherence::Bounded { slope }
+        }
+    };
+    let resolution = match args.resolution {
+        ResolutionArg::Single => Resolution::Single,
+        ResolutionArg::Multi => {
+            let ratio = args.pixel_to_voxel;
+            if !(1.0 / 256.0..=255.0).contains(&ratio) {
+                return Err(Error::new(
+                    "--pixel-to-voxel must be between 0.004 (1/256) and 255",
+                ));
+            }
+            Resolution::Multi {
+                pixel_to_voxel: U8F8::from_num(ratio),
+            }
+        }
+    };
+    let vertical_samples = match args.vertical_samples {
+        1 => VerticalSamples::One,
+        2 => VerticalSamples::Two,
+        4 => VerticalSamples::Four,
+        8 => VerticalSamples::Eight,
+        n => {
+            return Err(Error::new(format!(
+                "--vertical-samples must be 1, 2, 4 or 8, not {n}"
+            )))
+        }
+    };
+    Ok(RenderOptions {
+        coherence,
+        resolution,
+        hierarchical_first_hit: args.first_hit == FirstHitArg::Hierarchical,
+        vertical_samples,
+        sky,
+    })
 }
 
 fn load_scene(args: &RenderArgs) -> Result<Scene> {

@@ -1,6 +1,6 @@
 //! A rendered image with its per-pixel depth and the render's statistics.
 
-use terracast::Rgb;
+use terracast::{Rgb, MAX_LEVELS};
 
 /// An image and the Euclidean depth of each pixel's center ray.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,6 +28,19 @@ impl Frame {
     }
 }
 
+/// Where a kernel render spent its steps: per pyramid level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct LevelStats {
+    /// Levels the pyramid had (entries past it are zero).
+    pub levels: usize,
+    /// Walk steps on each level.
+    pub steps: [u64; MAX_LEVELS],
+    /// Rays that hit on each level.
+    pub hits: [u64; MAX_LEVELS],
+    /// First-hit bound tests (counted in the render's steps too).
+    pub bound_tests: u64,
+}
+
 /// What a render cost, for `--stats`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RenderStats {
@@ -43,4 +56,6 @@ pub struct RenderStats {
     pub resident_bytes: u64,
     /// Time of the render call alone.
     pub render_ns: u64,
+    /// Kernel renders: steps and hits by pyramid level.
+    pub levels: Option<LevelStats>,
 }

@@ -2,10 +2,13 @@
 
 use crate::camera::{length, ContractCamera};
 use crate::error::{Error, Result};
-use crate::frame::{Frame, RenderStats};
+use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
-use terracast::{render, Camera, Coherence, CountingProbe, RenderOptions, Sample, Sink, View};
+use terracast::{
+    render, Camera, Coherence, CountingProbe, Pyramid, RenderOptions, Resolution, Sample, Sink,
+    View,
+};
 
 /// A sink that keeps every sample of the frame.
 #[derive(Debug)]
@@ -51,13 +54,19 @@ pub fn render_kernel(
     height: u32,
     options: &RenderOptions,
 ) -> Result<(Frame, RenderStats)> {
-    let terrain = scene.terrain()?;
+    let full = scene.pyramid()?;
+    // A single-resolution render without the first hit holds level 0 only.
+    let pyramid = if options.resolution == Resolution::Single && !options.hierarchical_first_hit {
+        Pyramid::flat(*full.base())
+    } else {
+        full
+    };
     let view =
         View::new(camera, width, height).map_err(|e| Error::new(format!("bad view: {e}")))?;
     let mut buffer = SampleBuffer::new(width, height);
     let mut probe = CountingProbe::default();
     let started = Instant::now();
-    render(&terrain, &view, options, &mut buffer, &mut probe);
+    render(&pyramid, &view, options, &mut buffer, &mut probe);
     let render_ns = started.elapsed().as_nanos() as u64;
 
     let rays = ContractCamera::new(camera, width, height);
@@ -88,8 +97,14 @@ pub fn render_kernel(
         pixels,
         rays: probe.rays,
         steps: probe.steps,
-        resident_bytes: terrain.bytes() as u64,
+        resident_bytes: pyramid.bytes() as u64,
         render_ns,
+        levels: Some(LevelStats {
+            levels: pyramid.levels(),
+            steps: probe.steps_by_level,
+            hits: probe.hits_by_level,
+            bound_tests: probe.bound_tests,
+        }),
     };
     Ok((frame, stats))
 }

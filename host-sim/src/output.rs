@@ -68,7 +68,7 @@ pub fn stats_json(
     height: u32,
     sky_pixels: usize,
 ) -> serde_json::Value {
-    serde_json::json!({
+    let mut value = serde_json::json!({
         "method": stats.method,
         "width": width,
         "height": height,
@@ -79,7 +79,15 @@ pub fn stats_json(
         "sky_pixels": sky_pixels,
         "resident_bytes": stats.resident_bytes,
         "render_ns": stats.render_ns,
-    })
+    });
+    if let Some(levels) = &stats.levels {
+        value["bound_tests"] = levels.bound_tests.into();
+        value["levels"] = serde_json::json!({
+            "steps": &levels.steps[..levels.levels],
+            "hits": &levels.hits[..levels.levels],
+        });
+    }
+    value
 }
 
 /// Writes the `--stats` JSON.

@@ -305,6 +305,7 @@ impl<'s> Reference<'s> {
                 + self.levels.iter().map(|l| l.max.len() * 4).sum::<usize>())
                 as u64,
             render_ns,
+            levels: None,
         };
         (frame, stats)
     }

@@ -10,7 +10,7 @@ pub use load::{load_colors, load_heights};
 pub use procedural::{color_by_height_and_slope, procedural};
 
 use crate::error::{Error, Result};
-use terracast::{Rgb, Terrain};
+use terracast::{pyramid_cells, pyramid_points, HeightFilter, Pyramid, Rgb, Terrain};
 
 /// A height field and its colors, one per grid point, row-major.
 #[derive(Debug, Clone)]
@@ -25,13 +25,18 @@ pub struct Scene {
     pub colors: Vec<Rgb>,
 }
 
-/// A scene in the kernel's storage format; lends a [`Terrain`].
+/// A scene in the kernel's storage format with its pyramid; lends a
+/// [`Terrain`] and a [`Pyramid`].
 #[derive(Debug, Clone)]
 pub struct KernelScene {
     width: u32,
     depth: u32,
     heights: Vec<u16>,
     colors: Vec<Rgb>,
+    filter: HeightFilter,
+    coarse_heights: Vec<u16>,
+    coarse_colors: Vec<Rgb>,
+    bounds: Vec<u16>,
 }
 
 /// Loads a height map and its color map (colored by height and slope when
@@ -87,8 +92,14 @@ impl Scene {
         self.heights.iter().copied().fold(f32::MIN, f32::max)
     }
 
-    /// Converts to the kernel's format: heights rounded to 1/16 voxel.
+    /// Converts to the kernel's format (heights rounded to 1/16 voxel) and
+    /// builds the pyramid with mean heights.
     pub fn to_kernel(&self) -> Result<KernelScene> {
+        self.to_kernel_with(HeightFilter::Mean)
+    }
+
+    /// As [`Scene::to_kernel`], with the coarse levels' height filter.
+    pub fn to_kernel_with(&self, filter: HeightFilter) -> Result<KernelScene> {
         let heights = self
             .heights
             .iter()
@@ -104,13 +115,27 @@ impl Scene {
                 })
             })
             .collect::<Result<Vec<u16>>>()?;
-        let scene = KernelScene {
-            width: self.width,
-            depth: self.depth,
+        let (w, d) = (self.width, self.depth);
+        let mut scene = KernelScene {
+            width: w,
+            depth: d,
             heights,
             colors: self.colors.clone(),
+            filter,
+            coarse_heights: vec![0; pyramid_points(w, d)],
+            coarse_colors: vec![[0; 3]; pyramid_points(w, d)],
+            bounds: vec![0; pyramid_cells(w, d)],
         };
-        scene.terrain()?;
+        let terrain = Terrain::new(w, d, &scene.heights, &scene.colors)
+            .map_err(|e| Error::new(format!("terrain rejected by the kernel: {e}")))?;
+        Pyramid::build(
+            &terrain,
+            filter,
+            &mut scene.coarse_heights,
+            &mut scene.coarse_colors,
+            &mut scene.bounds,
+        )
+        .map_err(|e| Error::new(format!("pyramid not built: {e}")))?;
         Ok(scene)
     }
 }
@@ -120,5 +145,21 @@ impl KernelScene {
     pub fn terrain(&self) -> Result<Terrain<'_>> {
         Terrain::new(self.width, self.depth, &self.heights, &self.colors)
             .map_err(|e| Error::new(format!("terrain rejected by the kernel: {e}")))
+    }
+
+    /// The terrain and its coarser levels.
+    pub fn pyramid(&self) -> Result<Pyramid<'_>> {
+        Pyramid::new(
+            self.terrain()?,
+            &self.coarse_heights,
+            &self.coarse_colors,
+            &self.bounds,
+        )
+        .map_err(|e| Error::new(format!("pyramid rejected by the kernel: {e}")))
+    }
+
+    /// The filter the coarse heights were made with.
+    pub fn height_filter(&self) -> HeightFilter {
+        self.filter
     }
 }

@@ -2,7 +2,7 @@
 //! lives, loading a Comanche pair, and rendering kernel and reference views.
 
 use std::path::PathBuf;
-use terracast::{Camera, Coherence, RenderOptions};
+use terracast::{Camera, Coherence, RenderOptions, Resolution};
 use terracast_sim::frame::{Frame, RenderStats};
 use terracast_sim::kernel::render_kernel;
 use terracast_sim::reference::{Reference, ReferenceOptions};
@@ -44,18 +44,30 @@ pub fn camera(eye: [f32; 3], yaw: f32, pitch: f32) -> Camera {
     }
 }
 
-/// Renders with the kernel at the given coherence.
+/// Renders with the kernel at the given coherence and resolution.
 pub fn kernel_view(
     scene: &KernelScene,
     cam: &Camera,
     size: (u32, u32),
     coherence: Coherence,
+    resolution: Resolution,
 ) -> (Frame, RenderStats) {
     let options = RenderOptions {
         coherence,
+        resolution,
         ..RenderOptions::default()
     };
-    render_kernel(scene, cam, size.0, size.1, &options).expect("kernel render")
+    kernel_render(scene, cam, size, &options)
+}
+
+/// Renders with the kernel at any options.
+pub fn kernel_render(
+    scene: &KernelScene,
+    cam: &Camera,
+    size: (u32, u32),
+    options: &RenderOptions,
+) -> (Frame, RenderStats) {
+    render_kernel(scene, cam, size.0, size.1, options).expect("kernel render")
 }
 
 /// Renders the exact reference at 4 × 4 rays a pixel.

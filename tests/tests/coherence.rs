@@ -11,8 +11,11 @@
 //!   and tested here: at most 0.1 % of pixels differ from the from-eye image,
 //!   and the two are within 38 dB, on every view. At pitch 0° the column
 //!   planes are vertical and it too must be bit-identical.
+//!
+//! Both hold at single resolution and on the pyramid (where `Exact` resumes
+//! only between rays with the same level schedule).
 
-use terracast::Coherence;
+use terracast::{Coherence, Resolution};
 use terracast_sim::metrics::{differing_pixels, psnr};
 use terracast_tests::{camera, comanche, kernel_view};
 
@@ -22,8 +25,20 @@ const SIZE: (u32, u32) = (640, 360);
 fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
     let mut failures = Vec::new();
     let (mut off_steps, mut exact_steps, mut default_steps) = (0u64, 0u64, 0u64);
-    for (color, height) in [("1W", "1"), ("7W", "7"), ("14", "14")] {
+    for (color, height, resolution) in [
+        ("1W", "1", Resolution::Single),
+        ("7W", "7", Resolution::Single),
+        ("14", "14", Resolution::Single),
+        ("1W", "1", Resolution::DEFAULT),
+        ("7W", "7", Resolution::DEFAULT),
+        ("14", "14", Resolution::DEFAULT),
+    ] {
         let scene = comanche(color, height).to_kernel().unwrap();
+        let levels = if resolution == Resolution::Single {
+            "single"
+        } else {
+            "pyramid"
+        };
         for (i, yaw) in [15.0f32, 100.0, 190.0, 280.0].into_iter().enumerate() {
             for pitch in [0.0f32, 10.0, 30.0, 60.0, 90.0] {
                 let eye = [
@@ -32,15 +47,16 @@ fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
                     130.0 + 20.0 * i as f32,
                 ];
                 let cam = camera(eye, yaw, pitch);
-                let (off, s_off) = kernel_view(&scene, &cam, SIZE, Coherence::Off);
-                let (exact, s_exact) = kernel_view(&scene, &cam, SIZE, Coherence::Exact);
-                let (default, s_default) = kernel_view(&scene, &cam, SIZE, Coherence::DEFAULT);
+                let view = |c| kernel_view(&scene, &cam, SIZE, c, resolution);
+                let (off, s_off) = view(Coherence::Off);
+                let (exact, s_exact) = view(Coherence::Exact);
+                let (default, s_default) = view(Coherence::DEFAULT);
                 let exact_differ = differing_pixels(&exact.colors, &off.colors);
                 let default_differ = differing_pixels(&default.colors, &off.colors);
                 let fraction = default_differ as f64 / off.colors.len() as f64;
                 let p = psnr(&default.colors, &off.colors);
                 println!(
-                    "C{color} yaw {yaw:>5} pitch {pitch:>4}: exact {exact_differ} px differ, {:5.1}x fewer steps; default {default_differ:4} px ({:.3} %), {p:6.1} dB, {:5.1}x fewer steps",
+                    "C{color} {levels:7} yaw {yaw:>5} pitch {pitch:>4}: exact {exact_differ} px differ, {:5.1}x fewer steps; default {default_differ:4} px ({:.3} %), {p:6.1} dB, {:5.1}x fewer steps",
                     s_off.steps as f64 / s_exact.steps as f64,
                     fraction * 100.0,
                     s_off.steps as f64 / s_default.steps as f64,
@@ -48,12 +64,12 @@ fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
                 assert_eq!(exact.depth, off.depth, "exact coherence changed depth");
                 if exact_differ != 0 {
                     failures.push(format!(
-                        "exact: C{color} yaw {yaw} pitch {pitch}: {exact_differ} px"
+                        "exact: C{color} {levels} yaw {yaw} pitch {pitch}: {exact_differ} px"
                     ));
                 }
                 if fraction > 0.001 || p < 38.0 || (pitch == 0.0 && default_differ != 0) {
                     failures.push(format!(
-                        "default: C{color} yaw {yaw} pitch {pitch}: {default_differ} px, {p:.1} dB"
+                        "default: C{color} {levels} yaw {yaw} pitch {pitch}: {default_differ} px, {p:.1} dB"
                     ));
                 }
                 off_steps += s_off.steps;

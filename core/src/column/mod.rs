@@ -19,16 +19,19 @@
 //! the hit is refined between that sample and the first one below by the
 //! ratio of their clearances, and the color blended across both grid lines.
 
+mod first_hit;
 pub(crate) mod walk;
 
-use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, WEIGHT_BITS};
+use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS};
 use crate::probe::Probe;
+use crate::pyramid::Pyramid;
 use crate::sink::{Sample, Sink};
-use crate::terrain::Terrain;
-use crate::view::ray::{Cursor, Ray, RayKey, Strides};
+use crate::view::ray::{Cursor, Lod, LodPlan, Ray, RayKey};
 use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
-use walk::{clearance, locate, walk, Walk};
+use first_hit::first_hit;
+use fixed::types::U8F8;
+use walk::{lerp, walk, Stage, Walk};
 
 /// How each ray of a column may use the ray below it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,11 +39,13 @@ pub enum Coherence {
     /// Every ray is cast from the eye: the slow baseline.
     Off,
     /// A ray skips ahead only where the terrain's steepest neighbour
-    /// difference could not have hidden a hit from it: the image equals
+    /// difference could not have hidden a hit from it, and (with levels)
+    /// only from a ray with the same level schedule: the image equals
     /// [`Coherence::Off`]'s bit for bit.
     Exact,
     /// As [`Coherence::Exact`], assuming terrain no steeper than `slope`
-    /// (U12.4 height units per voxel). Faster under pitch; where the real
+    /// (U12.4 height units per voxel), and resuming across slightly
+    /// different level schedules. Faster under pitch; where the real
     /// terrain is steeper, a ray may miss a ridge the ray below it passed
     /// over (the bound measured in the coherence tests).
     Bounded {
@@ -55,11 +60,74 @@ impl Coherence {
     pub const DEFAULT: Self = Self::Bounded { slope: 32 };
 }
 
+/// Which levels of the pyramid the caster steps on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Resolution {
+    /// Level 0 only, however far the ray goes (the baseline that aliases
+    /// in the distance and costs more the farther it sees).
+    Single,
+    /// Every level the pyramid has (Cohen-Or §2): a ray moves up a level,
+    /// at an even step, where a voxel of its level gets narrower than
+    /// `1 / pixel_to_voxel` pixels, and morphs the surface and colors of
+    /// adjacent levels by depth so the switch is invisible. A higher ratio
+    /// switches sooner: fewer steps, a blurrier far field.
+    Multi {
+        /// The pixel-to-voxel ratio (1 = switch where a voxel is one pixel
+        /// wide).
+        pixel_to_voxel: U8F8,
+    },
+}
+
+impl Resolution {
+    /// [`Resolution::Multi`] at a pixel-to-voxel ratio of 1.
+    pub const DEFAULT: Self = Self::Multi {
+        pixel_to_voxel: U8F8::ONE,
+    };
+}
+
+/// How many rays each pixel gets, spread over its height (Cohen-Or §2.1:
+/// at shallow pitch a pixel's footprint is long and thin, and one ray
+/// undersamples it). They share the column's coherence, so they add rays,
+/// not voxels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VerticalSamples {
+    /// One ray through the pixel center.
+    One,
+    /// Two rays a half pixel apart.
+    Two,
+    /// Four rays.
+    Four,
+    /// Eight rays.
+    Eight,
+}
+
+impl VerticalSamples {
+    /// Rays per pixel.
+    pub fn count(self) -> u32 {
+        1 << self.log2()
+    }
+    fn log2(self) -> u32 {
+        match self {
+            Self::One => 0,
+            Self::Two => 1,
+            Self::Four => 2,
+            Self::Eight => 3,
+        }
+    }
+}
+
 /// Settings of the caster.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RenderOptions {
     /// Vertical ray coherence: each ray resumes where the ray below it hit.
     pub coherence: Coherence,
+    /// Single resolution or the pyramid's levels.
+    pub resolution: Resolution,
+    /// Rays cast from the eye (the bottom of each column, and any ray that
+    /// cannot resume) skip through the pyramid's height bounds.
+    pub hierarchical_first_hit: bool,
+    /// Rays per pixel, spread vertically.
+    pub vertical_samples: VerticalSamples,
     /// Color of rays that leave the terrain.
     pub sky: Rgb,
 }
@@ -68,21 +136,60 @@ impl Default for RenderOptions {
     fn default() -> Self {
         Self {
             coherence: Coherence::DEFAULT,
+            resolution: Resolution::DEFAULT,
+            hierarchical_first_hit: true,
+            vertical_samples: VerticalSamples::One,
             sky: DEFAULT_SKY,
+        }
+    }
+}
+
+/// What every column of a frame shares.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    lod: LodPlan,
+    /// The slope bound the resume proof assumes; `None` casts every ray
+    /// from the eye.
+    slope: Option<u16>,
+    /// Resume only between rays with equal level schedules.
+    same_schedule: bool,
+    first_hit: bool,
+}
+
+impl Frame {
+    fn new(pyramid: &Pyramid<'_>, view: &View, options: &RenderOptions) -> Self {
+        let lod = match options.resolution {
+            Resolution::Single => LodPlan::SINGLE,
+            Resolution::Multi { pixel_to_voxel } => {
+                LodPlan::new(view, pixel_to_voxel.to_bits(), pyramid.top())
+            }
+        };
+        let bound = pyramid.slope_bound();
+        let (slope, same_schedule) = match options.coherence {
+            Coherence::Off => (None, false),
+            Coherence::Exact => (Some(bound), true),
+            Coherence::Bounded { slope } => (Some(slope.min(bound)), false),
+        };
+        Self {
+            lod,
+            slope,
+            same_schedule,
+            first_hit: options.hierarchical_first_hit && pyramid.has_bounds(),
         }
     }
 }
 
 /// Renders every column of the view into `sink`.
 pub fn render<S: Sink, P: Probe>(
-    terrain: &Terrain<'_>,
+    pyramid: &Pyramid<'_>,
     view: &View,
     options: &RenderOptions,
     sink: &mut S,
     probe: &mut P,
 ) {
+    let frame = Frame::new(pyramid, view, options);
     for column in 0..view.width() {
-        render_column(terrain, view, options, column, sink, probe);
+        column_with(pyramid, view, options, &frame, column, sink, probe);
     }
 }
 
@@ -91,6 +198,7 @@ pub fn render<S: Sink, P: Probe>(
 #[derive(Debug, Clone, Copy)]
 struct Anchor {
     key: RayKey,
+    lod: Lod,
     start: i32,
     k: i32,
     dminor: i32,
@@ -100,42 +208,66 @@ struct Anchor {
 /// Renders one image column, bottom to top. Columns are independent: a
 /// column pool may hand them to any number of workers.
 pub fn render_column<S: Sink, P: Probe>(
-    terrain: &Terrain<'_>,
+    pyramid: &Pyramid<'_>,
     view: &View,
     options: &RenderOptions,
     column: u32,
     sink: &mut S,
     probe: &mut P,
 ) {
-    // The slope bound the resume proof assumes; `None` casts every ray from
-    // the eye.
-    let slope = match options.coherence {
-        Coherence::Off => None,
-        Coherence::Exact => Some(terrain.max_step()),
-        Coherence::Bounded { slope } => Some(slope.min(terrain.max_step())),
-    };
+    let frame = Frame::new(pyramid, view, options);
+    column_with(pyramid, view, options, &frame, column, sink, probe);
+}
+
+fn column_with<S: Sink, P: Probe>(
+    pyramid: &Pyramid<'_>,
+    view: &View,
+    options: &RenderOptions,
+    frame: &Frame,
+    column: u32,
+    sink: &mut S,
+    probe: &mut P,
+) {
+    let terrain = pyramid.base();
     let mut anchor: Option<Anchor> = None;
     let top_row = view.height() - 1;
+    let log2 = options.vertical_samples.log2();
+    let samples = 1i64 << log2;
     for row in 0..view.height() {
-        probe.ray();
-        let ray = view.ray(terrain, column, row);
-        let sample = if ray.start > ray.end {
-            sky(options)
-        } else {
-            let plan = anchor
-                .zip(slope)
-                .and_then(|(a, slope)| resume_plan(&a, &ray, slope));
-            let (sample, clear_until) = cast(terrain, &ray, plan, options, probe);
-            anchor = Some(Anchor {
-                key: ray.key,
-                start: ray.start,
-                k: clear_until,
-                dminor: ray.dminor.to_bits(),
-                dz: ray.dz.to_bits(),
-            });
-            sample
-        };
-        sink.put(column, top_row - row, sample);
+        let mut sum = [0u32; 3];
+        let mut center = sky(options);
+        for sub in 0..samples {
+            // Sub-ray centers, in sixteenths of a pixel from the pixel center.
+            let offset = ((2 * sub + 1 - samples) * 8) >> log2;
+            probe.ray();
+            let ray = view.ray(terrain, &frame.lod, column, i64::from(row) * 16 + offset);
+            let sample = if ray.start > ray.end {
+                sky(options)
+            } else {
+                let plan = anchor
+                    .zip(frame.slope)
+                    .and_then(|(a, slope)| resume_plan(&a, &ray, slope, frame.same_schedule));
+                let (sample, clear_until) =
+                    cast(pyramid, &ray, plan, frame.first_hit, options, probe);
+                anchor = Some(Anchor {
+                    key: ray.key,
+                    lod: ray.lod,
+                    start: ray.start,
+                    k: clear_until,
+                    dminor: ray.dminor.to_bits(),
+                    dz: ray.dz.to_bits(),
+                });
+                sample
+            };
+            for (s, v) in sum.iter_mut().zip(sample.color) {
+                *s += u32::from(v);
+            }
+            if sub == samples / 2 {
+                center = sample;
+            }
+        }
+        let color = sum.map(|s| ((s + (1 << log2 >> 1)) >> log2) as u8);
+        sink.put(column, top_row - row, Sample { color, ..center });
     }
 }
 
@@ -145,13 +277,15 @@ pub fn render_column<S: Sink, P: Probe>(
 /// Let the anchor ray be above the surface at samples `start..k`. At sample
 /// `i`, at distance `s ≥ i` from the eye, this ray is higher by at least
 /// `s·rise − 1` (Q16 bits) and sideways by at most `s·drift + 1`, and the
-/// sampled surface (heights blended by a 12-bit weight, so positions are
-/// quantized to 16 Q16 bits) can be higher there by at most
-/// `L/16 · (s·drift + 17)`, with `L`
-/// the slope bound in U12.4 per voxel. So this ray is above wherever
-/// `s·(rise − L·drift/16) > 1 + 17·L/16`: everywhere past a short prefix.
-fn resume_plan(anchor: &Anchor, ray: &Ray, slope: u16) -> Option<(i32, i32)> {
-    if anchor.key != ray.key {
+/// sampled surface of level `l` (heights blended by a 12-bit weight of a
+/// level-`l` voxel, so positions are quantized to `16·2^l` Q16 bits) can be
+/// higher there by at most `L/16 · (s·drift + 16·2^l + 1)`, with `L` the
+/// slope bound in U12.4 per voxel, which holds on every level. So this ray
+/// is above wherever `s·(rise − L·drift/16) > 1 + (16·2^l + 1)·L/16`:
+/// everywhere past a short prefix, as long as both rays sample the same
+/// level there (`same_schedule`).
+fn resume_plan(anchor: &Anchor, ray: &Ray, slope: u16, same_schedule: bool) -> Option<(i32, i32)> {
+    if anchor.key != ray.key || (same_schedule && anchor.lod != ray.lod) {
         return None;
     }
     let steep = i64::from(slope);
@@ -162,11 +296,21 @@ fn resume_plan(anchor: &Anchor, ray: &Ray, slope: u16) -> Option<(i32, i32)> {
     if margin <= 0 {
         return None;
     }
-    let quantum = 1i64 << (COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS);
-    let slack = 1 + ((quantum + 1) * steep + unit - 1) / unit;
-    let unsafe_samples = (slack / margin).min(i64::from(i32::MAX)) as i32;
-    let prefix_end = unsafe_samples.max(anchor.start - 1);
-    (prefix_end + 1 < anchor.k).then_some((prefix_end, anchor.k))
+    // The unsafe prefix on each level the skipped samples can be on.
+    let last_level = ray.level_at(anchor.k);
+    let mut unsafe_until = anchor.start - 1;
+    let mut begins = ray.first;
+    for level in 0..=last_level {
+        let quantum = 1i64 << (COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + u32::from(level));
+        let slack = 1 + ((quantum + 1) * steep + unit - 1) / unit;
+        let ends = ray.next_switch(level, begins);
+        let unsafe_here = (slack / margin).min(i64::from(i32::MAX)) as i32;
+        if unsafe_here >= begins {
+            unsafe_until = unsafe_until.max(unsafe_here.min(ends.saturating_sub(1)));
+        }
+        begins = ends;
+    }
+    (unsafe_until + 1 < anchor.k).then_some((unsafe_until, anchor.k))
 }
 
 fn sky(options: &RenderOptions) -> Sample {
@@ -177,47 +321,58 @@ fn sky(options: &RenderOptions) -> Sample {
     }
 }
 
-/// Casts one ray: from its start, or (with a plan) through a prefix and then
-/// from the resume sample. Returns what it saw and the sample up to which
-/// it is known to be above the surface (its hit, or one past its last).
+/// Casts one ray: from its start, or (with a plan) through a prefix and
+/// then from the resume sample. With `first_hit_on`, a walk from the start
+/// skips through the pyramid's bounds first. Returns what it saw and the sample up to which it is known to be
+/// above the surface (its hit, or one past its last).
 fn cast<P: Probe>(
-    terrain: &Terrain<'_>,
+    pyramid: &Pyramid<'_>,
     ray: &Ray,
     plan: Option<(i32, i32)>,
+    first_hit_on: bool,
     options: &RenderOptions,
     probe: &mut P,
 ) -> (Sample, i32) {
-    let heights = terrain.heights();
-    let strides = ray.strides(terrain.width());
-    // With a plan, walk only the prefix the proof does not cover first.
-    let first_end = plan.map_or(ray.end, |(prefix_end, _)| prefix_end.min(ray.end));
-    let mut outcome = if first_end >= ray.start {
-        walk(
-            heights,
-            ray,
-            &strides,
-            ray.cursor(ray.start, &strides),
-            first_end,
-            probe,
-        )
-    } else {
-        Walk::Exit {
-            last: ray.start - 1,
+    // Walks `from..=end`, skipping through the bounds first when allowed.
+    let walk_from = |from: i32, end: i32, probe: &mut P| {
+        let from = if first_hit_on {
+            match first_hit(pyramid, ray, from, end, probe) {
+                Some(k) => ray.next_visited(k),
+                None => return Walk::Exit { last: end },
+            }
+        } else {
+            from
+        };
+        if from > end {
+            Walk::Exit { last: end }
+        } else {
+            walk(pyramid, ray, ray.cursor(pyramid, from), end, probe)
         }
     };
-    if let (Some((_, resume)), Walk::Exit { last }) = (plan, outcome) {
-        if last < ray.end {
-            let from = resume.clamp(last + 1, ray.end);
-            outcome = walk(
-                heights,
-                ray,
-                &strides,
-                ray.cursor(from, &strides),
-                ray.end,
-                probe,
-            );
+    let outcome = match plan {
+        Some((prefix_end, resume)) => {
+            // Only the prefix the proof does not cover, then jump.
+            let prefix = if prefix_end >= ray.start {
+                walk_from(ray.start, prefix_end.min(ray.end), probe)
+            } else {
+                Walk::Exit {
+                    last: ray.start - 1,
+                }
+            };
+            match prefix {
+                Walk::Exit { last } if last < ray.end => {
+                    let from = ray.next_visited(resume.max(last + 1));
+                    if from > ray.end {
+                        Walk::Exit { last: ray.end }
+                    } else {
+                        walk(pyramid, ray, ray.cursor(pyramid, from), ray.end, probe)
+                    }
+                }
+                other => other,
+            }
         }
-    }
+        None => walk_from(ray.start, ray.end, probe),
+    };
     match outcome {
         Walk::Exit { last } => (sky(options), last + 1),
         Walk::Hit {
@@ -225,16 +380,7 @@ fn cast<P: Probe>(
             clearance,
             above: Some(above),
         } => (
-            shade(
-                terrain,
-                ray,
-                &strides,
-                at,
-                clearance,
-                Some(above),
-                options,
-                probe,
-            ),
+            shade(pyramid, ray, at, clearance, Some(above), options, probe),
             at.k,
         ),
         Walk::Hit {
@@ -242,34 +388,35 @@ fn cast<P: Probe>(
             clearance,
             above: None,
         } => {
-            let (at, clearance, above) = retrace(heights, ray, &strides, at, clearance, probe);
+            let (at, clearance, above) = retrace(pyramid, ray, at, clearance, probe);
             (
-                shade(terrain, ray, &strides, at, clearance, above, options, probe),
+                shade(pyramid, ray, at, clearance, above, options, probe),
                 at.k,
             )
         }
     }
 }
 
-/// The first visited sample was already below the surface: step back while
-/// the sample before is below too (never before the ray's start), and report
-/// the clearance of the sample above, if there is one in the map.
+/// The first visited sample was already below the surface: step back along
+/// the samples a walk from the eye visits while the one before is below
+/// too (never before the ray's start), and report the clearance of the
+/// sample above, if there is one in the map.
 fn retrace<P: Probe>(
-    heights: &[u16],
+    pyramid: &Pyramid<'_>,
     ray: &Ray,
-    strides: &Strides,
     mut at: Cursor,
     mut below: i32,
     probe: &mut P,
-) -> (Cursor, i32, Option<i32>) {
+) -> (Cursor, i32, Option<(i32, i32)>) {
     while at.k > ray.first {
-        let before = ray.cursor(at.k - 1, strides);
-        let Some((voxel, c)) = clearance(heights, &before, strides) else {
+        let before = ray.cursor(pyramid, ray.previous_visited(at.k));
+        let stage = Stage::new(pyramid, ray, before.level);
+        let Some((voxel, c)) = stage.clearance(&before) else {
             break;
         };
-        probe.visit(voxel);
+        probe.visit(before.level, voxel);
         if c > 0 {
-            return (at, below, Some(c));
+            return (at, below, Some((before.k, c)));
         }
         if before.k < ray.start {
             break;
@@ -280,60 +427,45 @@ fn retrace<P: Probe>(
     (at, below, None)
 }
 
-/// Colors a hit: the two voxels across the grid line blended by the subvoxel
-/// weight, on the hit's grid line and (when known) on the one before,
-/// blended by where between them the ray crossed the surface.
-#[allow(clippy::too_many_arguments)]
+/// Colors a hit: the color where the hit sample's grid line is crossed and
+/// (when known) where the previous visited sample's is, blended by where
+/// between them the ray crossed the surface.
 fn shade<P: Probe>(
-    terrain: &Terrain<'_>,
+    pyramid: &Pyramid<'_>,
     ray: &Ray,
-    strides: &Strides,
     hit: Cursor,
     below: i32,
-    above: Option<i32>,
+    above: Option<(i32, i32)>,
     options: &RenderOptions,
     probe: &mut P,
 ) -> Sample {
-    let colors = terrain.colors();
-    let Some(on_hit_line) = line_color(colors, &hit, strides, probe) else {
+    let stage = Stage::new(pyramid, ray, hit.level);
+    let Some(on_hit_line) = stage.color(&hit, probe) else {
         return sky(options);
     };
-    let (color, distance, back) = match above {
-        Some(above) => {
+    probe.hit(hit.level);
+    // How far back (in 1/256 of the last step) the crossing lies, and the
+    // last step's length in samples.
+    let (color, back, step) = match above {
+        Some((before, above)) => {
             let t = crossing_fraction(above, below);
-            let before = ray.cursor(hit.k - 1, strides);
-            let color = match line_color(colors, &before, strides, probe) {
+            let before = ray.cursor(pyramid, before);
+            let before_stage = Stage::new(pyramid, ray, before.level);
+            let color = match before_stage.color(&before, probe) {
                 Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
                 None => on_hit_line,
             };
-            let back = i64::from(256 - t);
-            (color, ray.distance(hit.k) - (back << 8), back)
+            (color, i64::from(256 - t), i64::from(hit.k - before.k))
         }
-        None => (on_hit_line, ray.distance(hit.k), 0),
+        None => (on_hit_line, 0, 1),
     };
-    // The crossing lies `back`/256 of a step before the hit sample.
-    let elevation = i64::from(hit.z.to_bits()) - ((back * i64::from(ray.dz.to_bits())) >> 8);
+    let distance = ray.distance(hit.k) - ((back * step) << 8);
+    let elevation = i64::from(hit.z) - ((back * step * i64::from(ray.dz.to_bits())) >> 8);
     Sample {
         color,
         distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
         elevation: elevation.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32,
     }
-}
-
-/// The color where a sample's grid line is crossed: two voxels blended by
-/// the subvoxel weight.
-#[inline]
-fn line_color<P: Probe>(
-    colors: &[Rgb],
-    at: &Cursor,
-    strides: &Strides,
-    probe: &mut P,
-) -> Option<Rgb> {
-    let (index, weight) = locate(at, strides, WEIGHT_BITS);
-    let c0 = *colors.get(index as usize)?;
-    let c1 = *colors.get((index + strides.minor) as usize)?;
-    probe.color(index as usize);
-    Some(lerp(c0, c1, weight as u32))
 }
 
 /// Where between a sample above the surface (clearance `above` > 0) and the
@@ -344,13 +476,6 @@ fn crossing_fraction(above: i32, below: i32) -> u32 {
     let den = num + below.unsigned_abs();
     let shift = (32 - den.leading_zeros()).saturating_sub(24);
     ((num >> shift) << 8) / (den >> shift).max(1)
-}
-
-/// Blends `a` toward `b` by `t`/256.
-#[inline]
-fn lerp(a: Rgb, b: Rgb, t: u32) -> Rgb {
-    let t = t.min(256);
-    core::array::from_fn(|i| ((u32::from(a[i]) * (256 - t) + u32::from(b[i]) * t + 128) >> 8) as u8)
 }
 
 #[cfg(test)]

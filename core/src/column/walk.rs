@@ -1,82 +1,250 @@
-//! The per-step loop: Cohen-Or's Figure 7, integer only.
+//! The per-step loop: Cohen-Or's Figure 7, integer only, on any level.
 //!
-//! One step: fetch the two heights across the minor grid line, blend them by
-//! the subvoxel weight (shift and mask of the minor coordinate), compare with
-//! the ray height, advance by the fixed-point increments. No division, no
-//! float; the only branches are the hit test, the end of the clipped ray, and
-//! the `get` that turns an impossible out-of-map index into an exit instead
-//! of a panic.
+//! One step at level 0: fetch the two heights across the minor grid line,
+//! blend them by the subvoxel weight (shift and mask of the minor
+//! coordinate), compare with the ray height, advance by the fixed-point
+//! increments. At level `l ≥ 1` the step is `2^l` voxels with the increments
+//! doubled `l` times, and the grid and weight are the same shift by `l` more
+//! bits. (Colors, not heights, are blended with the level below when a hit
+//! is shaded: morphing heights too would sample the finer level on the
+//! coarser grid lines only and lose every feature between them.) No
+//! division, no float; the only branches are the
+//! hit test, the end of the clipped ray, the level switch, and the `get`
+//! that turns an impossible out-of-map index into an exit instead of a
+//! panic.
 
 use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS};
 use crate::probe::Probe;
-use crate::view::ray::{Cursor, Ray, Strides};
+use crate::pyramid::Pyramid;
+use crate::view::ray::{Cursor, Ray, T_ONE};
+use crate::Rgb;
 
-/// The voxel index of a sample's grid-line start and its subvoxel weight of
-/// `bits` bits (shift and mask of the minor coordinate).
-#[inline(always)]
-pub(crate) fn locate(at: &Cursor, strides: &Strides, bits: u32) -> (isize, i32) {
-    let minor = at.minor.to_bits();
-    let index = at.base + (minor >> COORD_FRAC_BITS) as isize * strides.minor;
-    (
-        index,
-        (minor >> (COORD_FRAC_BITS - bits)) & ((1 << bits) - 1),
-    )
+/// Everything a step on one level needs, fixed while the ray stays there.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Stage<'a> {
+    level: u8,
+    heights: &'a [u16],
+    colors: &'a [Rgb],
+    /// The colors of the level below, for the blend (empty at level 0).
+    colors_below: &'a [Rgb],
+    /// Index change across a minor grid line, here and on the level below.
+    minor_stride: isize,
+    minor_stride_below: isize,
+    /// Index change per step, here and on the level below (two of its grid
+    /// lines per step).
+    step: isize,
+    step_below: isize,
+    /// Increments of one step of `2^level` voxels, Q16.
+    dminor: i32,
+    dz: i32,
+    dt: i32,
 }
 
-/// How far the ray is above the surface at a sample (Q16; ≤ 0 is a hit),
-/// and the voxel fetched. `None` only for an index outside the map.
+/// Index strides of a level's grid for a ray: (per major grid line, across
+/// a minor grid line).
+fn strides(width: u32, x_major: bool) -> (isize, isize) {
+    if x_major {
+        (1, width as isize)
+    } else {
+        (width as isize, 1)
+    }
+}
+
+impl<'a> Stage<'a> {
+    /// The stage of `level` for `ray` (level 0 if the pyramid lacks it).
+    pub fn new(pyramid: &Pyramid<'a>, ray: &Ray, level: u8) -> Self {
+        let level = level.min(pyramid.top());
+        let here = pyramid.level(usize::from(level)).unwrap_or(pyramid.base());
+        let below = level
+            .checked_sub(1)
+            .and_then(|l| pyramid.level(usize::from(l)));
+        let x_major = ray.key.x_major;
+        let sign = if ray.key.forward { 1 } else { -1 };
+        let (major_stride, minor_stride) = strides(here.width(), x_major);
+        let (major_below, minor_below) = below.map_or((0, 0), |b| strides(b.width(), x_major));
+        Self {
+            level,
+            heights: here.heights(),
+            colors: here.colors(),
+            colors_below: below.map_or(&[], |b| b.colors()),
+            minor_stride,
+            minor_stride_below: minor_below,
+            step: sign * major_stride,
+            step_below: sign * 2 * major_below,
+            dminor: ray.dminor.to_bits() << level,
+            dz: ray.dz.to_bits() << level,
+            dt: if level == 0 { 0 } else { ray.lod.dt },
+        }
+    }
+
+    /// Samples per step.
+    #[inline(always)]
+    pub fn stride(&self) -> i32 {
+        1 << self.level
+    }
+
+    /// How far the ray is above the surface at a sample (Q16; ≤ 0 is a
+    /// hit), and the voxel of this level fetched. `None` only for an index
+    /// outside the map.
+    #[inline(always)]
+    pub fn clearance(&self, at: &Cursor) -> Option<(usize, i32)> {
+        let (voxel, surface) = blend(
+            self.heights,
+            at.base,
+            self.minor_stride,
+            at.minor,
+            self.level,
+        )?;
+        Some((voxel, at.z.saturating_sub(surface)))
+    }
+
+    /// The color where a sample's grid line is crossed: two voxels blended by
+    /// the subvoxel weight, on this level and on the one below, blended by
+    /// the morph weight (the soft transition).
+    pub fn color<P: Probe>(&self, at: &Cursor, probe: &mut P) -> Option<Rgb> {
+        let here = line_color(
+            self.colors,
+            at.base,
+            self.minor_stride,
+            at.minor,
+            self.level,
+        )?;
+        probe.color(
+            self.level,
+            index(at.base, self.minor_stride, at.minor, self.level) as usize,
+        );
+        if self.level == 0 {
+            return Some(here);
+        }
+        let below = line_color(
+            self.colors_below,
+            at.base_below,
+            self.minor_stride_below,
+            at.minor,
+            self.level - 1,
+        )?;
+        let t = (at.t.clamp(0, T_ONE) >> (COORD_FRAC_BITS - 8)) as u32;
+        Some(lerp(below, here, t))
+    }
+
+    /// Moves to the next sample on this level.
+    #[inline(always)]
+    pub fn advance(&self, at: &mut Cursor) {
+        at.k += self.stride();
+        at.base += self.step;
+        at.base_below += self.step_below;
+        at.minor = at.minor.wrapping_add(self.dminor);
+        at.z = at.z.wrapping_add(self.dz);
+        at.t = at.t.saturating_add(self.dt);
+    }
+}
+
+/// The index of a sample's grid-line start on level `level`.
 #[inline(always)]
-pub(crate) fn clearance(heights: &[u16], at: &Cursor, strides: &Strides) -> Option<(usize, i32)> {
-    let (index, weight) = locate(at, strides, HEIGHT_WEIGHT_BITS);
-    let h0 = i32::from(*heights.get(index as usize)?);
-    let h1 = i32::from(*heights.get((index + strides.minor) as usize)?);
-    // U12.4 height times a 12-bit weight is exactly I16F16.
-    let surface = (h0 << HEIGHT_WEIGHT_BITS) + (h1 - h0) * weight;
-    Some((index as usize, at.z.to_bits().saturating_sub(surface)))
+fn index(base: isize, minor_stride: isize, minor: i32, level: u8) -> isize {
+    base + (minor >> (COORD_FRAC_BITS + u32::from(level))) as isize * minor_stride
+}
+
+/// The surface height on a grid line (Q16) and the voxel fetched: two
+/// heights blended by a 12-bit weight, which lands U12.4 exactly on I16F16.
+#[inline(always)]
+fn blend(
+    heights: &[u16],
+    base: isize,
+    minor_stride: isize,
+    minor: i32,
+    level: u8,
+) -> Option<(usize, i32)> {
+    let i = index(base, minor_stride, minor, level);
+    let weight_shift = COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + u32::from(level);
+    let weight = (minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1);
+    let h0 = i32::from(*heights.get(i as usize)?);
+    let h1 = i32::from(*heights.get((i + minor_stride) as usize)?);
+    Some((i as usize, (h0 << HEIGHT_WEIGHT_BITS) + (h1 - h0) * weight))
+}
+
+/// Two colors across a grid line blended by an 8-bit weight.
+#[inline]
+fn line_color(
+    colors: &[Rgb],
+    base: isize,
+    minor_stride: isize,
+    minor: i32,
+    level: u8,
+) -> Option<Rgb> {
+    let i = index(base, minor_stride, minor, level);
+    let weight = (minor >> (COORD_FRAC_BITS - 8 + u32::from(level))) & 0xff;
+    let c0 = *colors.get(i as usize)?;
+    let c1 = *colors.get((i + minor_stride) as usize)?;
+    Some(lerp(c0, c1, weight as u32))
+}
+
+/// Blends `a` toward `b` by `t`/256.
+#[inline]
+pub(crate) fn lerp(a: Rgb, b: Rgb, t: u32) -> Rgb {
+    let t = t.min(256);
+    core::array::from_fn(|i| ((u32::from(a[i]) * (256 - t) + u32::from(b[i]) * t + 128) >> 8) as u8)
 }
 
 /// The outcome of a walk along one ray.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Walk {
-    /// The ray is at or below the surface at `at`. `above` is the clearance
-    /// of the sample before it, when the walk visited that sample.
+    /// The ray is at or below the surface at `at`. `above` is the visited
+    /// sample before it and its clearance, when the walk visited it.
     Hit {
         at: Cursor,
         clearance: i32,
-        above: Option<i32>,
+        above: Option<(i32, i32)>,
     },
-    /// The ray reached its end above the surface: it was above at every
-    /// sample it visited, up to `last`.
+    /// The ray stopped above the surface: it was above at every sample it
+    /// visited, up to `last`.
     Exit { last: i32 },
 }
 
-/// Walks from `at` along the ray until a hit or sample `end`.
+/// Walks from `at` along the ray, switching levels on schedule, until a hit
+/// or the last visited sample not past `end`.
 #[inline]
 pub(crate) fn walk<P: Probe>(
-    heights: &[u16],
+    pyramid: &Pyramid<'_>,
     ray: &Ray,
-    strides: &Strides,
     mut at: Cursor,
     end: i32,
     probe: &mut P,
 ) -> Walk {
     let mut above = None;
     loop {
-        let Some((voxel, clearance)) = clearance(heights, &at, strides) else {
-            return Walk::Exit { last: at.k - 1 };
-        };
-        probe.visit(voxel);
-        if clearance <= 0 {
-            return Walk::Hit {
-                at,
-                clearance,
-                above,
+        let stage = Stage::new(pyramid, ray, at.level);
+        let switch = ray.next_switch(at.level, at.k);
+        let stride = stage.stride();
+        loop {
+            let Some((voxel, clearance)) = stage.clearance(&at) else {
+                return Walk::Exit { last: at.k - 1 };
             };
+            probe.visit(at.level, voxel);
+            if clearance <= 0 {
+                return Walk::Hit {
+                    at,
+                    clearance,
+                    above,
+                };
+            }
+            if at.k > end - stride {
+                if at.k < end && end == ray.end {
+                    // The ray's end lies between this level's lines: it is
+                    // visited too, on level 0 (see `Ray::next_visited`).
+                    above = Some((at.k, clearance));
+                    at = ray.cursor(pyramid, end);
+                    break;
+                }
+                return Walk::Exit { last: at.k };
+            }
+            above = Some((at.k, clearance));
+            stage.advance(&mut at);
+            if at.k >= switch {
+                break;
+            }
         }
-        if at.k >= end {
-            return Walk::Exit { last: at.k };
-        }
-        above = Some(clearance);
-        at.advance(ray, strides);
+        // The even-step rule put this sample on the next level's grid.
+        at = ray.cursor(pyramid, at.k);
     }
 }

@@ -88,6 +88,9 @@ pub struct View {
     pub(crate) base: [I32F32; 3],
     pub(crate) per_column: [I32F32; 3],
     pub(crate) per_row: [I32F32; 3],
+    /// Pixels per unit of depth (`W / 2·tan(hfov/2)`), Q16: a voxel at depth
+    /// `D` is `focal / D` pixels wide.
+    pub(crate) focal: i64,
     width: u32,
     height: u32,
 }
@@ -151,6 +154,7 @@ impl View {
             base: to_fixed(base),
             per_column: to_fixed(right * step),
             per_row: to_fixed(up * step),
+            focal: (w / (2.0 * tangent) * 65536.0) as i64,
             width,
             height,
         })

@@ -1,4 +1,5 @@
-//! Per-ray set-up: direction, major axis, fixed-point increments, clipping.
+//! Per-ray set-up: direction, major axis, fixed-point increments, clipping,
+//! and the schedule of pyramid levels along the ray.
 //!
 //! Integer arithmetic only (one division per increment, per ray, as in
 //! Cohen-Or's Figure 7). A ray samples the terrain on the grid lines of its
@@ -6,13 +7,32 @@
 //! `delta0 + k` voxels from the eye along that axis. Clipping bounds `k` so
 //! that every sample the caster visits is inside the map and every
 //! fixed-point value stays in range.
+//!
+//! # Levels along a ray
+//! Level `l ≥ 1` begins where a voxel of level `l − 1` gets narrower than a
+//! pixel: at depth `2^(l−1)·D1`, `D1 = focal / pixel_to_voxel`. On a ray of
+//! major-axis component `|d_major|` (the forward component is 1) that is the
+//! major-axis distance `2^(l−1)·reach`, `reach = D1·|d_major|`. The ray
+//! switches at the first sample past that distance whose grid line is a
+//! line of level `l` (the even-step rule, Figure 8), so it visits sample `k`
+//! at level `l` only when `major(k)` is a multiple of `2^l`, and steps there
+//! by `2^l`, with doubled increments.
+//!
+//! Within level `l` the surface is morphed from level `l − 1` to level `l`
+//! by `t = depth / (2^(l−1)·D1) − 1`, 0 where the level begins and 1 where
+//! it ends, so neither heights nor colors jump at a switch. `t` grows by the
+//! same `dt` every step at every level.
 
 use super::View;
-use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE};
+use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, MAX_WALK_LEVEL};
+use crate::pyramid::Pyramid;
 use crate::terrain::Terrain;
 use fixed::types::I16F16;
 
 const ONE: i64 = 1 << COORD_FRAC_BITS;
+
+/// Morph weight of a whole level, Q16.
+pub(crate) const T_ONE: i32 = 1 << COORD_FRAC_BITS;
 
 /// Which family of grid lines a ray steps across. Two rays with the same key
 /// number their samples identically, so one can resume where the other hit.
@@ -20,6 +40,46 @@ const ONE: i64 = 1 << COORD_FRAC_BITS;
 pub(crate) struct RayKey {
     pub x_major: bool,
     pub forward: bool,
+}
+
+/// The frame's level-of-detail set-up.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LodPlan {
+    /// Depth where level 1 begins, Q16 voxels.
+    level1_depth: i64,
+    /// Highest level the frame may use.
+    top: u8,
+}
+
+impl LodPlan {
+    /// Levels up to `top`, switching by `pixel_to_voxel` (U8.8; 0 counts as
+    /// 1/256).
+    pub fn new(view: &View, pixel_to_voxel: u16, top: u8) -> Self {
+        let ratio = i64::from(pixel_to_voxel.max(1));
+        Self {
+            level1_depth: (view.focal << 8) / ratio,
+            top: top.min(MAX_WALK_LEVEL as u8),
+        }
+    }
+
+    /// One level only.
+    pub const SINGLE: Self = Self {
+        level1_depth: i64::MAX,
+        top: 0,
+    };
+}
+
+/// A ray's level schedule. Two rays with equal `Lod` (and key) visit the
+/// same samples at the same levels with the same morph weights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Lod {
+    /// Major-axis distance where level 1 begins, Q16 (level `l` begins at
+    /// `reach << (l − 1)`).
+    reach: i64,
+    /// Morph-weight growth per step, Q16 of a level.
+    pub dt: i32,
+    /// Highest level this ray uses.
+    pub top: u8,
 }
 
 /// One ray, ready to traverse.
@@ -33,7 +93,7 @@ pub(crate) struct Ray {
     /// Minor coordinate and height at sample 0, Q16.
     minor0: i64,
     z0: i64,
-    /// Per-step increments of the minor coordinate and of the height.
+    /// Per-step (level 0) increments of the minor coordinate and height.
     pub dminor: I16F16,
     pub dz: I16F16,
     /// First sample inside the map; may be −1 (one step behind the eye),
@@ -43,36 +103,39 @@ pub(crate) struct Ray {
     pub start: i32,
     /// Last sample where a hit is possible.
     pub end: i32,
+    pub lod: Lod,
 }
 
-/// Where sample `k` of a ray is: the voxel index of its grid-line start
-/// (`base + floor(minor)·minor_stride`), the minor coordinate and the height.
+/// Where sample `k` of a ray is, on its level.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Cursor {
     pub k: i32,
+    pub level: u8,
+    /// Index of the level's grid-line start (`floor(minor) = 0`) in the
+    /// level's grid, and the same on the level below (morphing levels only).
     pub base: isize,
-    pub minor: I16F16,
-    pub z: I16F16,
-}
-
-/// Index arithmetic of one ray's grid lines on one terrain.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Strides {
-    /// Voxel-index change per step along the ray (±1 or ±width).
-    pub step: isize,
-    /// Voxel-index change across a minor grid line (width or 1).
-    pub minor: isize,
-    /// Voxel-index change per major grid coordinate (1 or width).
-    major: isize,
+    pub base_below: isize,
+    /// Minor coordinate (world voxels) and height, Q16.
+    pub minor: i32,
+    pub z: i32,
+    /// Morph weight toward this level, Q16, unclamped (see [`Ray::morph`]).
+    pub t: i32,
 }
 
 impl View {
-    /// Sets up the ray of pixel column `column`, `row` rows above the bottom.
-    pub(crate) fn ray(&self, terrain: &Terrain<'_>, column: u32, row: u32) -> Ray {
+    /// Sets up the ray of pixel column `column` at `row16` sixteenths of a
+    /// pixel above the center of the bottom row.
+    pub(crate) fn ray(
+        &self,
+        terrain: &Terrain<'_>,
+        plan: &LodPlan,
+        column: u32,
+        row16: i64,
+    ) -> Ray {
         let d: [i64; 3] = core::array::from_fn(|i| {
             self.base[i].to_bits()
                 + self.per_column[i].to_bits() * i64::from(column)
-                + self.per_row[i].to_bits() * i64::from(row)
+                + ((self.per_row[i].to_bits() * row16) >> 4)
         });
         let x_major = d[0].abs() >= d[1].abs();
         let (d_major, d_minor) = if x_major { (d[0], d[1]) } else { (d[1], d[0]) };
@@ -154,62 +217,202 @@ impl View {
             first: narrow(first),
             start: narrow(start),
             end: narrow(end),
+            lod: Lod::new(plan, run, dz),
         }
     }
 }
 
+impl Lod {
+    fn new(plan: &LodPlan, run: i64, dz: i64) -> Self {
+        // Doubling must keep the height increment inside I16F16 with room
+        // for the height itself: |dz|·2^l <= 2^29.
+        let mut top = plan.top;
+        while top > 0 && (dz.abs() << top) > 1 << 29 {
+            top -= 1;
+        }
+        if top == 0 {
+            return Self {
+                reach: i64::MAX,
+                dt: 0,
+                top,
+            };
+        }
+        // reach = D1·|d_major|: Q16 times Q32 (taken as Q16), in range for
+        // every depth and direction View accepts.
+        let reach = ((plan.level1_depth.min(1 << 40) * (run >> 16)) >> 16).clamp(1, 1 << 40);
+        // t goes from 0 to 1 over the level's `2^(l−1)·reach` voxels, which
+        // are `reach/2` steps of `2^l`: dt = 2 / reach (Q16 over Q16).
+        let dt = ((1i64 << 33) / reach).min(1 << 24) as i32;
+        Self { reach, dt, top }
+    }
+}
+
 impl Ray {
-    /// The voxel-index strides of this ray on a map `width` voxels wide.
-    pub fn strides(&self, width: u32) -> Strides {
-        let width = width as isize;
-        let (major, minor) = if self.key.x_major {
-            (1, width)
+    /// Major-axis grid coordinate of sample `k`.
+    #[inline]
+    fn major_at(&self, k: i32) -> i64 {
+        if self.key.forward {
+            self.major0 + i64::from(k)
         } else {
-            (width, 1)
-        };
-        Strides {
-            step: if self.key.forward { major } else { -major },
-            minor,
-            major,
+            self.major0 - i64::from(k)
         }
     }
 
-    /// The position of sample `k`, computed directly (not by stepping), so a
-    /// resumed ray sees exactly the values it would have reached by walking.
-    pub fn cursor(&self, k: i32, strides: &Strides) -> Cursor {
-        let k64 = i64::from(k);
-        let major = if self.key.forward {
-            self.major0 + k64
+    /// Whether sample `k` lies on a grid line of `level`.
+    pub fn on_level_grid(&self, k: i32, level: u8) -> bool {
+        self.major_at(k) & ((1 << level) - 1) == 0
+    }
+
+    /// The first sample at or after `k` on a grid line of `level`.
+    pub fn align_up(&self, k: i32, level: u8) -> i32 {
+        let mask = (1i64 << level) - 1;
+        let m = self.major_at(k);
+        let to = if self.key.forward {
+            ((m + mask) & !mask) - self.major0
         } else {
-            self.major0 - k64
+            self.major0 - (m & !mask)
         };
+        to.min(i64::from(i32::MAX)) as i32
+    }
+
+    /// The first sample at distance `reach << (level − 1)` or beyond.
+    fn threshold(&self, level: u8) -> i32 {
+        let distance = self.lod.reach << (level - 1);
+        let k = (distance - self.delta0 + ONE - 1) >> COORD_FRAC_BITS;
+        k.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+    }
+
+    /// Where a ray at level `level − 1`, at sample `k` (on or past that
+    /// level's first sample), switches to `level`: the first sample of
+    /// `level`'s grid at or past both `k` and the level's distance.
+    pub fn switch_sample(&self, level: u8, k: i32) -> i32 {
+        self.align_up(k.max(self.threshold(level)), level)
+    }
+
+    /// The first sample of the level after `level`, seen from sample `k` of
+    /// `level` (`i32::MAX` at the top level).
+    pub fn next_switch(&self, level: u8, k: i32) -> i32 {
+        if level >= self.lod.top {
+            i32::MAX
+        } else {
+            self.switch_sample(level + 1, k)
+        }
+    }
+
+    /// The level in effect at sample `k`.
+    pub fn level_at(&self, k: i32) -> u8 {
+        let (mut level, mut begins) = (0u8, self.first);
+        while level < self.lod.top {
+            let next = self.switch_sample(level + 1, begins);
+            if next > k {
+                break;
+            }
+            level += 1;
+            begins = next;
+        }
+        level
+    }
+
+    /// Whether `k` is the ray's end sample and lies between the grid lines
+    /// of its level: a walk tests it anyway, on level 0, so that a ray
+    /// that ends inside the map (below the ground, or at its edge) cannot
+    /// step over its last hit.
+    fn is_extra_end(&self, k: i32) -> bool {
+        k == self.end && !self.on_level_grid(k, self.level_at(k))
+    }
+
+    /// The first sample at or after `k` that a walk from the eye visits.
+    pub fn next_visited(&self, k: i32) -> i32 {
+        let on_grid = self.align_up(k, self.level_at(k));
+        if on_grid > self.end && k <= self.end {
+            self.end
+        } else {
+            on_grid
+        }
+    }
+
+    /// The sample a walk from the eye visits just before sample `k` (which
+    /// it must visit itself).
+    pub fn previous_visited(&self, k: i32) -> i32 {
+        if k <= self.first {
+            return k - 1;
+        }
+        if self.is_extra_end(k) {
+            // The last grid line of its level before it.
+            let level = self.level_at(k);
+            let up = self.align_up(k, level);
+            return up - (1 << level);
+        }
+        k - (1 << self.level_at(k - 1))
+    }
+
+    /// The morph weight of sample `k` at level `level`, Q16, unclamped.
+    fn morph(&self, k: i32, level: u8) -> i32 {
+        if level == 0 {
+            return 0;
+        }
+        let distance = self.delta0 + (i64::from(k) << COORD_FRAC_BITS);
+        let t = ((distance * i64::from(self.lod.dt)) >> (COORD_FRAC_BITS + u32::from(level)))
+            - i64::from(T_ONE);
+        t.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+    }
+
+    /// The position of sample `k` on its level, computed directly (not by
+    /// stepping), so a resumed ray sees exactly the values it would have
+    /// reached by walking.
+    pub fn cursor(&self, pyramid: &Pyramid<'_>, k: i32) -> Cursor {
+        let level = if self.is_extra_end(k) {
+            0
+        } else {
+            self.level_at(k)
+        };
+        self.cursor_on(pyramid, k, level)
+    }
+
+    /// The position of sample `k` on `level`, whatever the schedule says.
+    fn cursor_on(&self, pyramid: &Pyramid<'_>, k: i32, level: u8) -> Cursor {
+        let major = self.major_at(k);
+        let base_on = |level: u8| -> isize {
+            let stride = match pyramid.level(usize::from(level)) {
+                Some(t) if !self.key.x_major => t.width() as isize,
+                _ => 1,
+            };
+            (major >> level) as isize * stride
+        };
+        let k64 = i64::from(k);
         // Inside [first, end] both values are in range by construction; the
         // clamp keeps an out-of-range request harmless (it reads as far
         // below the surface, or as outside the map).
         let fit = |v: i64| v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
         Cursor {
             k,
-            base: major as isize * strides.major,
-            minor: I16F16::from_bits(fit(self.minor0 + k64 * i64::from(self.dminor.to_bits()))),
-            z: I16F16::from_bits(fit(self.z0 + k64 * i64::from(self.dz.to_bits()))),
+            level,
+            base: base_on(level),
+            base_below: if level > 0 { base_on(level - 1) } else { 0 },
+            minor: fit(self.minor0 + k64 * i64::from(self.dminor.to_bits())),
+            z: fit(self.z0 + k64 * i64::from(self.dz.to_bits())),
+            t: self.morph(k, level),
         }
+    }
+
+    /// Minor coordinate and height at sample `k`, Q16, without narrowing.
+    pub fn position(&self, k: i32) -> (i64, i64) {
+        let k = i64::from(k);
+        (
+            self.minor0 + k * i64::from(self.dminor.to_bits()),
+            self.z0 + k * i64::from(self.dz.to_bits()),
+        )
+    }
+
+    /// Major-axis grid coordinate of sample `k` (for the first hit).
+    pub fn major(&self, k: i32) -> i64 {
+        self.major_at(k)
     }
 
     /// Distance from the eye along the major axis to sample `k`, Q16, never
     /// negative.
     pub fn distance(&self, k: i32) -> i64 {
         (self.delta0 + (i64::from(k) << COORD_FRAC_BITS)).max(0)
-    }
-}
-
-impl Cursor {
-    /// Moves to the next sample along the ray.
-    #[inline(always)]
-    pub fn advance(&mut self, ray: &Ray, strides: &Strides) {
-        self.k += 1;
-        self.base += strides.step;
-        self.minor += ray.dminor;
-        self.z += ray.dz;
     }
 }
 
@@ -229,6 +432,7 @@ fn div_ceil(a: i64, b: i64) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::column::walk::Stage;
     use crate::view::Camera;
 
     #[test]
@@ -250,6 +454,7 @@ mod tests {
     fn samples_inside_the_clip_range_are_inside_the_map() {
         let (h, c) = flat(16, 0);
         let terrain = Terrain::new(16, 16, &h, &c).unwrap();
+        let pyramid = Pyramid::flat(terrain);
         for yaw in [0.0, 37.0, 90.0, 150.0, 200.0, 271.0, 333.0] {
             let cam = Camera {
                 eye: [-5.5, 7.25, 20.0],
@@ -260,18 +465,129 @@ mod tests {
             let view = View::new(&cam, 32, 8).unwrap();
             for col in 0..32 {
                 for row in 0..8 {
-                    let ray = view.ray(&terrain, col, row);
-                    let s = ray.strides(16);
+                    let ray = view.ray(&terrain, &LodPlan::SINGLE, col, row * 16);
+                    let stage = Stage::new(&pyramid, &ray, 0);
                     for k in ray.first..=ray.end {
-                        let cur = ray.cursor(k, &s);
-                        let idx = cur.base + (cur.minor.to_bits() >> 16) as isize * s.minor;
-                        assert!(
-                            idx >= 0 && ((idx + s.minor) as usize) < h.len(),
-                            "yaw {yaw} k {k}"
-                        );
+                        let cur = ray.cursor(&pyramid, k);
+                        assert!(stage.clearance(&cur).is_some(), "yaw {yaw} k {k}");
                     }
                 }
             }
+        }
+    }
+
+    /// A ray over a long map with levels 0 to 4, switching at `reach`.
+    fn ray_with_levels(forward: bool, eye_x: f32) -> Ray {
+        let (h, c) = flat(64, 0);
+        let terrain = Terrain::new(64, 64, &h, &c).unwrap();
+        let cam = Camera {
+            eye: [eye_x, 31.5, 3.0],
+            yaw_deg: if forward { 0.0 } else { 180.0 },
+            ..Camera::default()
+        };
+        let view = View::new(&cam, 64, 1).unwrap();
+        let plan = LodPlan {
+            level1_depth: 3 << 16,
+            top: 4,
+        };
+        view.ray(&terrain, &plan, 32, 0)
+    }
+
+    #[test]
+    fn levels_switch_only_on_coarser_grid_lines() {
+        for (forward, eye_x) in [(true, 0.3), (true, 5.0), (false, 63.2), (false, 50.0)] {
+            let ray = ray_with_levels(forward, eye_x);
+            let mut k = ray.start;
+            let mut level = 0;
+            let mut visited = std::vec::Vec::new();
+            while k <= 60 {
+                let now = ray.level_at(k);
+                assert!(now >= level, "levels never go back down");
+                if now > level {
+                    // The even-step rule: the first sample of a level is on
+                    // its grid, and the ray got there on the finer one.
+                    assert!(ray.on_level_grid(k, now), "{forward} {eye_x} k {k}");
+                    assert_eq!(now, level + 1, "one level at a time");
+                    level = now;
+                }
+                visited.push(k);
+                assert!(ray.on_level_grid(k, level));
+                assert_eq!(ray.next_visited(k), k);
+                // Increments double with the level.
+                let next = k + (1 << level);
+                if next <= 60 && ray.level_at(next) >= level {
+                    assert_eq!(ray.previous_visited(next), k);
+                }
+                k = next;
+            }
+            assert_eq!(level, 4, "reached the top level");
+            // Distances where levels begin grow by two each level.
+            let begins: std::vec::Vec<i64> = (1..=4u8)
+                .map(|l| ray.distance(ray.switch_sample(l, ray.threshold(l))))
+                .collect();
+            for pair in begins.windows(2) {
+                assert!(pair[1] >= 2 * pair[0] - (16 << 16), "{begins:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn stepping_doubles_the_increments_and_lands_on_the_direct_position() {
+        let (h, c) = flat(64, 0);
+        let terrain = Terrain::new(64, 64, &h, &c).unwrap();
+        let ray = ray_with_levels(true, 0.3);
+        // A pyramid whose levels all exist, so stages are real.
+        let n = crate::pyramid::pyramid_points(64, 64);
+        let (ph, pc) = (std::vec![0; n], std::vec![[0; 3]; n]);
+        let pb = std::vec![0; crate::pyramid::pyramid_cells(64, 64)];
+        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
+        let mut k = ray.start;
+        while k < 56 {
+            let at = ray.cursor(&pyramid, k);
+            let stage = Stage::new(&pyramid, &ray, at.level);
+            let mut stepped = at;
+            stage.advance(&mut stepped);
+            assert_eq!(stepped.k, k + (1 << at.level));
+            if ray.level_at(stepped.k) == at.level {
+                let direct = ray.cursor(&pyramid, stepped.k);
+                assert_eq!(
+                    (
+                        stepped.base,
+                        stepped.base_below,
+                        stepped.minor,
+                        stepped.z,
+                        stepped.t
+                    ),
+                    (
+                        direct.base,
+                        direct.base_below,
+                        direct.minor,
+                        direct.z,
+                        direct.t
+                    ),
+                    "k {k} level {}",
+                    at.level
+                );
+            }
+            k = stepped.k;
+        }
+    }
+
+    #[test]
+    fn morph_weight_runs_from_zero_to_one_within_each_level() {
+        let ray = ray_with_levels(true, 0.3);
+        for k in ray.start..60 {
+            let level = ray.level_at(k);
+            if level == 0 || !ray.on_level_grid(k, level) {
+                continue;
+            }
+            let t = ray.morph(k, level);
+            // One step of slack on either side: the switch waits for the
+            // coarser grid line.
+            assert!(
+                (-ray.lod.dt..=T_ONE + ray.lod.dt * 2).contains(&t),
+                "k {k} t {t}"
+            );
         }
     }
 }

@@ -1,0 +1,120 @@
+//! The hierarchical first hit (Cohen-Or §2, after Cohen & Shaked [5]): the
+//! bottom ray of a column cannot resume from a ray below it, so it goes
+//! top-down through the pyramid's height bounds instead of voxel by voxel.
+//!
+//! On bound level `b` the ray tests the segment up to its next grid line of
+//! that level (at most `2^b` voxels) against the bound of the cells the
+//! segment crosses (at most two, since the minor slope is at most one). If
+//! the segment's lower end is
+//! above the bound, no level's surface can be hit there and the ray skips
+//! the whole segment, then climbs a level whenever it stands on a coarser
+//! grid line. Otherwise it descends, and hands the sample over to the walk
+//! below level 1 or below the level the walk steps on there (a bound covers
+//! the levels up to its own, not the coarser ones). The cost is logarithmic
+//! in the distance to the hit.
+
+use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_WALK_LEVEL};
+use crate::probe::Probe;
+use crate::pyramid::{level_side, Pyramid};
+use crate::view::ray::Ray;
+
+/// The first sample in `from..=end` where `ray` may hit any level of
+/// `pyramid` (every sample before it is above every level's surface), or
+/// `None` when it cannot hit there.
+pub(crate) fn first_hit<P: Probe>(
+    pyramid: &Pyramid<'_>,
+    ray: &Ray,
+    from: i32,
+    end: i32,
+    probe: &mut P,
+) -> Option<i32> {
+    let top = pyramid.top().min(MAX_WALK_LEVEL as u8);
+    let base = pyramid.base();
+    let (major_cells_side, minor_cells_side) = if ray.key.x_major {
+        (base.width(), base.depth())
+    } else {
+        (base.depth(), base.width())
+    };
+    // Where each of the ray's levels begins, to keep tests at or above the
+    // level the walk samples (the bounds cover levels up to their own).
+    let mut begins = [i32::MAX; MAX_WALK_LEVEL as usize + 1];
+    let mut at = ray.first;
+    for level in 1..=ray.lod.top {
+        at = ray.switch_sample(level, at);
+        begins[usize::from(level)] = at;
+    }
+    let walk_level = |k: i32| begins[1..].iter().take_while(|&&b| b <= k).count() as u8;
+    let mut level = top;
+    let mut k = from;
+    loop {
+        if k > end {
+            return None;
+        }
+        if level == 0 {
+            return Some(k);
+        }
+        // The segment to the next grid line of this level lies in one
+        // column (or row) of its cells.
+        let next = ray.align_up(k.saturating_add(1), level);
+        if next > end {
+            level -= 1;
+            continue;
+        }
+        if level < walk_level(next) {
+            // The walk steps at least this coarse here: hand over.
+            return Some(k);
+        }
+        let Some(bounds) = pyramid.bounds(usize::from(level)) else {
+            return Some(k);
+        };
+        let major = ray.major(k);
+        let major_cell = if ray.key.forward {
+            major >> level
+        } else {
+            (major - 1) >> level
+        };
+        let (minor_a, z_a) = ray.position(k);
+        let (minor_b, z_b) = ray.position(next);
+        let shift = COORD_FRAC_BITS + u32::from(level);
+        let (lo, hi) = (minor_a.min(minor_b) >> shift, minor_a.max(minor_b) >> shift);
+        let cells_major = i64::from(level_side(major_cells_side, u32::from(level))) - 1;
+        let cells_minor = i64::from(level_side(minor_cells_side, u32::from(level))) - 1;
+        let row_width = if ray.key.x_major {
+            cells_major
+        } else {
+            cells_minor
+        };
+        let mut bound = 0u16;
+        for minor_cell in lo..=hi.min(lo + 1) {
+            let inside =
+                (0..cells_major).contains(&major_cell) && (0..cells_minor).contains(&minor_cell);
+            let (x, y) = if ray.key.x_major {
+                (major_cell, minor_cell)
+            } else {
+                (minor_cell, major_cell)
+            };
+            let cell = (y * row_width + x) as usize;
+            let b = if inside {
+                bounds.get(cell).copied()
+            } else {
+                None
+            };
+            probe.bound(level, cell);
+            // A cell outside the storage proves nothing: assume the worst.
+            bound = bound.max(b.unwrap_or(u16::MAX));
+        }
+        if hi > lo + 1 {
+            // Cannot happen with a minor slope of at most one; never skip.
+            bound = u16::MAX;
+        }
+        let lowest = z_a.min(z_b);
+        if lowest > i64::from(bound) << HEIGHT_WEIGHT_BITS {
+            k = next;
+            while level < top && ray.on_level_grid(k, level + 1) {
+                level += 1;
+            }
+        } else {
+            level -= 1;
+        }
+    }
+}

@@ -1,0 +1,559 @@
+//! The binary pyramid: coarser levels of the terrain, and conservative
+//! height bounds for the hierarchical first hit (Cohen-Or §2).
+//!
+//! # Levels
+//! Level 0 is the terrain itself. Grid point `i` of level `l` sits at world
+//! coordinate `i·2^l`, so every grid line of a coarser level is a grid line
+//! of every finer one and a ray that doubles its step at an even step stays
+//! on the coarser grid. A level has `ceil((side − 1) / 2^l) + 1` points per
+//! side, so it always covers the whole map; maps of any size are handled (a
+//! side that is not `2^n + 1` gets coarse points up to `2^l − 1` voxels past
+//! the far edge, filtered from the clamped edge, which no ray samples because
+//! rays are clipped to the level-0 map). Levels go up until both sides are 2.
+//!
+//! # Filter
+//! Each coarse point is the tent filter (`[1 2 1] / 4` along each axis, so
+//! `1/16 … 4/16` in 2-D) of the finer level centered on it: the filter that
+//! keeps a vertex-aligned grid unbiased (a box filter over the four children
+//! would shift every level by half a fine voxel). Colors always use it.
+//! Heights use it by default ([`HeightFilter::Mean`]): far terrain then keeps
+//! its mean height, at the cost of lowering sharp ridges a little at a
+//! distance. [`HeightFilter::Max`] takes the largest of the nine instead:
+//! silhouettes keep their ridges but the whole far terrain rises and gets
+//! thicker. The README reports both against the exact reference.
+//!
+//! # Bounds
+//! Bound cell `(i, j)` of level `b ≥ 1` covers the closed square
+//! `[i·2^b, (i+1)·2^b]²` and holds a height no lower than any point of
+//! levels `0..=b` in it, so a skip over the cell cannot miss a hit on any of
+//! those levels (or on a blend of two of them). The first hit never tests a
+//! cell below the level the caster samples there.
+//!
+//! Storage is the caller's: [`pyramid_points`] and [`pyramid_cells`] are
+//! `const fn`s, so a board can size `static` buffers at compile time (or put
+//! a pyramid built on the host in flash and wrap it with [`Pyramid::new`]).
+
+use crate::config::{MAX_LEVEL, MAX_MAP_SIDE};
+use crate::terrain::Terrain;
+use crate::Rgb;
+use core::fmt;
+use heapless::Vec;
+
+/// Levels a pyramid can hold, level 0 included.
+pub const MAX_LEVELS: usize = MAX_LEVEL as usize + 1;
+
+/// How coarse heights are made from finer ones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum HeightFilter {
+    /// The tent-weighted mean of the nine finer points around it.
+    #[default]
+    Mean,
+    /// The largest of the nine finer points around it.
+    Max,
+}
+
+/// Points per side of level `level` of a map side `side` (0 for level 0 of
+/// a degenerate side).
+pub const fn level_side(side: u32, level: u32) -> u32 {
+    if side < 2 || level > 31 {
+        return side;
+    }
+    let span = (side - 1) as u64;
+    let step = 1u64 << level;
+    span.div_ceil(step) as u32 + 1
+}
+
+/// Number of levels of a `width × depth` map's pyramid, level 0 included
+/// (1 for a map with no coarser level, such as 2 × 2).
+pub const fn level_count(width: u32, depth: u32) -> usize {
+    let mut levels = 1;
+    while level_side(width, levels as u32 - 1) > 2 || level_side(depth, levels as u32 - 1) > 2 {
+        levels += 1;
+    }
+    levels
+}
+
+/// Grid points in the coarser levels (1 and up) of a `width × depth` map:
+/// the length of the height and of the color storage.
+pub const fn pyramid_points(width: u32, depth: u32) -> usize {
+    let mut total = 0;
+    let mut level = 1;
+    while level < level_count(width, depth) {
+        total +=
+            level_side(width, level as u32) as usize * level_side(depth, level as u32) as usize;
+        level += 1;
+    }
+    total
+}
+
+/// Bound cells in levels 1 and up: the length of the bound storage.
+pub const fn pyramid_cells(width: u32, depth: u32) -> usize {
+    let mut total = 0;
+    let mut level = 1;
+    while level < level_count(width, depth) {
+        total += (level_side(width, level as u32) as usize - 1)
+            * (level_side(depth, level as u32) as usize - 1);
+        level += 1;
+    }
+    total
+}
+
+/// Bytes of pyramid storage a `width × depth` map needs (U12.4 heights,
+/// RGB colors and U12.4 bounds), on top of the map itself.
+pub const fn pyramid_bytes(width: u32, depth: u32) -> usize {
+    pyramid_points(width, depth) * (2 + 3) + pyramid_cells(width, depth) * 2
+}
+
+/// Why a pyramid could not be built or wrapped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PyramidError {
+    /// The height storage is shorter than [`pyramid_points`].
+    HeightStorage {
+        /// Elements needed.
+        needed: usize,
+    },
+    /// The color storage is shorter than [`pyramid_points`].
+    ColorStorage {
+        /// Elements needed.
+        needed: usize,
+    },
+    /// The bound storage is shorter than [`pyramid_cells`].
+    BoundStorage {
+        /// Elements needed.
+        needed: usize,
+    },
+}
+
+impl fmt::Display for PyramidError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (what, needed) = match self {
+            Self::HeightStorage { needed } => ("height", needed),
+            Self::ColorStorage { needed } => ("color", needed),
+            Self::BoundStorage { needed } => ("bound", needed),
+        };
+        write!(
+            f,
+            "pyramid {what} storage too small: {needed} elements needed"
+        )
+    }
+}
+
+impl core::error::Error for PyramidError {}
+
+/// A terrain and its coarser levels, borrowed from the caller.
+#[derive(Debug, Clone)]
+pub struct Pyramid<'a> {
+    levels: Vec<Terrain<'a>, MAX_LEVELS>,
+    /// `bounds[b - 1]`: the bound cells of level `b`.
+    bounds: Vec<&'a [u16], MAX_LEVELS>,
+}
+
+impl<'a> Pyramid<'a> {
+    /// A pyramid of one level: single-resolution rendering, no first-hit
+    /// acceleration, no storage.
+    pub fn flat(terrain: Terrain<'a>) -> Self {
+        let mut levels = Vec::new();
+        // Capacity is at least one: this cannot fail.
+        let _ = levels.push(terrain);
+        Self {
+            levels,
+            bounds: Vec::new(),
+        }
+    }
+
+    /// Wraps storage that [`Pyramid::build`] filled for this terrain (on
+    /// this machine or another: a board can keep it in flash). Longer
+    /// storage is fine; only the prefix is used.
+    pub fn new(
+        terrain: Terrain<'a>,
+        heights: &'a [u16],
+        colors: &'a [Rgb],
+        bounds: &'a [u16],
+    ) -> Result<Self, PyramidError> {
+        let (width, depth) = (terrain.width(), terrain.depth());
+        check_storage(width, depth, heights.len(), colors.len(), bounds.len())?;
+        let mut pyramid = Self::flat(terrain);
+        let (mut heights, mut colors, mut bounds) = (heights, colors, bounds);
+        for level in 1..level_count(width, depth) as u32 {
+            let (w, d) = (level_side(width, level), level_side(depth, level));
+            let points = w as usize * d as usize;
+            let cells = (w as usize - 1) * (d as usize - 1);
+            let (h, h_rest) = heights.split_at(points);
+            let (c, c_rest) = colors.split_at(points);
+            let (b, b_rest) = bounds.split_at(cells);
+            (heights, colors, bounds) = (h_rest, c_rest, b_rest);
+            // Coarse levels never exceed the base's highest height, and the
+            // filters keep its steepest slope per voxel (see `slope_bound`).
+            let coarse = Terrain::coarse(w, d, h, c, terrain.max_height(), terrain.max_step());
+            // Capacities hold every level a map of MAX_MAP_SIDE can have.
+            let _ = pyramid.levels.push(coarse);
+            let _ = pyramid.bounds.push(b);
+        }
+        Ok(pyramid)
+    }
+
+    /// Fills `heights`, `colors` and `bounds` with the coarser levels of
+    /// `terrain` and their height bounds. Needs [`pyramid_points`] heights
+    /// and colors and [`pyramid_cells`] bounds; allocates nothing.
+    pub fn build(
+        terrain: &Terrain<'_>,
+        filter: HeightFilter,
+        heights: &mut [u16],
+        colors: &mut [Rgb],
+        bounds: &mut [u16],
+    ) -> Result<(), PyramidError> {
+        let (width, depth) = (terrain.width(), terrain.depth());
+        check_storage(width, depth, heights.len(), colors.len(), bounds.len())?;
+        let levels = level_count(width, depth) as u32;
+
+        // Mean (or max) levels, each from the one below.
+        let mut offset = 0;
+        for level in 1..levels {
+            let (w, d) = (level_side(width, level), level_side(depth, level));
+            let points = w as usize * d as usize;
+            let (done, rest) = heights.split_at_mut(offset);
+            let (done_c, rest_c) = colors.split_at_mut(offset);
+            let (fine_h, fine_c, fw, fd): (&[u16], &[Rgb], u32, u32) = if level == 1 {
+                (terrain.heights(), terrain.colors(), width, depth)
+            } else {
+                let (fw, fd) = (level_side(width, level - 1), level_side(depth, level - 1));
+                let fine = fw as usize * fd as usize;
+                (&done[offset - fine..], &done_c[offset - fine..], fw, fd)
+            };
+            let coarse = Grid { width: w, depth: d };
+            let fine = Grid {
+                width: fw,
+                depth: fd,
+            };
+            downsample(
+                fine,
+                fine_h,
+                fine_c,
+                coarse,
+                &mut rest[..points],
+                &mut rest_c[..points],
+                filter,
+            );
+            offset += points;
+        }
+        build_bounds(terrain, heights, bounds);
+        Ok(())
+    }
+
+    /// Number of levels, level 0 included.
+    pub fn levels(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// The highest level (0 for a flat pyramid).
+    pub fn top(&self) -> u8 {
+        (self.levels.len() - 1) as u8
+    }
+
+    /// Level `level`, if the pyramid has it.
+    pub fn level(&self, level: usize) -> Option<&Terrain<'a>> {
+        self.levels.get(level)
+    }
+
+    /// Level 0: the terrain itself.
+    pub fn base(&self) -> &Terrain<'a> {
+        // A pyramid always holds level 0.
+        &self.levels[0]
+    }
+
+    /// The bound cells of level `level` (1 and up), if there are any.
+    pub(crate) fn bounds(&self, level: usize) -> Option<&'a [u16]> {
+        level
+            .checked_sub(1)
+            .and_then(|i| self.bounds.get(i))
+            .copied()
+    }
+
+    /// Whether the hierarchical first hit can be used.
+    pub fn has_bounds(&self) -> bool {
+        !self.bounds.is_empty()
+    }
+
+    /// A neighbour-difference bound (U12.4 per voxel) that holds on every
+    /// level: both filters keep level 0's slope per voxel, and the mean's
+    /// rounding adds at most half a unit per level over `2^l` voxels.
+    pub fn slope_bound(&self) -> u16 {
+        let base = self.base().max_step();
+        if self.levels.len() > 1 {
+            base.saturating_add(1)
+        } else {
+            base
+        }
+    }
+
+    /// Bytes of terrain the pyramid lends the caster: every level and the
+    /// bounds.
+    pub fn bytes(&self) -> usize {
+        self.levels.iter().map(Terrain::bytes).sum::<usize>()
+            + self
+                .bounds
+                .iter()
+                .map(|b| core::mem::size_of_val(*b))
+                .sum::<usize>()
+    }
+}
+
+fn check_storage(
+    width: u32,
+    depth: u32,
+    heights: usize,
+    colors: usize,
+    bounds: usize,
+) -> Result<(), PyramidError> {
+    debug_assert!(width <= MAX_MAP_SIDE && depth <= MAX_MAP_SIDE);
+    let points = pyramid_points(width, depth);
+    let cells = pyramid_cells(width, depth);
+    if heights < points {
+        return Err(PyramidError::HeightStorage { needed: points });
+    }
+    if colors < points {
+        return Err(PyramidError::ColorStorage { needed: points });
+    }
+    if bounds < cells {
+        return Err(PyramidError::BoundStorage { needed: cells });
+    }
+    Ok(())
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Grid {
+    width: u32,
+    depth: u32,
+}
+
+impl Grid {
+    /// Index of point `(x, y)`, clamped into the grid.
+    #[inline]
+    fn clamped(&self, x: i64, y: i64) -> usize {
+        let x = x.clamp(0, i64::from(self.width) - 1) as usize;
+        let y = y.clamp(0, i64::from(self.depth) - 1) as usize;
+        y * self.width as usize + x
+    }
+}
+
+/// Tent weights of the 3 × 3 finer points around a coarse point (sum 16).
+const TENT: [[u32; 3]; 3] = [[1, 2, 1], [2, 4, 2], [1, 2, 1]];
+
+fn downsample(
+    fine: Grid,
+    fine_h: &[u16],
+    fine_c: &[Rgb],
+    coarse: Grid,
+    out_h: &mut [u16],
+    out_c: &mut [Rgb],
+    filter: HeightFilter,
+) {
+    for y in 0..coarse.depth {
+        for x in 0..coarse.width {
+            let (mut h_sum, mut h_max) = (0u32, 0u16);
+            let mut c_sum = [0u32; 3];
+            for (dy, row) in TENT.iter().enumerate() {
+                for (dx, &w) in row.iter().enumerate() {
+                    let i = fine.clamped(
+                        2 * i64::from(x) + dx as i64 - 1,
+                        2 * i64::from(y) + dy as i64 - 1,
+                    );
+                    let (h, c) = (fine_h.get(i).copied(), fine_c.get(i).copied());
+                    let (h, c) = (h.unwrap_or(0), c.unwrap_or([0; 3]));
+                    h_sum += w * u32::from(h);
+                    h_max = h_max.max(h);
+                    for (s, v) in c_sum.iter_mut().zip(c) {
+                        *s += w * u32::from(v);
+                    }
+                }
+            }
+            let i = (y * coarse.width + x) as usize;
+            if let (Some(h), Some(c)) = (out_h.get_mut(i), out_c.get_mut(i)) {
+                *h = match filter {
+                    HeightFilter::Mean => ((h_sum + 8) >> 4) as u16,
+                    HeightFilter::Max => h_max,
+                };
+                *c = c_sum.map(|s| ((s + 8) >> 4) as u8);
+            }
+        }
+    }
+}
+
+/// Fills the bound cells of every level (see the module notes):
+/// `B_1(c)` is the largest of the level-0 and level-1 points in the closed
+/// cell, and `B_l(c)` the largest of its four children's bounds and its own
+/// level-`l` corners. So `B_l(c)` is no lower than any point of levels
+/// `0..=l` in `c`, and no surface of those levels (nor a blend of two of
+/// them) rises above it there.
+fn build_bounds(terrain: &Terrain<'_>, coarse_heights: &[u16], bounds: &mut [u16]) {
+    let (width, depth) = (terrain.width(), terrain.depth());
+    let levels = level_count(width, depth) as u32;
+    let (mut points_at, mut cells_at) = (0usize, 0usize);
+    let mut children_at = 0usize;
+    for level in 1..levels {
+        let g = Grid {
+            width: level_side(width, level),
+            depth: level_side(depth, level),
+        };
+        let (cw, cd) = (g.width - 1, g.depth - 1);
+        let points = &coarse_heights[points_at..points_at + (g.width * g.depth) as usize];
+        let (lower, upper) = bounds.split_at_mut(cells_at);
+        let children = &lower[children_at..];
+        let cells = &mut upper[..(cw * cd) as usize];
+        let child_grid = Grid {
+            width: level_side(width, level - 1),
+            depth: level_side(depth, level - 1),
+        };
+        for j in 0..cd {
+            for i in 0..cw {
+                let corner = |dx: u32, dy: u32| {
+                    let at = g.clamped(i64::from(i + dx), i64::from(j + dy));
+                    points.get(at).copied().unwrap_or(u16::MAX)
+                };
+                let mut b = corner(0, 0)
+                    .max(corner(1, 0))
+                    .max(corner(0, 1))
+                    .max(corner(1, 1));
+                if level == 1 {
+                    for y in 2 * j..=(2 * j + 2).min(depth - 1) {
+                        for x in 2 * i..=(2 * i + 2).min(width - 1) {
+                            let at = child_grid.clamped(i64::from(x), i64::from(y));
+                            b = b.max(terrain.heights().get(at).copied().unwrap_or(u16::MAX));
+                        }
+                    }
+                } else {
+                    let (ccw, ccd) = (child_grid.width - 1, child_grid.depth - 1);
+                    for y in 2 * j..(2 * j + 2).min(ccd) {
+                        for x in 2 * i..(2 * i + 2).min(ccw) {
+                            let child = children.get((y * ccw + x) as usize);
+                            b = b.max(child.copied().unwrap_or(u16::MAX));
+                        }
+                    }
+                }
+                if let Some(slot) = cells.get_mut((j * cw + i) as usize) {
+                    *slot = b;
+                }
+            }
+        }
+        children_at = cells_at;
+        points_at += (g.width * g.depth) as usize;
+        cells_at += (cw * cd) as usize;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec;
+    use std::vec::Vec as StdVec;
+
+    #[test]
+    fn level_sides_cover_the_map() {
+        assert_eq!(level_side(1024, 0), 1024);
+        assert_eq!(level_side(1024, 1), 513);
+        assert_eq!(level_side(1025, 1), 513);
+        assert_eq!(level_side(1024, 10), 2);
+        assert_eq!(level_count(1024, 1024), 11);
+        assert_eq!(level_count(2, 2), 1);
+        assert_eq!(level_count(3, 2), 2);
+        assert_eq!(level_count(MAX_MAP_SIDE, MAX_MAP_SIDE), 16);
+        assert!(level_count(MAX_MAP_SIDE, 2) <= MAX_LEVELS);
+        // Every level's last point reaches the far edge of the map.
+        for side in [2u32, 3, 5, 100, 1000, 1024, 4097] {
+            for level in 0..level_count(side, side) as u32 {
+                assert!((level_side(side, level) - 1) << level >= side - 1);
+            }
+        }
+        // About a third of the map again, as Cohen-Or's "a third more".
+        let extra = pyramid_points(1025, 1025) as f64 / (1025.0 * 1025.0);
+        assert!((extra - 1.0 / 3.0).abs() < 0.01, "{extra}");
+    }
+
+    fn map(side: u32, f: impl Fn(u32, u32) -> u16) -> (StdVec<u16>, StdVec<Rgb>) {
+        let h = (0..side * side).map(|i| f(i % side, i / side)).collect();
+        let c = (0..side * side).map(|i| [(i % 251) as u8, 0, 0]).collect();
+        (h, c)
+    }
+
+    fn built(side: u32, h: &[u16], c: &[Rgb], filter: HeightFilter) -> [StdVec<u16>; 2] {
+        let t = Terrain::new(side, side, h, c).unwrap();
+        let mut ph = vec![0; pyramid_points(side, side)];
+        let mut pc = vec![[0; 3]; pyramid_points(side, side)];
+        let mut pb = vec![0; pyramid_cells(side, side)];
+        Pyramid::build(&t, filter, &mut ph, &mut pc, &mut pb).unwrap();
+        [ph, pb]
+    }
+
+    #[test]
+    fn mean_keeps_a_plane_and_max_keeps_a_peak() {
+        // A tilted plane stays the same plane under the tent filter.
+        let (h, c) = map(9, |x, _| x as u16 * 16);
+        let [ph, _] = built(9, &h, &c, HeightFilter::Mean);
+        // Level 1 is 5 x 5; point (2, y) sits at world x = 4.
+        assert_eq!(ph[2], 4 * 16);
+        assert_eq!(ph[5 + 3], 6 * 16);
+        // A one-voxel peak: the mean spreads it, the max keeps it.
+        let (h, c) = map(9, |x, y| if (x, y) == (4, 4) { 160 } else { 0 });
+        let [mean, _] = built(9, &h, &c, HeightFilter::Mean);
+        let [max, _] = built(9, &h, &c, HeightFilter::Max);
+        assert_eq!(mean[2 * 5 + 2], 40);
+        assert_eq!(max[2 * 5 + 2], 160);
+    }
+
+    #[test]
+    fn bounds_cover_every_level_surface() {
+        let (h, c) = map(17, |x, y| ((x * 37 + y * 91) % 53) as u16 * 7);
+        for filter in [HeightFilter::Mean, HeightFilter::Max] {
+            let t = Terrain::new(17, 17, &h, &c).unwrap();
+            let n = pyramid_points(17, 17);
+            let (mut ph, mut pc) = (vec![0; n], vec![[0; 3]; n]);
+            let mut pb = vec![0; pyramid_cells(17, 17)];
+            Pyramid::build(&t, filter, &mut ph, &mut pc, &mut pb).unwrap();
+            let p = Pyramid::new(t, &ph, &pc, &pb).unwrap();
+            // For every bound cell, every grid point of levels up to the
+            // cell's own inside it is below.
+            for b in 1..p.levels() {
+                let bounds = p.bounds(b).unwrap();
+                let cw = level_side(17, b as u32) - 1;
+                for (ci, &bound) in bounds.iter().enumerate() {
+                    let mut tight = false;
+                    let (i, j) = (ci as u32 % cw, ci as u32 / cw);
+                    let (x0, y0, x1, y1) = (i << b, j << b, (i + 1) << b, (j + 1) << b);
+                    for l in 0..=b {
+                        let lv = p.level(l).unwrap();
+                        let step = 1u32 << l;
+                        let (gx0, gy0) = (x0 / step, y0 / step);
+                        let (gx1, gy1) = (x1 / step, y1 / step);
+                        for gy in gy0..=gy1.min(lv.depth() - 1) {
+                            for gx in gx0..=gx1.min(lv.width() - 1) {
+                                let v = lv.heights()[(gy * lv.width() + gx) as usize];
+                                assert!(v <= bound, "{filter:?} level {l} bound {b} cell {ci}");
+                                tight |= v == bound;
+                            }
+                        }
+                    }
+                    assert!(
+                        tight,
+                        "{filter:?} bound {b} cell {ci} is looser than its points"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn refuses_short_storage() {
+        let (h, c) = map(9, |_, _| 0);
+        let t = Terrain::new(9, 9, &h, &c).unwrap();
+        let n = pyramid_points(9, 9);
+        let (ph, pc, pb) = (vec![0; n], vec![[0; 3]; n], vec![0; pyramid_cells(9, 9)]);
+        assert_eq!(
+            Pyramid::new(t, &ph[1..], &pc, &pb).unwrap_err(),
+            PyramidError::HeightStorage { needed: n }
+        );
+        assert!(Pyramid::new(t, &ph, &pc[1..], &pb).is_err());
+        assert!(Pyramid::new(t, &ph, &pc, &pb[1..]).is_err());
+        assert_eq!(Pyramid::new(t, &ph, &pc, &pb).unwrap().levels(), 4);
+        assert_eq!(Pyramid::flat(t).levels(), 1);
+    }
+}
