@@ -17,6 +17,27 @@ pub fn psnr(test: &[Rgb], reference: &[Rgb]) -> f64 {
     10.0 * (255.0f64 * 255.0 / (sum / n as f64)).log10()
 }
 
+/// Mean absolute difference per channel (0–255) between two images: the
+/// frame-to-frame change of a flight.
+pub fn mean_abs_difference(a: &[Rgb], b: &[Rgb]) -> f64 {
+    let n = a.len().min(b.len()) * 3;
+    let sum: u64 = a
+        .iter()
+        .zip(b)
+        .flat_map(|(x, y)| (0..3).map(move |k| u64::from(x[k].abs_diff(y[k]))))
+        .sum();
+    sum as f64 / n.max(1) as f64
+}
+
+/// [`mean_abs_difference`] of each image row (`width` pixels a row): where
+/// in the image the change is.
+pub fn row_mean_abs_difference(a: &[Rgb], b: &[Rgb], width: usize) -> Vec<f64> {
+    a.chunks(width.max(1))
+        .zip(b.chunks(width.max(1)))
+        .map(|(x, y)| mean_abs_difference(x, y))
+        .collect()
+}
+
 /// Fraction of pixels on which both depth maps agree about sky (infinite)
 /// versus terrain (finite).
 pub fn sky_agreement(test: &[f32], reference: &[f32]) -> f64 {

@@ -42,6 +42,9 @@ pub(crate) fn first_hit<P: Probe>(
     for level in 1..=ray.lod.top {
         at = ray.switch_sample(level, at);
         begins[usize::from(level)] = at;
+        if at > end {
+            break;
+        }
     }
     let walk_level = |k: i32| begins[1..].iter().take_while(|&&b| b <= k).count() as u8;
     let mut level = top;

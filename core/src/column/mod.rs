@@ -31,7 +31,7 @@ use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
 use first_hit::first_hit;
 use fixed::types::U8F8;
-use walk::{lerp, walk, Stage, Walk};
+use walk::{lerp, walk, Recent, Stage, Walk};
 
 /// How each ray of a column may use the ray below it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -230,6 +230,7 @@ fn column_with<S: Sink, P: Probe>(
 ) {
     let terrain = pyramid.base();
     let mut anchor: Option<Anchor> = None;
+    let mut recent = Recent::default();
     let top_row = view.height() - 1;
     let log2 = options.vertical_samples.log2();
     let samples = 1i64 << log2;
@@ -247,8 +248,15 @@ fn column_with<S: Sink, P: Probe>(
                 let plan = anchor
                     .zip(frame.slope)
                     .and_then(|(a, slope)| resume_plan(&a, &ray, slope, frame.same_schedule));
-                let (sample, clear_until) =
-                    cast(pyramid, &ray, plan, frame.first_hit, options, probe);
+                let (sample, clear_until) = cast(
+                    pyramid,
+                    &ray,
+                    plan,
+                    frame.first_hit,
+                    options,
+                    &mut recent,
+                    probe,
+                );
                 anchor = Some(Anchor {
                     key: ray.key,
                     lod: ray.lod,
@@ -331,10 +339,11 @@ fn cast<P: Probe>(
     plan: Option<(i32, i32)>,
     first_hit_on: bool,
     options: &RenderOptions,
+    recent: &mut Recent,
     probe: &mut P,
 ) -> (Sample, i32) {
     // Walks `from..=end`, skipping through the bounds first when allowed.
-    let walk_from = |from: i32, end: i32, probe: &mut P| {
+    let walk_from = |from: i32, end: i32, recent: &mut Recent, probe: &mut P| {
         let from = if first_hit_on {
             match first_hit(pyramid, ray, from, end, probe) {
                 Some(k) => ray.next_visited(k),
@@ -346,14 +355,14 @@ fn cast<P: Probe>(
         if from > end {
             Walk::Exit { last: end }
         } else {
-            walk(pyramid, ray, ray.cursor(pyramid, from), end, probe)
+            walk(pyramid, ray, ray.cursor(pyramid, from), end, recent, probe)
         }
     };
     let outcome = match plan {
         Some((prefix_end, resume)) => {
             // Only the prefix the proof does not cover, then jump.
             let prefix = if prefix_end >= ray.start {
-                walk_from(ray.start, prefix_end.min(ray.end), probe)
+                walk_from(ray.start, prefix_end.min(ray.end), recent, probe)
             } else {
                 Walk::Exit {
                     last: ray.start - 1,
@@ -365,13 +374,14 @@ fn cast<P: Probe>(
                     if from > ray.end {
                         Walk::Exit { last: ray.end }
                     } else {
-                        walk(pyramid, ray, ray.cursor(pyramid, from), ray.end, probe)
+                        let at = ray.cursor(pyramid, from);
+                        walk(pyramid, ray, at, ray.end, recent, probe)
                     }
                 }
                 other => other,
             }
         }
-        None => walk_from(ray.start, ray.end, probe),
+        None => walk_from(ray.start, ray.end, recent, probe),
     };
     match outcome {
         Walk::Exit { last } => (sky(options), last + 1),
@@ -388,7 +398,7 @@ fn cast<P: Probe>(
             clearance,
             above: None,
         } => {
-            let (at, clearance, above) = retrace(pyramid, ray, at, clearance, probe);
+            let (at, clearance, above) = retrace(pyramid, ray, at, clearance, recent, probe);
             (
                 shade(pyramid, ray, at, clearance, above, options, probe),
                 at.k,
@@ -406,15 +416,16 @@ fn retrace<P: Probe>(
     ray: &Ray,
     mut at: Cursor,
     mut below: i32,
+    recent: &mut Recent,
     probe: &mut P,
 ) -> (Cursor, i32, Option<(i32, i32)>) {
     while at.k > ray.first {
         let before = ray.cursor(pyramid, ray.previous_visited(at.k));
         let stage = Stage::new(pyramid, ray, before.level);
-        let Some((voxel, c)) = stage.clearance(&before) else {
+        let Some((cell, c)) = stage.clearance_recent(&before, recent, probe) else {
             break;
         };
-        probe.visit(before.level, voxel);
+        recent.add(cell);
         if c > 0 {
             return (at, below, Some((before.k, c)));
         }

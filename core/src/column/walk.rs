@@ -33,10 +33,12 @@ pub(crate) struct Stage<'a> {
     /// Index change per step, here and on the level below (two of its grid
     /// lines per step).
     step: isize,
+    #[cfg(test)]
     step_below: isize,
     /// Increments of one step of `2^level` voxels, Q16.
     dminor: i32,
     dz: i32,
+    #[cfg(test)]
     dt: i32,
 }
 
@@ -61,7 +63,7 @@ impl<'a> Stage<'a> {
         let x_major = ray.key.x_major;
         let sign = if ray.key.forward { 1 } else { -1 };
         let (major_stride, minor_stride) = strides(here.width(), x_major);
-        let (major_below, minor_below) = below.map_or((0, 0), |b| strides(b.width(), x_major));
+        let (_major_below, minor_below) = below.map_or((0, 0), |b| strides(b.width(), x_major));
         Self {
             level,
             heights: here.heights(),
@@ -70,9 +72,11 @@ impl<'a> Stage<'a> {
             minor_stride,
             minor_stride_below: minor_below,
             step: sign * major_stride,
-            step_below: sign * 2 * major_below,
+            #[cfg(test)]
+            step_below: sign * 2 * _major_below,
             dminor: ray.dminor.to_bits() << level,
             dz: ray.dz.to_bits() << level,
+            #[cfg(test)]
             dt: if level == 0 { 0 } else { ray.lod.dt },
         }
     }
@@ -86,16 +90,56 @@ impl<'a> Stage<'a> {
     /// How far the ray is above the surface at a sample (Q16; ≤ 0 is a
     /// hit), and the voxel of this level fetched. `None` only for an index
     /// outside the map.
-    #[inline(always)]
+    #[cfg(test)]
     pub fn clearance(&self, at: &Cursor) -> Option<(usize, i32)> {
-        let (voxel, surface) = blend(
-            self.heights,
-            at.base,
-            self.minor_stride,
-            at.minor,
-            self.level,
-        )?;
-        Some((voxel, at.z.saturating_sub(surface)))
+        let cell = self.fetch(at)?;
+        Some((cell.index as usize, self.clearance_in(at, &cell)))
+    }
+
+    /// The two heights across the sample's grid line. `None` only for an
+    /// index outside the map.
+    #[inline(always)]
+    fn fetch(&self, at: &Cursor) -> Option<Cell> {
+        let index = index(at.base, self.minor_stride, at.minor, self.level);
+        Some(Cell {
+            level: self.level,
+            index,
+            across: self.minor_stride,
+            h0: i32::from(*self.heights.get(index as usize)?),
+            h1: i32::from(*self.heights.get((index + self.minor_stride) as usize)?),
+        })
+    }
+
+    /// The clearance at a sample from its cell's heights: the two blended
+    /// by a 12-bit weight (U12.4 lands exactly on I16F16), compared with
+    /// the ray height.
+    #[inline(always)]
+    fn clearance_in(&self, at: &Cursor, cell: &Cell) -> i32 {
+        let weight_shift = COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + u32::from(self.level);
+        let weight = (at.minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1);
+        let surface = (cell.h0 << HEIGHT_WEIGHT_BITS) + (cell.h1 - cell.h0) * weight;
+        at.z.saturating_sub(surface)
+    }
+
+    /// As [`Stage::clearance`], from `recent` when it holds the sample's
+    /// cell (no fetch, no step: Figure 7's inner loop compares the next ray
+    /// with the heights it already has), else fetched and reported.
+    pub fn clearance_recent<P: Probe>(
+        &self,
+        at: &Cursor,
+        recent: &Recent,
+        probe: &mut P,
+    ) -> Option<(Cell, i32)> {
+        let index = index(at.base, self.minor_stride, at.minor, self.level);
+        let cell = match recent.find(self.level, index, self.minor_stride) {
+            Some(cell) => cell,
+            None => {
+                let cell = self.fetch(at)?;
+                probe.visit(self.level, index as usize);
+                cell
+            }
+        };
+        Some((cell, self.clearance_in(at, &cell)))
     }
 
     /// The color where a sample's grid line is crossed: two voxels blended by
@@ -127,8 +171,9 @@ impl<'a> Stage<'a> {
         Some(lerp(below, here, t))
     }
 
-    /// Moves to the next sample on this level.
-    #[inline(always)]
+    /// Moves to the next sample on this level (the loop in
+    /// [`Stage::steps`] does the same on four values).
+    #[cfg(test)]
     pub fn advance(&self, at: &mut Cursor) {
         at.k += self.stride();
         at.base += self.step;
@@ -145,22 +190,37 @@ fn index(base: isize, minor_stride: isize, minor: i32, level: u8) -> isize {
     base + (minor >> (COORD_FRAC_BITS + u32::from(level))) as isize * minor_stride
 }
 
-/// The surface height on a grid line (Q16) and the voxel fetched: two
-/// heights blended by a 12-bit weight, which lands U12.4 exactly on I16F16.
-#[inline(always)]
-fn blend(
-    heights: &[u16],
-    base: isize,
-    minor_stride: isize,
-    minor: i32,
+/// The two heights across a grid line on one level, as fetched.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Cell {
     level: u8,
-) -> Option<(usize, i32)> {
-    let i = index(base, minor_stride, minor, level);
-    let weight_shift = COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + u32::from(level);
-    let weight = (minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1);
-    let h0 = i32::from(*heights.get(i as usize)?);
-    let h1 = i32::from(*heights.get((i + minor_stride) as usize)?);
-    Some((i as usize, (h0 << HEIGHT_WEIGHT_BITS) + (h1 - h0) * weight))
+    index: isize,
+    /// Index change to the second height (which grid line family).
+    across: isize,
+    h0: i32,
+    h1: i32,
+}
+
+/// The last two cells a column's rays hit or retraced to: the next ray
+/// tests them again.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Recent {
+    cells: [Option<Cell>; 2],
+}
+
+impl Recent {
+    fn find(&self, level: u8, index: isize, across: isize) -> Option<Cell> {
+        self.cells
+            .iter()
+            .flatten()
+            .find(|c| c.level == level && c.index == index && c.across == across)
+            .copied()
+    }
+
+    /// Remembers a cell: a hit's, or a retrace's.
+    pub fn add(&mut self, cell: Cell) {
+        self.cells = [Some(cell), self.cells[0]];
+    }
 }
 
 /// Two colors across a grid line blended by an 8-bit weight.
@@ -202,49 +262,114 @@ pub(crate) enum Walk {
 }
 
 /// Walks from `at` along the ray, switching levels on schedule, until a hit
-/// or the last visited sample not past `end`.
+/// or the last visited sample not past `end`. The first sample is tested
+/// against the `recent` cells; a hit's cell is left there for the next ray.
 #[inline]
 pub(crate) fn walk<P: Probe>(
     pyramid: &Pyramid<'_>,
     ray: &Ray,
-    mut at: Cursor,
+    at: Cursor,
     end: i32,
+    recent: &mut Recent,
     probe: &mut P,
 ) -> Walk {
-    let mut above = None;
+    let stage = Stage::new(pyramid, ray, at.level);
+    let Some((cell, clearance)) = stage.clearance_recent(&at, recent, probe) else {
+        return Walk::Exit { last: at.k - 1 };
+    };
+    if clearance <= 0 {
+        recent.add(cell);
+        return Walk::Hit {
+            at,
+            clearance,
+            above: None,
+        };
+    }
+    let mut last = (at.k, clearance);
+    let mut level = at.level;
     loop {
-        let stage = Stage::new(pyramid, ray, at.level);
-        let switch = ray.next_switch(at.level, at.k);
-        let stride = stage.stride();
-        loop {
-            let Some((voxel, clearance)) = stage.clearance(&at) else {
-                return Walk::Exit { last: at.k - 1 };
-            };
-            probe.visit(at.level, voxel);
-            if clearance <= 0 {
+        // The next sample: one step on, or the ray's end when that lies
+        // between this level's lines.
+        let stride = 1i32 << level;
+        let next = if last.0 > end - stride {
+            if last.0 < end && end == ray.end {
+                end
+            } else {
+                return Walk::Exit { last: last.0 };
+            }
+        } else {
+            last.0 + stride
+        };
+        let at = ray.cursor(pyramid, next);
+        level = at.level;
+        let stage = Stage::new(pyramid, ray, level);
+        let switch = ray.next_switch(level, next);
+        match stage.steps(at, end, switch, &mut last, probe) {
+            Some(Some((k, clearance, cell))) => {
+                recent.add(cell);
                 return Walk::Hit {
-                    at,
+                    at: ray.cursor(pyramid, k),
                     clearance,
-                    above,
+                    above: Some(last),
                 };
             }
-            if at.k > end - stride {
-                if at.k < end && end == ray.end {
-                    // The ray's end lies between this level's lines: it is
-                    // visited too, on level 0 (see `Ray::next_visited`).
-                    above = Some((at.k, clearance));
-                    at = ray.cursor(pyramid, end);
-                    break;
-                }
-                return Walk::Exit { last: at.k };
-            }
-            above = Some((at.k, clearance));
-            stage.advance(&mut at);
-            if at.k >= switch {
-                break;
-            }
+            Some(None) => {}
+            None => return Walk::Exit { last: last.0 },
         }
-        // The even-step rule put this sample on the next level's grid.
-        at = ray.cursor(pyramid, at.k);
+    }
+}
+
+impl Stage<'_> {
+    /// The per-step loop on this level, from `at` (not yet tested) up to
+    /// the last sample before `switch` and not past `end`: `Some(Some(hit
+    /// sample, clearance, cell))`, `Some(None)` when the run ends above the
+    /// surface (`last` is then its last sample), or `None` for an index
+    /// outside the map (impossible for a clipped ray). Only four values
+    /// change per step; the caller rebuilds the full cursor at the exits.
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    fn steps<P: Probe>(
+        &self,
+        at: Cursor,
+        end: i32,
+        switch: i32,
+        last: &mut (i32, i32),
+        probe: &mut P,
+    ) -> Option<Option<(i32, i32, Cell)>> {
+        let (mut k, mut base, mut minor, mut z) = (at.k, at.base, at.minor, at.z);
+        let stride = self.stride();
+        // Step on while the next sample is before the switch and the end.
+        let stop = end.min(switch.saturating_sub(1)).saturating_sub(stride);
+        let index_shift = COORD_FRAC_BITS + u32::from(self.level);
+        let weight_shift = COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + u32::from(self.level);
+        let mut above = *last;
+        loop {
+            let index = base + (minor >> index_shift) as isize * self.minor_stride;
+            let h0 = i32::from(*self.heights.get(index as usize)?);
+            let h1 = i32::from(*self.heights.get((index + self.minor_stride) as usize)?);
+            probe.visit(self.level, index as usize);
+            let weight = (minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1);
+            let clearance = z.saturating_sub((h0 << HEIGHT_WEIGHT_BITS) + (h1 - h0) * weight);
+            if clearance <= 0 {
+                *last = above;
+                let cell = Cell {
+                    level: self.level,
+                    index,
+                    across: self.minor_stride,
+                    h0,
+                    h1,
+                };
+                return Some(Some((k, clearance, cell)));
+            }
+            above = (k, clearance);
+            if k > stop {
+                *last = above;
+                return Some(None);
+            }
+            k += stride;
+            base += self.step;
+            minor = minor.wrapping_add(self.dminor);
+            z = z.wrapping_add(self.dz);
+        }
     }
 }
