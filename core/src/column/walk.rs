@@ -54,6 +54,7 @@ fn strides(width: u32, x_major: bool) -> (isize, isize) {
 
 impl<'a> Stage<'a> {
     /// The stage of `level` for `ray` (level 0 if the pyramid lacks it).
+    #[inline]
     pub fn new(pyramid: &Pyramid<'a>, ray: &Ray, level: u8) -> Self {
         let level = level.min(pyramid.top());
         let here = pyramid.level(usize::from(level)).unwrap_or(pyramid.base());
@@ -268,74 +269,105 @@ pub(crate) enum Walk {
 pub(crate) fn walk<P: Probe>(
     pyramid: &Pyramid<'_>,
     ray: &Ray,
-    at: Cursor,
+    mut at: Cursor,
     end: i32,
     recent: &mut Recent,
     probe: &mut P,
 ) -> Walk {
-    let stage = Stage::new(pyramid, ray, at.level);
-    let Some((cell, clearance)) = stage.clearance_recent(&at, recent, probe) else {
-        return Walk::Exit { last: at.k - 1 };
-    };
-    if clearance <= 0 {
-        recent.add(cell);
-        return Walk::Hit {
-            at,
-            clearance,
-            above: None,
-        };
-    }
-    let mut last = (at.k, clearance);
-    let mut level = at.level;
+    let mut last: Option<(i32, i32)> = None;
+    let mut first = Some(&*recent);
     loop {
-        // The next sample: one step on, or the ray's end when that lies
-        // between this level's lines.
-        let stride = 1i32 << level;
-        let next = if last.0 > end - stride {
-            if last.0 < end && end == ray.end {
-                end
-            } else {
-                return Walk::Exit { last: last.0 };
-            }
-        } else {
-            last.0 + stride
-        };
-        let at = ray.cursor(pyramid, next);
-        level = at.level;
-        let stage = Stage::new(pyramid, ray, level);
-        let switch = ray.next_switch(level, next);
-        match stage.steps(at, end, switch, &mut last, probe) {
-            Some(Some((k, clearance, cell))) => {
+        let stage = Stage::new(pyramid, ray, at.level);
+        let switch = ray.next_switch(at.level, at.k);
+        match stage.steps(at, end, switch, first.take(), &mut last, probe) {
+            Run::Hit {
+                k,
+                base,
+                minor,
+                z,
+                clearance,
+                cell,
+            } => {
                 recent.add(cell);
+                let at = if stage.level == 0 {
+                    // Level 0 needs no morph weight: the loop's values are
+                    // the cursor.
+                    Cursor {
+                        k,
+                        level: 0,
+                        base,
+                        base_below: 0,
+                        minor,
+                        z,
+                        t: 0,
+                    }
+                } else {
+                    ray.cursor(pyramid, k)
+                };
                 return Walk::Hit {
-                    at: ray.cursor(pyramid, k),
+                    at,
                     clearance,
-                    above: Some(last),
+                    above: last,
                 };
             }
-            Some(None) => {}
-            None => return Walk::Exit { last: last.0 },
+            Run::Missing => {
+                return Walk::Exit {
+                    last: last.map_or(at.k - 1, |l| l.0),
+                }
+            }
+            Run::Above => {}
         }
+        // The run ended above the surface: the next sample begins the next
+        // level, or is the ray's end between this level's lines.
+        let Some((k, _)) = last else {
+            return Walk::Exit { last: at.k - 1 };
+        };
+        let next = k + stage.stride();
+        let next = if next <= end {
+            next
+        } else if k < end && end == ray.end {
+            end
+        } else {
+            return Walk::Exit { last: k };
+        };
+        at = ray.cursor(pyramid, next);
     }
+}
+
+/// How a run of steps on one level ended.
+enum Run {
+    /// At sample `k` (loop values `base`, `minor`, `z`), in `cell`.
+    Hit {
+        k: i32,
+        base: isize,
+        minor: i32,
+        z: i32,
+        clearance: i32,
+        cell: Cell,
+    },
+    /// Above the surface at its last sample, the one before the next
+    /// level's first or the end.
+    Above,
+    /// An index outside the map (impossible for a clipped ray).
+    Missing,
 }
 
 impl Stage<'_> {
     /// The per-step loop on this level, from `at` (not yet tested) up to
-    /// the last sample before `switch` and not past `end`: `Some(Some(hit
-    /// sample, clearance, cell))`, `Some(None)` when the run ends above the
-    /// surface (`last` is then its last sample), or `None` for an index
-    /// outside the map (impossible for a clipped ray). Only four values
-    /// change per step; the caller rebuilds the full cursor at the exits.
+    /// the last sample before `switch` and not past `end`; `last` follows
+    /// the last sample found above the surface. The first sample is read
+    /// from `first` when it holds its cell. Only four values change per
+    /// step; the caller rebuilds the full cursor at the exits.
     #[inline(always)]
-    #[allow(clippy::type_complexity)]
     fn steps<P: Probe>(
         &self,
         at: Cursor,
         end: i32,
         switch: i32,
-        last: &mut (i32, i32),
+        mut first: Option<&Recent>,
+        last: &mut Option<(i32, i32)>,
         probe: &mut P,
-    ) -> Option<Option<(i32, i32, Cell)>> {
+    ) -> Run {
         let (mut k, mut base, mut minor, mut z) = (at.k, at.base, at.minor, at.z);
         let stride = self.stride();
         // Step on while the next sample is before the switch and the end.
@@ -345,9 +377,23 @@ impl Stage<'_> {
         let mut above = *last;
         loop {
             let index = base + (minor >> index_shift) as isize * self.minor_stride;
-            let h0 = i32::from(*self.heights.get(index as usize)?);
-            let h1 = i32::from(*self.heights.get((index + self.minor_stride) as usize)?);
-            probe.visit(self.level, index as usize);
+            let cached = first
+                .take()
+                .and_then(|r| r.find(self.level, index, self.minor_stride));
+            let (h0, h1) = match cached {
+                Some(cell) => (cell.h0, cell.h1),
+                None => {
+                    let (Some(&h0), Some(&h1)) = (
+                        self.heights.get(index as usize),
+                        self.heights.get((index + self.minor_stride) as usize),
+                    ) else {
+                        *last = above;
+                        return Run::Missing;
+                    };
+                    probe.visit(self.level, index as usize);
+                    (i32::from(h0), i32::from(h1))
+                }
+            };
             let weight = (minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1);
             let clearance = z.saturating_sub((h0 << HEIGHT_WEIGHT_BITS) + (h1 - h0) * weight);
             if clearance <= 0 {
@@ -359,12 +405,19 @@ impl Stage<'_> {
                     h0,
                     h1,
                 };
-                return Some(Some((k, clearance, cell)));
+                return Run::Hit {
+                    k,
+                    base,
+                    minor,
+                    z,
+                    clearance,
+                    cell,
+                };
             }
-            above = (k, clearance);
+            above = Some((k, clearance));
             if k > stop {
                 *last = above;
-                return Some(None);
+                return Run::Above;
             }
             k += stride;
             base += self.step;

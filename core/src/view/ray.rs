@@ -264,6 +264,7 @@ impl Ray {
     }
 
     /// The first sample at or after `k` on a grid line of `level`.
+    #[inline]
     pub fn align_up(&self, k: i32, level: u8) -> i32 {
         let mask = (1i64 << level) - 1;
         let m = self.major_at(k);
@@ -276,6 +277,7 @@ impl Ray {
     }
 
     /// The first sample at distance `reach << (level − 1)` or beyond.
+    #[inline]
     fn threshold(&self, level: u8) -> i32 {
         let distance = self.lod.reach << (level - 1);
         let k = (distance - self.delta0 + ONE - 1) >> COORD_FRAC_BITS;
@@ -285,12 +287,14 @@ impl Ray {
     /// Where a ray at level `level − 1`, at sample `k` (on or past that
     /// level's first sample), switches to `level`: the first sample of
     /// `level`'s grid at or past both `k` and the level's distance.
+    #[inline]
     pub fn switch_sample(&self, level: u8, k: i32) -> i32 {
         self.align_up(k.max(self.threshold(level)), level)
     }
 
     /// The first sample of the level after `level`, seen from sample `k` of
     /// `level` (`i32::MAX` at the top level).
+    #[inline]
     pub fn next_switch(&self, level: u8, k: i32) -> i32 {
         if level >= self.lod.top {
             i32::MAX
@@ -300,6 +304,7 @@ impl Ray {
     }
 
     /// The level in effect at sample `k`.
+    #[inline]
     pub fn level_at(&self, k: i32) -> u8 {
         let (mut level, mut begins) = (0u8, self.first);
         while level < self.lod.top {
@@ -317,6 +322,7 @@ impl Ray {
     /// of its level: a walk tests it anyway, on level 0, so that a ray
     /// that ends inside the map (below the ground, or at its edge) cannot
     /// step over its last hit.
+    #[inline]
     fn is_extra_end(&self, k: i32) -> bool {
         k == self.end && !self.on_level_grid(k, self.level_at(k))
     }
@@ -333,6 +339,7 @@ impl Ray {
 
     /// The sample a walk from the eye visits just before sample `k` (which
     /// it must visit itself).
+    #[inline]
     pub fn previous_visited(&self, k: i32) -> i32 {
         if k <= self.first {
             return k - 1;
@@ -347,6 +354,7 @@ impl Ray {
     }
 
     /// The morph weight of sample `k` at level `level`, Q16, unclamped.
+    #[inline]
     fn morph(&self, k: i32, level: u8) -> i32 {
         if level == 0 {
             return 0;
@@ -360,6 +368,7 @@ impl Ray {
     /// The position of sample `k` on its level, computed directly (not by
     /// stepping), so a resumed ray sees exactly the values it would have
     /// reached by walking.
+    #[inline]
     pub fn cursor(&self, pyramid: &Pyramid<'_>, k: i32) -> Cursor {
         let level = if self.is_extra_end(k) {
             0
@@ -370,6 +379,7 @@ impl Ray {
     }
 
     /// The position of sample `k` on `level`, whatever the schedule says.
+    #[inline]
     fn cursor_on(&self, pyramid: &Pyramid<'_>, k: i32, level: u8) -> Cursor {
         let major = self.major_at(k);
         let base_on = |level: u8| -> isize {
@@ -396,6 +406,7 @@ impl Ray {
     }
 
     /// Minor coordinate and height at sample `k`, Q16, without narrowing.
+    #[inline]
     pub fn position(&self, k: i32) -> (i64, i64) {
         let k = i64::from(k);
         (
@@ -405,12 +416,14 @@ impl Ray {
     }
 
     /// Major-axis grid coordinate of sample `k` (for the first hit).
+    #[inline]
     pub fn major(&self, k: i32) -> i64 {
         self.major_at(k)
     }
 
     /// Distance from the eye along the major axis to sample `k`, Q16, never
     /// negative.
+    #[inline]
     pub fn distance(&self, k: i32) -> i64 {
         (self.delta0 + (i64::from(k) << COORD_FRAC_BITS)).max(0)
     }
