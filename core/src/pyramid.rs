@@ -73,29 +73,31 @@ pub const fn level_count(width: u32, depth: u32) -> usize {
     levels
 }
 
-/// Grid points in the coarser levels (1 and up) of a `width × depth` map:
-/// the length of the height and of the color storage.
-pub const fn pyramid_points(width: u32, depth: u32) -> usize {
+/// Sum over levels 1 and up of `(points a row − less)·(points a column −
+/// less)`: points with `less = 0`, cells with `less = 1`.
+const fn sum_over_levels(width: u32, depth: u32, less: usize) -> usize {
     let mut total = 0;
     let mut level = 1;
     while level < level_count(width, depth) {
-        total +=
-            level_side(width, level as u32) as usize * level_side(depth, level as u32) as usize;
+        let (w, d) = (
+            level_side(width, level as u32),
+            level_side(depth, level as u32),
+        );
+        total += (w as usize - less) * (d as usize - less);
         level += 1;
     }
     total
 }
 
+/// Grid points in the coarser levels (1 and up) of a `width × depth` map:
+/// the length of the height and of the color storage.
+pub const fn pyramid_points(width: u32, depth: u32) -> usize {
+    sum_over_levels(width, depth, 0)
+}
+
 /// Bound cells in levels 1 and up: the length of the bound storage.
 pub const fn pyramid_cells(width: u32, depth: u32) -> usize {
-    let mut total = 0;
-    let mut level = 1;
-    while level < level_count(width, depth) {
-        total += (level_side(width, level as u32) as usize - 1)
-            * (level_side(depth, level as u32) as usize - 1);
-        level += 1;
-    }
-    total
+    sum_over_levels(width, depth, 1)
 }
 
 /// Bytes of pyramid storage a `width × depth` map needs (U12.4 heights,
@@ -184,7 +186,7 @@ impl<'a> Pyramid<'a> {
             (heights, colors, bounds) = (h_rest, c_rest, b_rest);
             // Coarse levels never exceed the base's highest height, and the
             // filters keep its steepest slope per voxel (see `slope_bound`).
-            let coarse = Terrain::coarse(w, d, h, c, terrain.max_height(), terrain.max_step());
+            let coarse = Terrain::with_bounds(w, d, h, c, terrain.max_height(), terrain.max_step());
             // Capacities hold every level a map of MAX_MAP_SIDE can have.
             let _ = pyramid.levels.push(coarse);
             let _ = pyramid.bounds.push(b);

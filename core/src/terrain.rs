@@ -78,19 +78,15 @@ impl<'a> Terrain<'a> {
             .chain(along_y.map(|(a, b)| a.abs_diff(*b)))
             .max()
             .unwrap_or(0);
-        Ok(Self {
-            heights,
-            colors,
-            width,
-            depth,
-            max_height,
-            max_step,
-        })
+        Ok(Self::with_bounds(
+            width, depth, heights, colors, max_height, max_step,
+        ))
     }
 
-    /// A level of a pyramid, whose height bound and slope bound are known
-    /// from the level below (see [`crate::Pyramid::new`]).
-    pub(crate) fn coarse(
+    /// A terrain whose highest height and steepest step are already known
+    /// (checked by [`Terrain::new`], or a pyramid level, bounded by the
+    /// level below: see [`crate::Pyramid::new`]).
+    pub(crate) fn with_bounds(
         width: u32,
         depth: u32,
         heights: &'a [u16],
