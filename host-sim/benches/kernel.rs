@@ -16,7 +16,7 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
 use terracast::{
-    render, Camera, Coherence, CountingProbe, NoProbe, Pyramid, RenderOptions, Resolution, View,
+    render, Camera, Coherence, CountingProbe, NoProbe, RenderOptions, Resolution, View,
 };
 use terracast_sim::kernel::SampleBuffer;
 use terracast_sim::scene::{load_pair, procedural, Scene};
@@ -95,19 +95,10 @@ fn cases() -> Vec<Case> {
 fn main() {
     let (scene, name) = scene();
     let kernel = scene.to_kernel().expect("kernel scene");
-    let pyramid = kernel.pyramid().expect("pyramid");
-    let flat = Pyramid::flat(*pyramid.base());
     let pixels = u64::from(SIZE.0 * SIZE.1);
     let out_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/criterion-kernel");
     let cases = cases();
-    // Renders without the first hit or levels hold level 0 only.
-    let levels_for = |o: &RenderOptions| {
-        if o.resolution == Resolution::Single && !o.hierarchical_first_hit {
-            &flat
-        } else {
-            &pyramid
-        }
-    };
+    let levels_for = |o: &RenderOptions| kernel.pyramid_for(o).expect("pyramid");
 
     let mut criterion = Criterion::default()
         .output_directory(&out_dir)
@@ -121,7 +112,7 @@ fn main() {
             let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
             let levels = levels_for(&case.options);
             group.bench_function(BenchmarkId::from_parameter(&case.label), |b| {
-                b.iter(|| render(levels, &view, &case.options, &mut buffer, &mut NoProbe))
+                b.iter(|| render(&levels, &view, &case.options, &mut buffer, &mut NoProbe))
             });
         }
         group.finish();
@@ -138,7 +129,7 @@ fn main() {
         let mut probe = CountingProbe::default();
         let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
         render(
-            levels_for(&case.options),
+            &levels_for(&case.options),
             &view,
             &case.options,
             &mut buffer,

@@ -5,10 +5,7 @@ use crate::error::{Error, Result};
 use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
-use terracast::{
-    render, Camera, Coherence, CountingProbe, Pyramid, RenderOptions, Resolution, Sample, Sink,
-    View,
-};
+use terracast::{render, Camera, Coherence, CountingProbe, RenderOptions, Sample, Sink, View};
 
 /// A sink that keeps every sample of the frame.
 #[derive(Debug)]
@@ -54,13 +51,7 @@ pub fn render_kernel(
     height: u32,
     options: &RenderOptions,
 ) -> Result<(Frame, RenderStats)> {
-    let full = scene.pyramid()?;
-    // A single-resolution render without the first hit holds level 0 only.
-    let pyramid = if options.resolution == Resolution::Single && !options.hierarchical_first_hit {
-        Pyramid::flat(*full.base())
-    } else {
-        full
-    };
+    let pyramid = scene.pyramid_for(options)?;
     let view =
         View::new(camera, width, height).map_err(|e| Error::new(format!("bad view: {e}")))?;
     let mut buffer = SampleBuffer::new(width, height);

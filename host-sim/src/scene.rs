@@ -10,7 +10,9 @@ pub use load::{load_colors, load_heights};
 pub use procedural::{color_by_height_and_slope, procedural};
 
 use crate::error::{Error, Result};
-use terracast::{pyramid_cells, pyramid_points, HeightFilter, Pyramid, Rgb, Terrain};
+use terracast::{
+    pyramid_cells, pyramid_points, HeightFilter, Pyramid, RenderOptions, Resolution, Rgb, Terrain,
+};
 
 /// A height field and its colors, one per grid point, row-major.
 #[derive(Debug, Clone)]
@@ -156,6 +158,18 @@ impl KernelScene {
             &self.bounds,
         )
         .map_err(|e| Error::new(format!("pyramid rejected by the kernel: {e}")))
+    }
+
+    /// What a render with `options` holds: level 0 alone for a
+    /// single-resolution render without the first hit (which reads nothing
+    /// else), the whole pyramid otherwise.
+    pub fn pyramid_for(&self, options: &RenderOptions) -> Result<Pyramid<'_>> {
+        let full = self.pyramid()?;
+        if options.resolution == Resolution::Single && !options.hierarchical_first_hit {
+            Ok(Pyramid::flat(*full.base()))
+        } else {
+            Ok(full)
+        }
     }
 
     /// The filter the coarse heights were made with.

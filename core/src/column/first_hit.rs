@@ -35,18 +35,6 @@ pub(crate) fn first_hit<P: Probe>(
     } else {
         (base.depth(), base.width())
     };
-    // Where each of the ray's levels begins, to keep tests at or above the
-    // level the walk samples (the bounds cover levels up to their own).
-    let mut begins = [i32::MAX; MAX_WALK_LEVEL as usize + 1];
-    let mut at = ray.first;
-    for level in 1..=ray.lod.top {
-        at = ray.switch_sample(level, at);
-        begins[usize::from(level)] = at;
-        if at > end {
-            break;
-        }
-    }
-    let walk_level = |k: i32| begins[1..].iter().take_while(|&&b| b <= k).count() as u8;
     let mut level = top;
     let mut k = from;
     loop {
@@ -63,14 +51,15 @@ pub(crate) fn first_hit<P: Probe>(
             level -= 1;
             continue;
         }
-        if level < walk_level(next) {
-            // The walk steps at least this coarse here: hand over.
+        if level < ray.level_at(next) {
+            // The walk steps on a coarser level here, which this level's
+            // bounds do not cover: hand over.
             return Some(k);
         }
         let Some(bounds) = pyramid.bounds(usize::from(level)) else {
             return Some(k);
         };
-        let major = ray.major(k);
+        let major = ray.major_at(k);
         let major_cell = if ray.key.forward {
             major >> level
         } else {
@@ -97,12 +86,10 @@ pub(crate) fn first_hit<P: Probe>(
                 (minor_cell, major_cell)
             };
             let cell = (y * row_width + x) as usize;
-            let b = if inside {
-                bounds.get(cell).copied()
-            } else {
-                None
-            };
-            probe.bound(level, cell);
+            let b = inside.then(|| bounds.get(cell).copied()).flatten();
+            if b.is_some() {
+                probe.bound(level, cell);
+            }
             // A cell outside the storage proves nothing: assume the worst.
             bound = bound.max(b.unwrap_or(u16::MAX));
         }

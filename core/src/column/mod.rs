@@ -68,8 +68,8 @@ pub enum Resolution {
     Single,
     /// Every level the pyramid has (Cohen-Or §2): a ray moves up a level,
     /// at an even step, where a voxel of its level gets narrower than
-    /// `1 / pixel_to_voxel` pixels, and morphs the surface and colors of
-    /// adjacent levels by depth so the switch is invisible. A higher ratio
+    /// `1 / pixel_to_voxel` pixels, and blends the colors of adjacent
+    /// levels by depth so the switch is invisible. A higher ratio
     /// switches sooner: fewer steps, a blurrier far field.
     Multi {
         /// The pixel-to-voxel ratio (1 = switch where a voxel is one pixel
@@ -331,8 +331,9 @@ fn sky(options: &RenderOptions) -> Sample {
 
 /// Casts one ray: from its start, or (with a plan) through a prefix and
 /// then from the resume sample. With `first_hit_on`, a walk from the start
-/// skips through the pyramid's bounds first. Returns what it saw and the sample up to which it is known to be
-/// above the surface (its hit, or one past its last).
+/// skips through the pyramid's bounds first. Returns what it saw and the
+/// sample up to which it is known to be above the surface (its hit, or one
+/// past its last).
 fn cast<P: Probe>(
     pyramid: &Pyramid<'_>,
     ray: &Ray,
@@ -342,20 +343,22 @@ fn cast<P: Probe>(
     recent: &mut Recent,
     probe: &mut P,
 ) -> (Sample, i32) {
-    // Walks `from..=end`, skipping through the bounds first when allowed.
-    let walk_from = |from: i32, end: i32, recent: &mut Recent, probe: &mut P| {
-        let from = if first_hit_on {
-            match first_hit(pyramid, ray, from, end, probe) {
-                Some(k) => ray.next_visited(k),
-                None => return Walk::Exit { last: end },
-            }
-        } else {
-            from
-        };
+    // Walks `from..=end`.
+    let walk_at = |from: i32, end: i32, recent: &mut Recent, probe: &mut P| {
         if from > end {
             Walk::Exit { last: end }
         } else {
             walk(pyramid, ray, ray.cursor(pyramid, from), end, recent, probe)
+        }
+    };
+    // The same from the eye side, through the bounds first when allowed.
+    let walk_from = |from: i32, end: i32, recent: &mut Recent, probe: &mut P| {
+        if !first_hit_on {
+            return walk_at(from, end, recent, probe);
+        }
+        match first_hit(pyramid, ray, from, end, probe) {
+            Some(k) => walk_at(ray.next_visited(k), end, recent, probe),
+            None => Walk::Exit { last: end },
         }
     };
     let outcome = match plan {
@@ -371,12 +374,7 @@ fn cast<P: Probe>(
             match prefix {
                 Walk::Exit { last } if last < ray.end => {
                     let from = ray.next_visited(resume.max(last + 1));
-                    if from > ray.end {
-                        Walk::Exit { last: ray.end }
-                    } else {
-                        let at = ray.cursor(pyramid, from);
-                        walk(pyramid, ray, at, ray.end, recent, probe)
-                    }
+                    walk_at(from, ray.end, recent, probe)
                 }
                 other => other,
             }
@@ -388,17 +386,13 @@ fn cast<P: Probe>(
         Walk::Hit {
             at,
             clearance,
-            above: Some(above),
-        } => (
-            shade(pyramid, ray, at, clearance, Some(above), options, probe),
-            at.k,
-        ),
-        Walk::Hit {
-            at,
-            clearance,
-            above: None,
+            above,
         } => {
-            let (at, clearance, above) = retrace(pyramid, ray, at, clearance, recent, probe);
+            // A first sample already below: find the one above it.
+            let (at, clearance, above) = match above {
+                Some(_) => (at, clearance, above),
+                None => retrace(pyramid, ray, at, clearance, recent, probe),
+            };
             (
                 shade(pyramid, ray, at, clearance, above, options, probe),
                 at.k,
@@ -409,8 +403,8 @@ fn cast<P: Probe>(
 
 /// The first visited sample was already below the surface: step back along
 /// the samples a walk from the eye visits while the one before is below
-/// too (never before the ray's start), and report the clearance of the
-/// sample above, if there is one in the map.
+/// too (never before the ray's start), and report the sample above and its
+/// clearance, if there is one in the map.
 fn retrace<P: Probe>(
     pyramid: &Pyramid<'_>,
     ray: &Ray,

@@ -13,7 +13,9 @@
 //! that turns an impossible out-of-map index into an exit instead of a
 //! panic.
 
-use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS};
+use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS, WEIGHT_BITS};
+#[cfg(test)]
+use crate::probe::NoProbe;
 use crate::probe::Probe;
 use crate::pyramid::Pyramid;
 use crate::view::ray::{Cursor, Ray, T_ONE};
@@ -33,13 +35,9 @@ pub(crate) struct Stage<'a> {
     /// Index change per step, here and on the level below (two of its grid
     /// lines per step).
     step: isize,
-    #[cfg(test)]
-    step_below: isize,
     /// Increments of one step of `2^level` voxels, Q16.
     dminor: i32,
     dz: i32,
-    #[cfg(test)]
-    dt: i32,
 }
 
 /// Index strides of a level's grid for a ray: (per major grid line, across
@@ -64,7 +62,7 @@ impl<'a> Stage<'a> {
         let x_major = ray.key.x_major;
         let sign = if ray.key.forward { 1 } else { -1 };
         let (major_stride, minor_stride) = strides(here.width(), x_major);
-        let (_major_below, minor_below) = below.map_or((0, 0), |b| strides(b.width(), x_major));
+        let minor_below = below.map_or(0, |b| strides(b.width(), x_major).1);
         Self {
             level,
             heights: here.heights(),
@@ -73,12 +71,8 @@ impl<'a> Stage<'a> {
             minor_stride,
             minor_stride_below: minor_below,
             step: sign * major_stride,
-            #[cfg(test)]
-            step_below: sign * 2 * _major_below,
             dminor: ray.dminor.to_bits() << level,
             dz: ray.dz.to_bits() << level,
-            #[cfg(test)]
-            dt: if level == 0 { 0 } else { ray.lod.dt },
         }
     }
 
@@ -93,38 +87,43 @@ impl<'a> Stage<'a> {
     /// outside the map.
     #[cfg(test)]
     pub fn clearance(&self, at: &Cursor) -> Option<(usize, i32)> {
-        let cell = self.fetch(at)?;
-        Some((cell.index as usize, self.clearance_in(at, &cell)))
+        let (cell, clearance) = self.clearance_recent(at, &Recent::default(), &mut NoProbe)?;
+        Some((cell.index as usize, clearance))
     }
 
-    /// The two heights across the sample's grid line. `None` only for an
-    /// index outside the map.
+    /// The two heights across the grid line starting at `index`: from
+    /// `recent` when it holds that cell (no fetch, no step: Figure 7's inner
+    /// loop compares the next ray with the heights it already has), else
+    /// fetched and reported. `None` only for an index outside the map.
     #[inline(always)]
-    fn fetch(&self, at: &Cursor) -> Option<Cell> {
-        let index = index(at.base, self.minor_stride, at.minor, self.level);
+    fn cell<P: Probe>(&self, index: isize, recent: Option<&Recent>, probe: &mut P) -> Option<Cell> {
+        if let Some(cell) = recent.and_then(|r| r.find(self.level, index, self.minor_stride)) {
+            return Some(cell);
+        }
+        let h0 = *self.heights.get(index as usize)?;
+        let h1 = *self.heights.get((index + self.minor_stride) as usize)?;
+        probe.visit(self.level, index as usize);
         Some(Cell {
             level: self.level,
             index,
             across: self.minor_stride,
-            h0: i32::from(*self.heights.get(index as usize)?),
-            h1: i32::from(*self.heights.get((index + self.minor_stride) as usize)?),
+            h0: i32::from(h0),
+            h1: i32::from(h1),
         })
     }
 
-    /// The clearance at a sample from its cell's heights: the two blended
-    /// by a 12-bit weight (U12.4 lands exactly on I16F16), compared with
-    /// the ray height.
+    /// How far a ray at height `z` is above a cell's surface at minor
+    /// coordinate `minor` (Q16): the two heights blended by a 12-bit weight
+    /// (U12.4 lands exactly on I16F16).
     #[inline(always)]
-    fn clearance_in(&self, at: &Cursor, cell: &Cell) -> i32 {
+    fn clearance_in(&self, cell: &Cell, minor: i32, z: i32) -> i32 {
         let weight_shift = COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + u32::from(self.level);
-        let weight = (at.minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1);
-        let surface = (cell.h0 << HEIGHT_WEIGHT_BITS) + (cell.h1 - cell.h0) * weight;
-        at.z.saturating_sub(surface)
+        let weight = (minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1);
+        z.saturating_sub((cell.h0 << HEIGHT_WEIGHT_BITS) + (cell.h1 - cell.h0) * weight)
     }
 
-    /// As [`Stage::clearance`], from `recent` when it holds the sample's
-    /// cell (no fetch, no step: Figure 7's inner loop compares the next ray
-    /// with the heights it already has), else fetched and reported.
+    /// The clearance at a sample and its cell, read from `recent` when it
+    /// holds the cell (see [`Stage::cell`]).
     pub fn clearance_recent<P: Probe>(
         &self,
         at: &Cursor,
@@ -132,20 +131,13 @@ impl<'a> Stage<'a> {
         probe: &mut P,
     ) -> Option<(Cell, i32)> {
         let index = index(at.base, self.minor_stride, at.minor, self.level);
-        let cell = match recent.find(self.level, index, self.minor_stride) {
-            Some(cell) => cell,
-            None => {
-                let cell = self.fetch(at)?;
-                probe.visit(self.level, index as usize);
-                cell
-            }
-        };
-        Some((cell, self.clearance_in(at, &cell)))
+        let cell = self.cell(index, Some(recent), probe)?;
+        Some((cell, self.clearance_in(&cell, at.minor, at.z)))
     }
 
     /// The color where a sample's grid line is crossed: two voxels blended by
     /// the subvoxel weight, on this level and on the one below, blended by
-    /// the morph weight (the soft transition).
+    /// the sample's level weight `t` (the soft transition).
     pub fn color<P: Probe>(&self, at: &Cursor, probe: &mut P) -> Option<Rgb> {
         let here = line_color(
             self.colors,
@@ -168,20 +160,8 @@ impl<'a> Stage<'a> {
             at.minor,
             self.level - 1,
         )?;
-        let t = (at.t.clamp(0, T_ONE) >> (COORD_FRAC_BITS - 8)) as u32;
+        let t = (at.t.clamp(0, T_ONE) >> (COORD_FRAC_BITS - WEIGHT_BITS)) as u32;
         Some(lerp(below, here, t))
-    }
-
-    /// Moves to the next sample on this level (the loop in
-    /// [`Stage::steps`] does the same on four values).
-    #[cfg(test)]
-    pub fn advance(&self, at: &mut Cursor) {
-        at.k += self.stride();
-        at.base += self.step;
-        at.base_below += self.step_below;
-        at.minor = at.minor.wrapping_add(self.dminor);
-        at.z = at.z.wrapping_add(self.dz);
-        at.t = at.t.saturating_add(self.dt);
     }
 }
 
@@ -224,7 +204,7 @@ impl Recent {
     }
 }
 
-/// Two colors across a grid line blended by an 8-bit weight.
+/// Two colors across a grid line blended by the subvoxel weight.
 #[inline]
 fn line_color(
     colors: &[Rgb],
@@ -234,13 +214,14 @@ fn line_color(
     level: u8,
 ) -> Option<Rgb> {
     let i = index(base, minor_stride, minor, level);
-    let weight = (minor >> (COORD_FRAC_BITS - 8 + u32::from(level))) & 0xff;
+    let weight =
+        (minor >> (COORD_FRAC_BITS - WEIGHT_BITS + u32::from(level))) & ((1 << WEIGHT_BITS) - 1);
     let c0 = *colors.get(i as usize)?;
     let c1 = *colors.get((i + minor_stride) as usize)?;
     Some(lerp(c0, c1, weight as u32))
 }
 
-/// Blends `a` toward `b` by `t`/256.
+/// Blends `a` toward `b` by `t`/256 (`WEIGHT_BITS` = 8).
 #[inline]
 pub(crate) fn lerp(a: Rgb, b: Rgb, t: u32) -> Rgb {
     let t = t.min(256);
@@ -290,7 +271,7 @@ pub(crate) fn walk<P: Probe>(
             } => {
                 recent.add(cell);
                 let at = if stage.level == 0 {
-                    // Level 0 needs no morph weight: the loop's values are
+                    // Level 0 needs no level weight: the loop's values are
                     // the cursor.
                     Cursor {
                         k,
@@ -372,39 +353,16 @@ impl Stage<'_> {
         let stride = self.stride();
         // Step on while the next sample is before the switch and the end.
         let stop = end.min(switch.saturating_sub(1)).saturating_sub(stride);
-        let index_shift = COORD_FRAC_BITS + u32::from(self.level);
-        let weight_shift = COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + u32::from(self.level);
         let mut above = *last;
         loop {
-            let index = base + (minor >> index_shift) as isize * self.minor_stride;
-            let cached = first
-                .take()
-                .and_then(|r| r.find(self.level, index, self.minor_stride));
-            let (h0, h1) = match cached {
-                Some(cell) => (cell.h0, cell.h1),
-                None => {
-                    let (Some(&h0), Some(&h1)) = (
-                        self.heights.get(index as usize),
-                        self.heights.get((index + self.minor_stride) as usize),
-                    ) else {
-                        *last = above;
-                        return Run::Missing;
-                    };
-                    probe.visit(self.level, index as usize);
-                    (i32::from(h0), i32::from(h1))
-                }
+            let index = index(base, self.minor_stride, minor, self.level);
+            let Some(cell) = self.cell(index, first.take(), probe) else {
+                *last = above;
+                return Run::Missing;
             };
-            let weight = (minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1);
-            let clearance = z.saturating_sub((h0 << HEIGHT_WEIGHT_BITS) + (h1 - h0) * weight);
+            let clearance = self.clearance_in(&cell, minor, z);
             if clearance <= 0 {
                 *last = above;
-                let cell = Cell {
-                    level: self.level,
-                    index,
-                    across: self.minor_stride,
-                    h0,
-                    h1,
-                };
                 return Run::Hit {
                     k,
                     base,
@@ -423,6 +381,66 @@ impl Stage<'_> {
             base += self.step;
             minor = minor.wrapping_add(self.dminor);
             z = z.wrapping_add(self.dz);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pyramid::{pyramid_cells, pyramid_points};
+    use crate::terrain::Terrain;
+    use crate::view::ray::LodPlan;
+    use crate::view::{Camera, View};
+    use std::vec;
+
+    /// The loop's four increments on every level are exactly the difference
+    /// between the directly computed positions of successive samples: the
+    /// increments double with the level and never drift.
+    #[test]
+    fn loop_increments_double_and_land_on_the_direct_positions() {
+        let (h, c) = (vec![0u16; 64 * 64], vec![[0u8; 3]; 64 * 64]);
+        let terrain = Terrain::new(64, 64, &h, &c).unwrap();
+        let n = pyramid_points(64, 64);
+        let (ph, pc, pb) = (vec![0; n], vec![[0; 3]; n], vec![0; pyramid_cells(64, 64)]);
+        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
+        for yaw in [0.0, 25.0, 110.0, 200.0, 300.0] {
+            let camera = Camera {
+                eye: [31.7, 30.2, 3.0],
+                yaw_deg: yaw,
+                ..Camera::default()
+            };
+            let view = View::new(&camera, 64, 8).unwrap();
+            // Level 1 begins 14 voxels out (pixel-to-voxel ratio 4).
+            let plan = LodPlan::new(&view, 4 << 8, pyramid.top());
+            for column in [0, 20, 63] {
+                let ray = view.ray(&terrain, &plan, column, 48);
+                let mut levels_seen = 0u8;
+                let mut k = ray.start;
+                loop {
+                    let at = ray.cursor(&pyramid, k);
+                    let stage = Stage::new(&pyramid, &ray, at.level);
+                    levels_seen |= 1 << at.level;
+                    if k + stage.stride() > ray.end {
+                        break;
+                    }
+                    let next = ray.cursor(&pyramid, k + stage.stride());
+                    if next.level == at.level {
+                        assert_eq!(stage.dminor, ray.dminor.to_bits() << at.level);
+                        assert_eq!(
+                            (next.base - at.base, next.minor - at.minor, next.z - at.z),
+                            (stage.step, stage.dminor, stage.dz),
+                            "yaw {yaw} column {column} k {k} level {}",
+                            at.level
+                        );
+                    }
+                    k = next.k;
+                }
+                assert!(
+                    levels_seen & 0b110 != 0,
+                    "yaw {yaw}: no coarse level reached"
+                );
+            }
         }
     }
 }

@@ -18,10 +18,10 @@
 //! at level `l` only when `major(k)` is a multiple of `2^l`, and steps there
 //! by `2^l`, with doubled increments.
 //!
-//! Within level `l` the surface is morphed from level `l − 1` to level `l`
-//! by `t = depth / (2^(l−1)·D1) − 1`, 0 where the level begins and 1 where
-//! it ends, so neither heights nor colors jump at a switch. `t` grows by the
-//! same `dt` every step at every level.
+//! Within level `l` a weight `t = depth / (2^(l−1)·D1) − 1` runs from 0
+//! where the level begins to 1 where it ends; a hit's color is level
+//! `l − 1`'s blended into level `l`'s by it, so colors do not jump at a
+//! switch. `t` grows by the same `dt` every step at every level.
 
 use super::View;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, MAX_WALK_LEVEL};
@@ -70,7 +70,7 @@ impl LodPlan {
 }
 
 /// A ray's level schedule. Two rays with equal `Lod` (and key) visit the
-/// same samples at the same levels with the same morph weights.
+/// same samples at the same levels with the same level weights.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Lod {
     /// Major-axis distance where level 1 begins, Q16 (level `l` begins at
@@ -112,13 +112,14 @@ pub(crate) struct Cursor {
     pub k: i32,
     pub level: u8,
     /// Index of the level's grid-line start (`floor(minor) = 0`) in the
-    /// level's grid, and the same on the level below (morphing levels only).
+    /// level's grid, and the same on the level below (for the color blend;
+    /// 0 on level 0).
     pub base: isize,
     pub base_below: isize,
     /// Minor coordinate (world voxels) and height, Q16.
     pub minor: i32,
     pub z: i32,
-    /// Morph weight toward this level, Q16, unclamped (see [`Ray::morph`]).
+    /// Level weight `t`, Q16, unclamped (see [`Ray::level_weight`]).
     pub t: i32,
 }
 
@@ -250,7 +251,7 @@ impl Lod {
 impl Ray {
     /// Major-axis grid coordinate of sample `k`.
     #[inline]
-    fn major_at(&self, k: i32) -> i64 {
+    pub fn major_at(&self, k: i32) -> i64 {
         if self.key.forward {
             self.major0 + i64::from(k)
         } else {
@@ -353,9 +354,9 @@ impl Ray {
         k - (1 << self.level_at(k - 1))
     }
 
-    /// The morph weight of sample `k` at level `level`, Q16, unclamped.
+    /// The level weight `t` of sample `k` on level `level`, Q16, unclamped.
     #[inline]
-    fn morph(&self, k: i32, level: u8) -> i32 {
+    fn level_weight(&self, k: i32, level: u8) -> i32 {
         if level == 0 {
             return 0;
         }
@@ -401,7 +402,7 @@ impl Ray {
             base_below: if level > 0 { base_on(level - 1) } else { 0 },
             minor: fit(self.minor0 + k64 * i64::from(self.dminor.to_bits())),
             z: fit(self.z0 + k64 * i64::from(self.dz.to_bits())),
-            t: self.morph(k, level),
+            t: self.level_weight(k, level),
         }
     }
 
@@ -413,12 +414,6 @@ impl Ray {
             self.minor0 + k * i64::from(self.dminor.to_bits()),
             self.z0 + k * i64::from(self.dz.to_bits()),
         )
-    }
-
-    /// Major-axis grid coordinate of sample `k` (for the first hit).
-    #[inline]
-    pub fn major(&self, k: i32) -> i64 {
-        self.major_at(k)
     }
 
     /// Distance from the eye along the major axis to sample `k`, Q16, never
@@ -545,56 +540,14 @@ mod tests {
     }
 
     #[test]
-    fn stepping_doubles_the_increments_and_lands_on_the_direct_position() {
-        let (h, c) = flat(64, 0);
-        let terrain = Terrain::new(64, 64, &h, &c).unwrap();
-        let ray = ray_with_levels(true, 0.3);
-        // A pyramid whose levels all exist, so stages are real.
-        let n = crate::pyramid::pyramid_points(64, 64);
-        let (ph, pc) = (std::vec![0; n], std::vec![[0; 3]; n]);
-        let pb = std::vec![0; crate::pyramid::pyramid_cells(64, 64)];
-        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
-        let mut k = ray.start;
-        while k < 56 {
-            let at = ray.cursor(&pyramid, k);
-            let stage = Stage::new(&pyramid, &ray, at.level);
-            let mut stepped = at;
-            stage.advance(&mut stepped);
-            assert_eq!(stepped.k, k + (1 << at.level));
-            if ray.level_at(stepped.k) == at.level {
-                let direct = ray.cursor(&pyramid, stepped.k);
-                assert_eq!(
-                    (
-                        stepped.base,
-                        stepped.base_below,
-                        stepped.minor,
-                        stepped.z,
-                        stepped.t
-                    ),
-                    (
-                        direct.base,
-                        direct.base_below,
-                        direct.minor,
-                        direct.z,
-                        direct.t
-                    ),
-                    "k {k} level {}",
-                    at.level
-                );
-            }
-            k = stepped.k;
-        }
-    }
-
-    #[test]
-    fn morph_weight_runs_from_zero_to_one_within_each_level() {
+    fn level_weight_runs_from_zero_to_one_within_each_level() {
         let ray = ray_with_levels(true, 0.3);
         for k in ray.start..60 {
             let level = ray.level_at(k);
             if level == 0 || !ray.on_level_grid(k, level) {
                 continue;
             }
-            let t = ray.morph(k, level);
+            let t = ray.level_weight(k, level);
             // One step of slack on either side: the switch waits for the
             // coarser grid line.
             assert!(
