@@ -1,5 +1,6 @@
 //! The `terracast-sim` command line (spec/view-contract.md).
 
+use crate::board::{board_views, verify, write_scene};
 use crate::error::{Error, Result};
 use crate::kernel::render_kernel;
 use crate::output::{stats_json, write_pfm, write_png, write_stats};
@@ -24,6 +25,53 @@ pub struct Cli {
 enum Command {
     /// Render one view to a PNG (with optional depth and stats).
     Render(RenderArgs),
+    /// The emulated board: pack its scene, verify what it rendered
+    /// (scripts/board-check runs both around QEMU).
+    #[command(subcommand)]
+    Board(BoardCommand),
+}
+
+#[derive(Debug, Subcommand)]
+enum BoardCommand {
+    /// Write the scene file the firmware bakes in: the procedural terrain
+    /// and the board's views.
+    Scene(BoardSceneArgs),
+    /// Compare the board's frames and display wire with the host kernel's,
+    /// byte for byte, and report instructions per pixel. Fails on any
+    /// difference or when the budget is exceeded.
+    Verify(BoardVerifyArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct BoardSceneArgs {
+    /// Side of the procedural map (it must fit the board's 4 MiB of code
+    /// memory: 5 bytes a voxel).
+    #[arg(long, default_value_t = 512, value_name = "N")]
+    procedural_size: u32,
+    /// Seed of the procedural scene.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    seed: u64,
+    /// Image size of the board's frames.
+    #[arg(long, default_value = "320x240", value_parser = parse_size, value_name = "WxH")]
+    size: (u32, u32),
+    /// Output scene file.
+    #[arg(long, value_name = "SCENE.tcb")]
+    out: PathBuf,
+}
+
+#[derive(Debug, clap::Args)]
+struct BoardVerifyArgs {
+    /// The scene file the firmware was built with.
+    #[arg(long, value_name = "SCENE.tcb")]
+    scene: PathBuf,
+    /// Folder holding the board's frame-K.rgb, wire-K.bin and
+    /// board-results.txt.
+    #[arg(long, value_name = "DIR")]
+    from: PathBuf,
+    /// Fail when the kernel's instructions per pixel over all views exceed
+    /// this.
+    #[arg(long, value_name = "N")]
+    budget: Option<f64>,
 }
 
 /// The kernel's vertical ray coherence.
@@ -185,7 +233,62 @@ struct RenderArgs {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render_command(args),
+        Command::Board(BoardCommand::Scene(args)) => board_scene_command(args),
+        Command::Board(BoardCommand::Verify(args)) => board_verify_command(args),
     }
+}
+
+fn board_scene_command(args: BoardSceneArgs) -> Result<()> {
+    // 5 bytes a voxel must fit beside the code in 4 MiB.
+    if !(2..=800).contains(&args.procedural_size) {
+        return Err(Error::new(
+            "--procedural-size must be between 2 and 800 for the board's 4 MiB of code memory",
+        ));
+    }
+    let scene = procedural(args.procedural_size, args.seed);
+    let views = board_views(args.procedural_size, scene.max_height());
+    write_scene(&args.out, &scene, args.size, &views)?;
+    println!(
+        "board scene: {0}x{0} map, {1} views at {2}x{3} -> {4}",
+        args.procedural_size,
+        views.len(),
+        args.size.0,
+        args.size.1,
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn board_verify_command(args: BoardVerifyArgs) -> Result<()> {
+    let report = verify(&args.scene, &args.from)?;
+    print!("{}", report.table());
+    let differing: Vec<String> = report
+        .frames
+        .iter()
+        .filter(|f| !f.identical())
+        .map(|f| f.index.to_string())
+        .collect();
+    let per_pixel = report.instructions_per_pixel();
+    if !differing.is_empty() {
+        println!("instructions per pixel: {per_pixel:.0}");
+        return Err(Error::new(format!(
+            "board and host frames differ in view(s) {}",
+            differing.join(", ")
+        )));
+    }
+    if let Some(budget) = args.budget {
+        if per_pixel > budget {
+            println!("instructions per pixel: {per_pixel:.0}");
+            return Err(Error::new(format!(
+                "{per_pixel:.0} instructions per pixel exceeds the budget of {budget:.0}"
+            )));
+        }
+        println!("all frames identical; budget {budget:.0} instructions per pixel holds");
+    } else {
+        println!("all frames identical");
+    }
+    println!("instructions per pixel: {per_pixel:.0}");
+    Ok(())
 }
 
 fn render_command(args: RenderArgs) -> Result<()> {

@@ -1,0 +1,234 @@
+//! The board scene file: a terrain in the kernel's own format and the views
+//! to render, baked into the firmware as one constant.
+//!
+//! Layout, all numbers little-endian:
+//!
+//! | offset | size | what |
+//! |---|---|---|
+//! | 0 | 8 | [`MAGIC`] |
+//! | 8 | 4 × u32 | map width, map depth, image width, image height |
+//! | 24 | u32 | number of views, at most [`MAX_VIEWS`] |
+//! | 28 | 24 a view | eye x, y, z, yaw, pitch, horizontal fov: f32 each (roll 0) |
+//! | [`HEADER_BYTES`] | 2 a voxel | heights, U12.4, row-major |
+//! | after them | 3 a voxel | colors, RGB |
+//!
+//! The header is padded to [`HEADER_BYTES`] so that the heights start
+//! aligned when the file is.
+
+use core::fmt;
+use terracast::{Camera, Rgb, Terrain, TerrainError};
+
+/// First bytes of a board scene file.
+pub const MAGIC: [u8; 8] = *b"TCBOARD1";
+/// Header size; the heights start here.
+pub const HEADER_BYTES: usize = 256;
+/// Most views a scene carries.
+pub const MAX_VIEWS: usize = 8;
+const VIEWS_AT: usize = 28;
+const VIEW_BYTES: usize = 24;
+
+/// Sizes and views: everything but the terrain's voxels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Header {
+    /// Map width in voxels.
+    pub map_width: u32,
+    /// Map depth in voxels.
+    pub map_depth: u32,
+    /// Image width in pixels.
+    pub image_width: u32,
+    /// Image height in pixels.
+    pub image_height: u32,
+    views: [Camera; MAX_VIEWS],
+    view_count: usize,
+}
+
+impl Header {
+    /// A header; fails with [`SceneError::TooManyViews`] past [`MAX_VIEWS`].
+    pub fn new(map: (u32, u32), image: (u32, u32), views: &[Camera]) -> Result<Self, SceneError> {
+        if views.len() > MAX_VIEWS {
+            return Err(SceneError::TooManyViews);
+        }
+        let mut all = [Camera::default(); MAX_VIEWS];
+        all[..views.len()].copy_from_slice(views);
+        Ok(Self {
+            map_width: map.0,
+            map_depth: map.1,
+            image_width: image.0,
+            image_height: image.1,
+            views: all,
+            view_count: views.len(),
+        })
+    }
+
+    /// The views, in order.
+    pub fn views(&self) -> &[Camera] {
+        &self.views[..self.view_count]
+    }
+
+    /// Voxels of the map.
+    pub fn voxels(&self) -> usize {
+        self.map_width as usize * self.map_depth as usize
+    }
+
+    /// Size of the whole file.
+    pub fn file_bytes(&self) -> usize {
+        HEADER_BYTES + self.voxels() * 5
+    }
+
+    /// The header's bytes.
+    pub fn encode(&self) -> [u8; HEADER_BYTES] {
+        let mut out = [0u8; HEADER_BYTES];
+        out[..8].copy_from_slice(&MAGIC);
+        let words = [
+            self.map_width,
+            self.map_depth,
+            self.image_width,
+            self.image_height,
+            self.view_count as u32,
+        ];
+        for (slot, word) in out[8..VIEWS_AT].chunks_exact_mut(4).zip(words) {
+            slot.copy_from_slice(&word.to_le_bytes());
+        }
+        for (slot, view) in out[VIEWS_AT..]
+            .chunks_exact_mut(VIEW_BYTES)
+            .zip(self.views())
+        {
+            let numbers = [
+                view.eye[0],
+                view.eye[1],
+                view.eye[2],
+                view.yaw_deg,
+                view.pitch_deg,
+                view.hfov_deg,
+            ];
+            for (s, n) in slot.chunks_exact_mut(4).zip(numbers) {
+                s.copy_from_slice(&n.to_le_bytes());
+            }
+        }
+        out
+    }
+
+    /// Reads a header from the start of a scene file.
+    pub fn decode(bytes: &[u8]) -> Result<Self, SceneError> {
+        if bytes.get(..MAGIC.len()) != Some(MAGIC.as_slice()) {
+            return Err(SceneError::NotABoardScene);
+        }
+        let header = bytes.get(..HEADER_BYTES).ok_or(SceneError::Truncated)?;
+        let word = |at: usize| {
+            let mut b = [0u8; 4];
+            b.copy_from_slice(&header[at..at + 4]);
+            b
+        };
+        let number = |at: usize| u32::from_le_bytes(word(at));
+        let view_count = number(24) as usize;
+        if view_count > MAX_VIEWS {
+            return Err(SceneError::TooManyViews);
+        }
+        let mut views = [Camera::default(); MAX_VIEWS];
+        for (i, view) in views.iter_mut().enumerate().take(view_count) {
+            let at = VIEWS_AT + i * VIEW_BYTES;
+            let float = |k: usize| f32::from_le_bytes(word(at + 4 * k));
+            *view = Camera {
+                eye: [float(0), float(1), float(2)],
+                yaw_deg: float(3),
+                pitch_deg: float(4),
+                roll_deg: 0.0,
+                hfov_deg: float(5),
+            };
+        }
+        let header = Self {
+            map_width: number(8),
+            map_depth: number(12),
+            image_width: number(16),
+            image_height: number(20),
+            views,
+            view_count,
+        };
+        if header.map_width > terracast::config::MAX_MAP_SIDE
+            || header.map_depth > terracast::config::MAX_MAP_SIDE
+        {
+            return Err(SceneError::Terrain(TerrainError::TooLarge));
+        }
+        Ok(header)
+    }
+}
+
+/// A scene file read in place: the terrain borrows the file's bytes.
+#[derive(Debug, Clone, Copy)]
+pub struct BoardScene<'a> {
+    /// Sizes and views.
+    pub header: Header,
+    heights: &'a [u16],
+    colors: &'a [Rgb],
+}
+
+/// Why a scene file was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SceneError {
+    /// The file does not start with [`MAGIC`].
+    NotABoardScene,
+    /// The file is shorter than its header says.
+    Truncated,
+    /// More than [`MAX_VIEWS`] views.
+    TooManyViews,
+    /// The heights do not start on a 2-byte boundary (the file must be
+    /// placed aligned), or the target is big-endian.
+    Misaligned,
+    /// The kernel refused the terrain.
+    Terrain(TerrainError),
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::NotABoardScene => f.write_str("not a board scene file (bad magic)"),
+            Self::Truncated => f.write_str("board scene file is shorter than its header says"),
+            Self::TooManyViews => write!(f, "board scene has more than {MAX_VIEWS} views"),
+            Self::Misaligned => {
+                f.write_str("board scene heights are not 2-byte aligned little-endian u16")
+            }
+            Self::Terrain(e) => write!(f, "board scene terrain refused: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for SceneError {}
+
+impl<'a> BoardScene<'a> {
+    /// Reads a scene file without copying it.
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, SceneError> {
+        let header = Header::decode(bytes)?;
+        let voxels = header.voxels();
+        let heights = bytes
+            .get(HEADER_BYTES..HEADER_BYTES + 2 * voxels)
+            .ok_or(SceneError::Truncated)?;
+        let colors = bytes
+            .get(HEADER_BYTES + 2 * voxels..HEADER_BYTES + 5 * voxels)
+            .ok_or(SceneError::Truncated)?;
+        if cfg!(target_endian = "big") {
+            return Err(SceneError::Misaligned);
+        }
+        let heights: &[u16] =
+            bytemuck::try_cast_slice(heights).map_err(|_| SceneError::Misaligned)?;
+        let colors: &[Rgb] =
+            bytemuck::try_cast_slice(colors).map_err(|_| SceneError::Misaligned)?;
+        let scene = Self {
+            header,
+            heights,
+            colors,
+        };
+        scene.terrain()?;
+        Ok(scene)
+    }
+
+    /// The kernel's terrain over the file's voxels.
+    pub fn terrain(&self) -> Result<Terrain<'a>, SceneError> {
+        Terrain::new(
+            self.header.map_width,
+            self.header.map_depth,
+            self.heights,
+            self.colors,
+        )
+        .map_err(SceneError::Terrain)
+    }
+}

@@ -1,0 +1,288 @@
+//! terracast on the reference board: an Arm MPS2 with the AN500 image
+//! (Cortex-M7), as emulated by `qemu-system-arm -machine mps2-an500`.
+//!
+//! At boot it builds the pyramid of the baked-in scene into static RAM, then
+//! renders each of the scene's views twice:
+//!
+//! 1. into a framebuffer, which is written to the host as `frame-K.rgb`
+//!    (RGB888, row-major) — the frame the host kernel must match byte for
+//!    byte;
+//! 2. through the SPI display driver, whose wire traffic is captured and
+//!    written as `wire-K.bin` — the stream a panel would receive.
+//!
+//! Both renders are timed with SysTick. Under QEMU's `-icount` the clock
+//! advances by instruction count, so ticks convert to instructions exactly
+//! and repeatably (QEMU does not model the DWT cycle counter). A loop of a
+//! known number of instructions is timed first, to calibrate that
+//! conversion. The ticks go to `board-results.txt`; `terracast-sim board
+//! verify` turns them into instructions per pixel. Everything is reported over semihosting, and the
+//! firmware exits QEMU with status 0 on success.
+//!
+//! What lives where is described in `memory.x`.
+#![no_std]
+#![no_main]
+
+use core::fmt::Write as _;
+use core::ptr::addr_of_mut;
+use core::sync::atomic::{AtomicU32, Ordering};
+use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m_rt::{entry, exception};
+use cortex_m_semihosting::{debug, hprintln, nr, syscall};
+use embedded_hal::delay::DelayNs;
+use embedded_hal::digital::{ErrorType, OutputPin};
+use panic_semihosting as _;
+use terracast::{
+    pyramid_cells, pyramid_points, render, Framebuffer, HeightFilter, NoProbe, Pyramid,
+    RenderOptions, Rgb, View,
+};
+use terracast_board::{scene::BoardScene, wire::frame_capture_bytes, CaptureBus, SpiDisplay};
+
+/// Lets the scene file be read in place as `u16` heights.
+#[repr(C, align(4))]
+pub struct Aligned<T: ?Sized>(T);
+
+mod scene {
+    use super::Aligned;
+    include!(concat!(env!("OUT_DIR"), "/scene.rs"));
+}
+use scene::{IMAGE_HEIGHT, IMAGE_WIDTH, MAP_DEPTH, MAP_WIDTH, SCENE};
+
+const PYRAMID_POINTS: usize = pyramid_points(MAP_WIDTH, MAP_DEPTH);
+const PYRAMID_CELLS: usize = pyramid_cells(MAP_WIDTH, MAP_DEPTH);
+const PIXELS: usize = IMAGE_WIDTH as usize * IMAGE_HEIGHT as usize;
+const CAPTURE_BYTES: usize = frame_capture_bytes(IMAGE_WIDTH, IMAGE_HEIGHT);
+const COLUMN: usize = IMAGE_HEIGHT as usize;
+
+// The board's working memory, in .bss (RAM). Each is borrowed mutably
+// exactly once, at the top of `main`.
+static mut COARSE_HEIGHTS: [u16; PYRAMID_POINTS] = [0; PYRAMID_POINTS];
+static mut COARSE_COLORS: [Rgb; PYRAMID_POINTS] = [[0; 3]; PYRAMID_POINTS];
+static mut BOUNDS: [u16; PYRAMID_CELLS] = [0; PYRAMID_CELLS];
+static mut FRAME: [Rgb; PIXELS] = [[0; 3]; PIXELS];
+static mut CAPTURE: [u8; CAPTURE_BYTES] = [0; CAPTURE_BYTES];
+
+/// SysTick's reload: the full 24 bits.
+const RELOAD: u32 = 0x00FF_FFFF;
+/// SysTick wraps, counted by its exception.
+static WRAPS: AtomicU32 = AtomicU32::new(0);
+
+#[exception]
+fn SysTick() {
+    WRAPS.fetch_add(1, Ordering::Relaxed);
+}
+
+/// Core clock ticks since the counter started.
+fn ticks() -> u64 {
+    loop {
+        let before = WRAPS.load(Ordering::Relaxed);
+        let current = SYST::get_current();
+        if WRAPS.load(Ordering::Relaxed) == before {
+            return u64::from(before) * (u64::from(RELOAD) + 1) + u64::from(RELOAD - current);
+        }
+    }
+}
+
+/// Instructions the calibration loop runs: two an iteration.
+const CALIBRATION_INSTRUCTIONS: u32 = 20_000_000;
+
+/// Ticks of a loop of exactly [`CALIBRATION_INSTRUCTIONS`] instructions:
+/// the host divides by them to turn ticks into instructions, whatever the
+/// emulator's clock model and `-icount` shift.
+fn calibration_ticks() -> u64 {
+    let start = ticks();
+    // SAFETY: a countdown in one register; touches no memory or stack.
+    unsafe {
+        core::arch::asm!(
+            "2:",
+            "subs {n}, {n}, #1",
+            "bne 2b",
+            n = inout(reg) CALIBRATION_INSTRUCTIONS / 2 => _,
+            options(nomem, nostack),
+        );
+    }
+    ticks() - start
+}
+
+/// A busy-wait delay at the board's 25 MHz core clock.
+struct BusyDelay;
+
+impl DelayNs for BusyDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        cortex_m::asm::delay(ns / 40 + 1);
+    }
+}
+
+/// The FPGA's user LED 0 (FPGAIO at 0x4002_8000, LED register at offset 0):
+/// blinks once a frame alongside the display's frame-done line.
+struct FrameLed;
+
+impl ErrorType for FrameLed {
+    type Error = core::convert::Infallible;
+}
+
+impl OutputPin for FrameLed {
+    fn set_low(&mut self) -> Result<(), Self::Error> {
+        // SAFETY: the FPGAIO LED register is a write-only MMIO word on the
+        // MPS2 memory map; no other code touches it.
+        unsafe { core::ptr::write_volatile(0x4002_8000 as *mut u32, 0) };
+        Ok(())
+    }
+
+    fn set_high(&mut self) -> Result<(), Self::Error> {
+        // SAFETY: as in `set_low`.
+        unsafe { core::ptr::write_volatile(0x4002_8000 as *mut u32, 1) };
+        Ok(())
+    }
+}
+
+/// Writes a file on the host (QEMU's working directory); `name` ends in NUL.
+fn write_host_file(name: &str, bytes: &[u8]) -> Result<(), &'static str> {
+    let path = name.as_bytes();
+    if path.last() != Some(&0) {
+        return Err("host file name must end in NUL");
+    }
+    // SAFETY: semihosting calls with a NUL-terminated name and its length
+    // without the NUL, then a live buffer and its length, as the Arm
+    // semihosting specification requires.
+    let handle = unsafe {
+        syscall!(
+            OPEN,
+            path.as_ptr(),
+            nr::open::W_TRUNC_BINARY,
+            path.len() - 1
+        )
+    };
+    if handle as isize == -1 {
+        return Err("semihosting cannot open a host file");
+    }
+    // SAFETY: as above; WRITE returns the number of bytes not written.
+    let unwritten = unsafe { syscall!(WRITE, handle, bytes.as_ptr(), bytes.len()) };
+    // SAFETY: `handle` is the open file of this call.
+    unsafe { syscall!(CLOSE, handle) };
+    if unwritten != 0 {
+        return Err("semihosting write to a host file failed");
+    }
+    Ok(())
+}
+
+#[entry]
+fn main() -> ! {
+    let code = match run() {
+        Ok(()) => debug::EXIT_SUCCESS,
+        Err(message) => {
+            hprintln!("terracast-firmware: {}", message);
+            debug::EXIT_FAILURE
+        }
+    };
+    debug::exit(code);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+fn run() -> Result<(), &'static str> {
+    // SAFETY: `run` is called once, from `main`, before any interrupt that
+    // could reach these statics is enabled (none ever does); each is
+    // borrowed exactly once here.
+    let (coarse_heights, coarse_colors, bounds, frame, capture) = unsafe {
+        (
+            &mut *addr_of_mut!(COARSE_HEIGHTS),
+            &mut *addr_of_mut!(COARSE_COLORS),
+            &mut *addr_of_mut!(BOUNDS),
+            &mut *addr_of_mut!(FRAME),
+            &mut *addr_of_mut!(CAPTURE),
+        )
+    };
+    let mut core = cortex_m::Peripherals::take().ok_or("core peripherals taken twice")?;
+    core.SYST.set_clock_source(SystClkSource::Core);
+    core.SYST.set_reload(RELOAD);
+    core.SYST.clear_current();
+    core.SYST.enable_interrupt();
+    core.SYST.enable_counter();
+    // The counter starts from 0 and reloads on its first tick: wait for
+    // that, so that the first reading is on the running count.
+    while SYST::get_current() == 0 {}
+
+    let calibration = calibration_ticks();
+    let scene = BoardScene::parse(&SCENE.0).map_err(|_| "the baked-in scene does not parse")?;
+    let terrain = scene
+        .terrain()
+        .map_err(|_| "the kernel refused the terrain")?;
+    let start = ticks();
+    Pyramid::build(
+        &terrain,
+        HeightFilter::Mean,
+        coarse_heights,
+        coarse_colors,
+        bounds,
+    )
+    .map_err(|_| "pyramid storage does not match the map")?;
+    let pyramid_ticks = ticks() - start;
+    let pyramid = Pyramid::new(terrain, coarse_heights, coarse_colors, bounds)
+        .map_err(|_| "the kernel refused the pyramid")?;
+    let options = RenderOptions::default();
+
+    let mut results: heapless::String<1024> = heapless::String::new();
+    let _ = writeln!(
+        results,
+        "calibration instructions {CALIBRATION_INSTRUCTIONS} ticks {calibration}"
+    );
+    let _ = writeln!(results, "pyramid_ticks {pyramid_ticks}");
+    hprintln!(
+        "terracast-firmware: {}x{} map, pyramid built in {} ticks",
+        MAP_WIDTH,
+        MAP_DEPTH,
+        pyramid_ticks
+    );
+    let mut led = FrameLed;
+    for (index, camera) in scene.header.views().iter().enumerate() {
+        let view = View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+
+        let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+            .map_err(|_| "framebuffer too small")?;
+        let start = ticks();
+        render(&pyramid, &view, &options, &mut framebuffer, &mut NoProbe);
+        let kernel_ticks = ticks() - start;
+
+        let bus = CaptureBus::new(capture);
+        let mut display: SpiDisplay<_, _, _, COLUMN> = SpiDisplay::new(
+            bus.spi(),
+            bus.data_command(),
+            bus.frame_done(),
+            IMAGE_WIDTH,
+            IMAGE_HEIGHT,
+        )
+        .map_err(|_| "display refused the image size")?;
+        display
+            .init(&mut BusyDelay)
+            .map_err(|_| "display init failed")?;
+        let start = ticks();
+        render(&pyramid, &view, &options, &mut display, &mut NoProbe);
+        display.finish().map_err(|_| "display frame failed")?;
+        let display_ticks = ticks() - start;
+        let _ = display.release();
+        let wire = bus
+            .into_written()
+            .map_err(|_| "display capture overflowed")?;
+        let _ = led.set_high();
+        let _ = led.set_low();
+
+        let mut name: heapless::String<32> = heapless::String::new();
+        let _ = write!(name, "frame-{index}.rgb\0");
+        write_host_file(&name, frame.as_flattened())?;
+        name.clear();
+        let _ = write!(name, "wire-{index}.bin\0");
+        write_host_file(&name, wire)?;
+        let _ = writeln!(
+            results,
+            "frame {index} kernel_ticks {kernel_ticks} display_ticks {display_ticks}"
+        );
+        hprintln!(
+            "terracast-firmware: frame {} rendered in {} ticks ({} with the display)",
+            index,
+            kernel_ticks,
+            display_ticks
+        );
+    }
+    write_host_file("board-results.txt\0", results.as_bytes())
+}

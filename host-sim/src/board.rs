@@ -1,0 +1,432 @@
+//! The host side of the board check: packs the scene the firmware bakes in,
+//! and verifies what the emulated board sent back against the host kernel.
+//!
+//! `scripts/board-check` runs the whole loop: `terracast-sim board scene`,
+//! the firmware build, QEMU, `terracast-sim board verify`.
+
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use std::fmt::Write as _;
+use std::path::Path;
+use terracast::{
+    pyramid_cells, pyramid_points, render, Camera, CountingProbe, Framebuffer, HeightFilter,
+    NoProbe, Pyramid, RenderOptions, View,
+};
+use terracast_board::scene::{BoardScene, Header};
+use terracast_board::wire::frame_capture_bytes;
+use terracast_board::{decode, rgb565, CaptureBus, SpiDisplay};
+
+/// Tallest image the board check handles (the display driver's column).
+pub const MAX_IMAGE_HEIGHT: usize = 1024;
+
+/// The views the board renders, over a `side` map whose highest point is
+/// `top`: the `render` command's default view, a grazing view across the
+/// map, a steep one and one straight down.
+pub fn board_views(side: u32, top: f32) -> Vec<Camera> {
+    let s = side as f32;
+    let camera = |eye: [f32; 3], yaw_deg: f32, pitch_deg: f32| Camera {
+        eye,
+        yaw_deg,
+        pitch_deg,
+        roll_deg: 0.0,
+        hfov_deg: 60.0,
+    };
+    vec![
+        camera([s * 0.5, s * 0.12, top + 0.04 * s], 90.0, 12.0),
+        camera([s * 0.08, s * 0.1, top + 0.01 * s], 40.0, 2.0),
+        camera([s * 0.3, s * 0.3, top + 0.15 * s], 60.0, 45.0),
+        camera([s * 0.5, s * 0.5, top + 0.25 * s], 0.0, 90.0),
+    ]
+}
+
+/// Writes the board scene file for `scene` and `views` at `image` size.
+pub fn write_scene(path: &Path, scene: &Scene, image: (u32, u32), views: &[Camera]) -> Result<()> {
+    if image.1 as usize > MAX_IMAGE_HEIGHT {
+        return Err(Error::new(format!(
+            "board images are at most {MAX_IMAGE_HEIGHT} pixels tall"
+        )));
+    }
+    for camera in views {
+        View::new(camera, image.0, image.1)
+            .map_err(|e| Error::new(format!("bad board view: {e}")))?;
+    }
+    let kernel = scene.to_kernel()?;
+    let terrain = kernel.terrain()?;
+    let header = Header::new((scene.width, scene.depth), image, views)
+        .map_err(|e| Error::new(e.to_string()))?;
+    let mut bytes = Vec::with_capacity(header.file_bytes());
+    bytes.extend_from_slice(&header.encode());
+    for h in terrain.heights() {
+        bytes.extend_from_slice(&h.to_le_bytes());
+    }
+    bytes.extend(terrain.colors().iter().flatten());
+    std::fs::write(path, &bytes)
+        .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))
+}
+
+/// One view's verdict.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameCheck {
+    /// Which view.
+    pub index: usize,
+    /// Pixels whose RGB888 color differs between board and host.
+    pub differing_pixels: usize,
+    /// Whether the display wire capture is byte-identical.
+    pub wire_identical: bool,
+    /// Pixels of the decoded board wire that differ from the host frame in
+    /// RGB565.
+    pub display_differing_pixels: usize,
+    /// Kernel steps of the host render (same traversal as the board's).
+    pub steps: u64,
+    /// The board's core clock ticks for the kernel render and for the
+    /// render through the display driver.
+    pub kernel_ticks: u64,
+    /// See `kernel_ticks`.
+    pub display_ticks: u64,
+}
+
+impl FrameCheck {
+    /// Whether board and host agree on every byte.
+    pub fn identical(&self) -> bool {
+        self.differing_pixels == 0 && self.wire_identical && self.display_differing_pixels == 0
+    }
+}
+
+/// Everything `board verify` found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoardReport {
+    /// Image size.
+    pub image: (u32, u32),
+    /// Per view.
+    pub frames: Vec<FrameCheck>,
+    /// Ticks to build the pyramid at boot.
+    pub pyramid_ticks: u64,
+    /// Instructions a tick, from the board's calibration loop.
+    pub instructions_per_tick: f64,
+}
+
+impl BoardReport {
+    /// Kernel instructions per pixel over all views.
+    pub fn instructions_per_pixel(&self) -> f64 {
+        let per_tick = self.instructions_per_tick;
+        let ticks: u64 = self.frames.iter().map(|f| f.kernel_ticks).sum();
+        let pixels = self.frames.len() as f64 * f64::from(self.image.0) * f64::from(self.image.1);
+        ticks as f64 * per_tick / pixels.max(1.0)
+    }
+
+    /// A table of the views and the summary, for the terminal.
+    pub fn table(&self) -> String {
+        let per_tick = self.instructions_per_tick;
+        let pixels = f64::from(self.image.0) * f64::from(self.image.1);
+        let mut out = String::from(
+            "view  frame       wire       display  steps/px  instr/px  instr/step  instr/px with display\n",
+        );
+        for f in &self.frames {
+            let verdict = |ok: bool| if ok { "identical" } else { "DIFFERENT" };
+            let instructions = f.kernel_ticks as f64 * per_tick;
+            let _ = writeln!(
+                out,
+                "{:>4}  {:<10}  {:<9}  {:<7}  {:>8.2}  {:>8.0}  {:>10.0}  {:>21.0}",
+                f.index,
+                verdict(f.differing_pixels == 0),
+                verdict(f.wire_identical),
+                if f.display_differing_pixels == 0 {
+                    "matches"
+                } else {
+                    "DIFFERS"
+                },
+                f.steps as f64 / pixels,
+                instructions / pixels,
+                instructions / (f.steps.max(1) as f64),
+                f.display_ticks as f64 * per_tick / pixels,
+            );
+        }
+        let _ = writeln!(
+            out,
+            "pyramid build at boot: {:.0} instructions",
+            self.pyramid_ticks as f64 * per_tick
+        );
+        out
+    }
+}
+
+/// What the host kernel renders for one view of a board scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HostFrame {
+    /// RGB888, row-major: what the board writes as `frame-K.rgb`.
+    pub rgb: Vec<u8>,
+    /// The display wire capture: what the board writes as `wire-K.bin`.
+    pub wire: Vec<u8>,
+    /// Kernel steps (the board takes the same ones).
+    pub steps: u64,
+}
+
+/// A board scene file read into aligned storage.
+#[derive(Debug)]
+pub struct SceneFile {
+    words: Vec<u16>,
+    len: usize,
+}
+
+impl SceneFile {
+    /// Reads and checks a scene file written by [`write_scene`].
+    pub fn read(path: &Path) -> Result<Self> {
+        let bytes = read(path)?;
+        // Heights are read in place as u16: copy into 2-byte aligned storage.
+        let mut words = vec![0u16; bytes.len().div_ceil(2)];
+        bytemuck::cast_slice_mut::<u16, u8>(&mut words)[..bytes.len()].copy_from_slice(&bytes);
+        let file = Self {
+            words,
+            len: bytes.len(),
+        };
+        let header = file
+            .scene()
+            .map_err(|e| Error::new(format!("{}: {e}", path.display())))?
+            .header;
+        if header.image_height as usize > MAX_IMAGE_HEIGHT {
+            return Err(Error::new(format!(
+                "{}: board images are at most {MAX_IMAGE_HEIGHT} pixels tall",
+                path.display()
+            )));
+        }
+        Ok(file)
+    }
+
+    /// The parsed scene, borrowing the file.
+    pub fn scene(&self) -> std::result::Result<BoardScene<'_>, terracast_board::SceneError> {
+        BoardScene::parse(&bytemuck::cast_slice::<u16, u8>(&self.words)[..self.len])
+    }
+
+    /// Renders every view as the firmware does: pyramid with mean heights,
+    /// default options, into a framebuffer and through the display driver.
+    pub fn render(&self) -> Result<Vec<HostFrame>> {
+        let scene = self.scene().map_err(|e| Error::new(e.to_string()))?;
+        let header = scene.header;
+        let (width, height) = (header.image_width, header.image_height);
+        let terrain = scene.terrain().map_err(|e| Error::new(e.to_string()))?;
+        let (w, d) = (header.map_width, header.map_depth);
+        let mut coarse_heights = vec![0u16; pyramid_points(w, d)];
+        let mut coarse_colors = vec![[0u8; 3]; pyramid_points(w, d)];
+        let mut bounds = vec![0u16; pyramid_cells(w, d)];
+        Pyramid::build(
+            &terrain,
+            HeightFilter::Mean,
+            &mut coarse_heights,
+            &mut coarse_colors,
+            &mut bounds,
+        )
+        .map_err(|e| Error::new(format!("pyramid not built: {e}")))?;
+        let pyramid = Pyramid::new(terrain, &coarse_heights, &coarse_colors, &bounds)
+            .map_err(|e| Error::new(format!("pyramid rejected: {e}")))?;
+        let options = RenderOptions::default();
+        let mut frames = Vec::new();
+        for (index, camera) in header.views().iter().enumerate() {
+            let view = View::new(camera, width, height)
+                .map_err(|e| Error::new(format!("bad board view {index}: {e}")))?;
+            let mut colors = vec![[0u8; 3]; width as usize * height as usize];
+            let mut framebuffer = Framebuffer::new(&mut colors, width, height)
+                .map_err(|e| Error::new(e.to_string()))?;
+            let mut probe = CountingProbe::default();
+            render(&pyramid, &view, &options, &mut framebuffer, &mut probe);
+            frames.push(HostFrame {
+                rgb: colors.into_iter().flatten().collect(),
+                wire: display_capture(&pyramid, &view, &options, width, height)?,
+                steps: probe.steps,
+            });
+        }
+        Ok(frames)
+    }
+}
+
+/// Checks the board's output in `from` (`frame-K.rgb`, `wire-K.bin`,
+/// `board-results.txt`) against the host kernel rendering `scene_path`.
+pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
+    let file = SceneFile::read(scene_path)?;
+    let header = file.scene().map_err(|e| Error::new(e.to_string()))?.header;
+    let (width, height) = (header.image_width, header.image_height);
+    let results = parse_results(&read(&from.join("board-results.txt"))?)?;
+    let pixels = width as usize * height as usize;
+    let mut frames = Vec::new();
+    for (index, host) in file.render()?.into_iter().enumerate() {
+        let board_frame = read(&from.join(format!("frame-{index}.rgb")))?;
+        if board_frame.len() != pixels * 3 {
+            return Err(Error::new(format!(
+                "frame-{index}.rgb has {} bytes, expected {}",
+                board_frame.len(),
+                pixels * 3
+            )));
+        }
+        let differing_pixels = board_frame
+            .chunks_exact(3)
+            .zip(host.rgb.chunks_exact(3))
+            .filter(|(board, host)| board != host)
+            .count();
+        let board_wire = read(&from.join(format!("wire-{index}.bin")))?;
+        let mut shown = vec![0u16; pixels];
+        decode(&board_wire, &mut shown, width, height)
+            .map_err(|e| Error::new(format!("wire-{index}.bin: {e}")))?;
+        let display_differing_pixels = shown
+            .iter()
+            .zip(host.rgb.chunks_exact(3))
+            .filter(|(shown, host)| **shown != rgb565([host[0], host[1], host[2]]))
+            .count();
+        let (kernel_ticks, display_ticks) = *results.frames.get(index).ok_or_else(|| {
+            Error::new(format!("board-results.txt has no timing for frame {index}"))
+        })?;
+        frames.push(FrameCheck {
+            index,
+            differing_pixels,
+            wire_identical: host.wire == board_wire,
+            display_differing_pixels,
+            steps: host.steps,
+            kernel_ticks,
+            display_ticks,
+        });
+    }
+    Ok(BoardReport {
+        image: (width, height),
+        frames,
+        pyramid_ticks: results.pyramid_ticks,
+        instructions_per_tick: results.instructions_per_tick()?,
+    })
+}
+
+/// The display wire the host produces for a view, init included.
+fn display_capture(
+    pyramid: &Pyramid<'_>,
+    view: &View,
+    options: &RenderOptions,
+    width: u32,
+    height: u32,
+) -> Result<Vec<u8>> {
+    let mut buffer = vec![0u8; frame_capture_bytes(width, height)];
+    let bus = CaptureBus::new(&mut buffer);
+    let mut display: SpiDisplay<_, _, _, MAX_IMAGE_HEIGHT> = SpiDisplay::new(
+        bus.spi(),
+        bus.data_command(),
+        bus.frame_done(),
+        width,
+        height,
+    )
+    .map_err(|e| Error::new(e.to_string()))?;
+    display
+        .init(&mut NoDelay)
+        .map_err(|e| Error::new(e.to_string()))?;
+    render(pyramid, view, options, &mut display, &mut NoProbe);
+    display.finish().map_err(|e| Error::new(e.to_string()))?;
+    let _ = display.release();
+    let wire = bus.into_written().map_err(|e| Error::new(e.to_string()))?;
+    Ok(wire.to_vec())
+}
+
+/// The host needs no real delay: the capture has no timing.
+struct NoDelay;
+
+impl embedded_hal::delay::DelayNs for NoDelay {
+    fn delay_ns(&mut self, _ns: u32) {}
+}
+
+struct BoardResults {
+    /// Instructions and ticks of the calibration loop.
+    calibration: Option<(u64, u64)>,
+    pyramid_ticks: u64,
+    frames: Vec<(u64, u64)>,
+}
+
+impl BoardResults {
+    fn instructions_per_tick(&self) -> Result<f64> {
+        match self.calibration {
+            Some((instructions, ticks)) if instructions > 0 && ticks > 0 => {
+                Ok(instructions as f64 / ticks as f64)
+            }
+            _ => Err(Error::new(
+                "board-results.txt has no usable calibration line",
+            )),
+        }
+    }
+}
+
+/// Reads `board-results.txt`: `calibration instructions N ticks T`,
+/// `pyramid_ticks N` and `frame K kernel_ticks N display_ticks M` lines.
+fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
+    let text =
+        std::str::from_utf8(bytes).map_err(|_| Error::new("board-results.txt is not text"))?;
+    let mut results = BoardResults {
+        calibration: None,
+        pyramid_ticks: 0,
+        frames: Vec::new(),
+    };
+    for (number, line) in text.lines().enumerate() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let bad = || {
+            Error::new(format!(
+                "board-results.txt line {}: cannot read '{line}'",
+                number + 1
+            ))
+        };
+        let int = |s: &str| s.parse::<u64>().map_err(|_| bad());
+        match words.as_slice() {
+            [] => {}
+            ["calibration", "instructions", n, "ticks", t] => {
+                results.calibration = Some((int(n)?, int(t)?));
+            }
+            ["pyramid_ticks", n] => results.pyramid_ticks = int(n)?,
+            ["frame", k, "kernel_ticks", n, "display_ticks", m] => {
+                if int(k)? != results.frames.len() as u64 {
+                    return Err(bad());
+                }
+                results.frames.push((int(n)?, int(m)?));
+            }
+            _ => return Err(bad()),
+        }
+    }
+    Ok(results)
+}
+
+fn read(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| Error::new(format!("cannot read {}: {e}", path.display())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn results_are_read_and_bad_lines_named() {
+        let ok = parse_results(
+            b"calibration instructions 400 ticks 10\npyramid_ticks 12\nframe 0 kernel_ticks 5 display_ticks 7\nframe 1 kernel_ticks 6 display_ticks 8\n",
+        )
+        .unwrap();
+        assert_eq!(ok.pyramid_ticks, 12);
+        assert_eq!(ok.frames, vec![(5, 7), (6, 8)]);
+        assert_eq!(ok.instructions_per_tick().unwrap(), 40.0);
+        let uncalibrated = parse_results(b"pyramid_ticks 12\n").unwrap();
+        assert!(uncalibrated.instructions_per_tick().is_err());
+        let e = parse_results(b"frame 1 kernel_ticks 5 display_ticks 7\n")
+            .err()
+            .unwrap();
+        assert!(e.to_string().contains("line 1"), "{e}");
+        assert!(parse_results(b"frame 0 kernel_ticks x display_ticks 7").is_err());
+    }
+
+    #[test]
+    fn host_wire_decodes_to_the_host_frame() {
+        let scene = crate::scene::procedural(64, 3);
+        let kernel = scene.to_kernel().unwrap();
+        let pyramid = kernel.pyramid().unwrap();
+        let camera = board_views(64, scene.max_height())[0];
+        let view = View::new(&camera, 48, 32).unwrap();
+        let options = RenderOptions::default();
+        let mut colors = vec![[0u8; 3]; 48 * 32];
+        let mut fb = Framebuffer::new(&mut colors, 48, 32).unwrap();
+        render(&pyramid, &view, &options, &mut fb, &mut NoProbe);
+        let wire = display_capture(&pyramid, &view, &options, 48, 32).unwrap();
+        assert_eq!(wire.len(), frame_capture_bytes(48, 32));
+        let mut shown = vec![0u16; 48 * 32];
+        let decoded = decode(&wire, &mut shown, 48, 32).unwrap();
+        assert_eq!(decoded.frames, 1);
+        assert_eq!(decoded.pixels, 48 * 32);
+        let expected: Vec<u16> = colors.iter().map(|&c| rgb565(c)).collect();
+        assert_eq!(shown, expected);
+    }
+}

@@ -1,0 +1,162 @@
+//! `terracast-sim board scene` and `board verify` without the emulator: the
+//! host plays the board (writing what the firmware writes), and verify must
+//! accept that, and reject any changed byte, a missing file, or an exceeded
+//! budget, each with one line.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use terracast_sim::board::SceneFile;
+
+fn sim(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn fresh_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("terracast-board-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A small scene, and a folder holding what the board would have written
+/// for it (the host's own frames, 1000 ticks a frame at 40 instructions a
+/// tick).
+fn scene_and_board_output(name: &str) -> (PathBuf, PathBuf) {
+    let dir = fresh_dir(name);
+    let scene = dir.join("scene.tcb");
+    let (code, out, err) = sim(&[
+        "board",
+        "scene",
+        "--procedural-size",
+        "96",
+        "--size",
+        "40x30",
+        "--out",
+        s(&scene),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("96x96 map, 4 views at 40x30"), "{out}");
+    let board = dir.join("board");
+    std::fs::create_dir_all(&board).unwrap();
+    let frames = SceneFile::read(&scene).unwrap().render().unwrap();
+    assert_eq!(frames.len(), 4);
+    let mut results = String::from("calibration instructions 4000 ticks 100\npyramid_ticks 7\n");
+    for (k, frame) in frames.iter().enumerate() {
+        std::fs::write(board.join(format!("frame-{k}.rgb")), &frame.rgb).unwrap();
+        std::fs::write(board.join(format!("wire-{k}.bin")), &frame.wire).unwrap();
+        results += &format!("frame {k} kernel_ticks 1000 display_ticks 1100\n");
+    }
+    std::fs::write(board.join("board-results.txt"), results).unwrap();
+    (scene, board)
+}
+
+#[test]
+fn identical_output_passes_and_reports_instructions_per_pixel_last() {
+    let (scene, board) = scene_and_board_output("same");
+    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("all frames identical"), "{out}");
+    // 1000 ticks x 40 instructions over 40 x 30 pixels.
+    assert_eq!(
+        out.lines().last(),
+        Some("instructions per pixel: 33"),
+        "{out}"
+    );
+}
+
+#[test]
+fn one_changed_byte_of_a_frame_or_the_wire_fails() {
+    let (scene, board) = scene_and_board_output("changed");
+    let frame = board.join("frame-2.rgb");
+    let mut bytes = std::fs::read(&frame).unwrap();
+    bytes[1234] ^= 1;
+    std::fs::write(&frame, &bytes).unwrap();
+    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    assert_eq!(code, 1);
+    assert_eq!(
+        err.trim(),
+        "terracast-sim: board and host frames differ in view(s) 2"
+    );
+    assert!(out.contains("   2  DIFFERENT"), "{out}");
+
+    // Restore the frame, change one pixel byte on the wire (past the init
+    // and the first column's addresses): the wire differs and so does
+    // what the panel shows.
+    bytes[1234] ^= 1;
+    std::fs::write(&frame, &bytes).unwrap();
+    let wire = board.join("wire-0.bin");
+    let mut bytes = std::fs::read(&wire).unwrap();
+    let last = bytes.len() - 3;
+    bytes[last] ^= 0x80;
+    std::fs::write(&wire, &bytes).unwrap();
+    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    assert_eq!(code, 1, "{out}");
+    assert!(err.contains("differ in view(s) 0"), "{err}");
+    assert!(
+        out.contains("   0  identical   DIFFERENT  DIFFERS"),
+        "{out}"
+    );
+}
+
+#[test]
+fn exceeded_budget_fails_and_missing_or_bad_files_are_named() {
+    let (scene, board) = scene_and_board_output("budget");
+    let (code, _, err) = sim(&[
+        "board",
+        "verify",
+        "--scene",
+        s(&scene),
+        "--from",
+        s(&board),
+        "--budget",
+        "30",
+    ]);
+    assert_eq!(code, 1);
+    assert_eq!(
+        err.trim(),
+        "terracast-sim: 33 instructions per pixel exceeds the budget of 30"
+    );
+
+    std::fs::remove_file(board.join("wire-3.bin")).unwrap();
+    let (code, _, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("cannot read") && err.contains("wire-3.bin"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1);
+
+    let (code, _, err) = sim(&[
+        "board",
+        "verify",
+        "--scene",
+        s(&board.join("board-results.txt")),
+        "--from",
+        s(&board),
+    ]);
+    assert_eq!(code, 1);
+    assert!(err.contains("not a board scene file"), "{err}");
+
+    let (code, _, err) = sim(&[
+        "board",
+        "scene",
+        "--procedural-size",
+        "4000",
+        "--out",
+        s(&scene),
+    ]);
+    assert_eq!(code, 1);
+    assert!(err.contains("4 MiB"), "{err}");
+}
