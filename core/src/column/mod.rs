@@ -26,7 +26,7 @@ use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS};
 use crate::probe::Probe;
 use crate::pyramid::Pyramid;
 use crate::sink::{Sample, Sink};
-use crate::view::ray::{Cursor, Lod, LodPlan, Ray, RayKey};
+use crate::view::ray::{div_trunc, Cursor, Lod, LodPlan, Ray, RayKey};
 use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
 use first_hit::first_hit;
@@ -312,7 +312,7 @@ fn resume_plan(anchor: &Anchor, ray: &Ray, slope: u16, same_schedule: bool) -> O
         let quantum = 1i64 << (COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + u32::from(level));
         let slack = 1 + ((quantum + 1) * steep + unit - 1) / unit;
         let ends = ray.next_switch(level, begins);
-        let unsafe_here = (slack / margin).min(i64::from(i32::MAX)) as i32;
+        let unsafe_here = div_trunc(slack, margin).min(i64::from(i32::MAX)) as i32;
         if unsafe_here >= begins {
             unsafe_until = unsafe_until.max(unsafe_here.min(ends.saturating_sub(1)));
         }

@@ -104,7 +104,17 @@ pub(crate) struct Ray {
     /// Last sample where a hit is possible.
     pub end: i32,
     pub lod: Lod,
+    /// The level schedule, worked out once per ray because the caster asks
+    /// for it several times a ray: `begins[l]` is the first sample of level
+    /// `l` (`begins[0] = first`), known for `l < known`, which covers every
+    /// level up to the one in effect at `end`. Samples past that are
+    /// scheduled on demand (only the coherence proof asks about them).
+    begins: [i32; LEVEL_SLOTS],
+    known: u8,
 }
+
+/// Levels a ray may use: 0 to `MAX_WALK_LEVEL`.
+const LEVEL_SLOTS: usize = MAX_WALK_LEVEL as usize + 1;
 
 /// Where sample `k` of a ray is, on its level.
 #[derive(Debug, Clone, Copy)]
@@ -207,7 +217,7 @@ impl View {
         };
 
         let narrow = |v: i64| v.clamp(-(1 << 20), 1 << 20) as i32;
-        Ray {
+        let mut ray = Ray {
             key: RayKey { x_major, forward },
             major0,
             delta0,
@@ -219,7 +229,11 @@ impl View {
             start: narrow(start),
             end: narrow(end),
             lod: Lod::new(plan, run, dz),
-        }
+            begins: [i32::MAX; LEVEL_SLOTS],
+            known: 1,
+        };
+        ray.schedule();
+        ray
     }
 }
 
@@ -249,6 +263,20 @@ impl Lod {
 }
 
 impl Ray {
+    /// Works out `begins` for every level up to the first that begins past
+    /// the end (or the top).
+    fn schedule(&mut self) {
+        self.begins = [i32::MAX; LEVEL_SLOTS];
+        self.begins[0] = self.first;
+        let top = usize::from(self.lod.top).min(LEVEL_SLOTS - 1);
+        let mut level = 1;
+        while level <= top && self.begins[level - 1] <= self.end {
+            self.begins[level] = self.switch_sample(level as u8, self.begins[level - 1]);
+            level += 1;
+        }
+        self.known = level as u8;
+    }
+
     /// Major-axis grid coordinate of sample `k`.
     #[inline]
     pub fn major_at(&self, k: i32) -> i64 {
@@ -298,16 +326,33 @@ impl Ray {
     #[inline]
     pub fn next_switch(&self, level: u8, k: i32) -> i32 {
         if level >= self.lod.top {
-            i32::MAX
-        } else {
-            self.switch_sample(level + 1, k)
+            return i32::MAX;
         }
+        let l = usize::from(level);
+        if l + 1 < usize::from(self.known) {
+            // On the schedule, `switch_sample` gives the next level's first
+            // sample; off it (a cursor moved to another level), work it out.
+            let (begins, next) = (self.begins[l], self.begins[l + 1]);
+            if begins <= k && k < next {
+                return next;
+            }
+        }
+        self.switch_sample(level + 1, k)
     }
 
     /// The level in effect at sample `k`.
     #[inline]
     pub fn level_at(&self, k: i32) -> u8 {
         let (mut level, mut begins) = (0u8, self.first);
+        // The levels worked out at set-up first.
+        while level < self.lod.top && level + 1 < self.known {
+            let next = self.begins[usize::from(level) + 1];
+            if next > k {
+                return level;
+            }
+            level += 1;
+            begins = next;
+        }
         while level < self.lod.top {
             let next = self.switch_sample(level + 1, begins);
             if next > k {
@@ -424,9 +469,20 @@ impl Ray {
     }
 }
 
+/// `a / b`, truncated, as `i64` division does; by the 32-bit divide when
+/// both fit. The quotient is the same, and on 32-bit cores a 64-bit
+/// division is a library call of a hundred instructions or more.
+#[inline]
+pub(crate) fn div_trunc(a: i64, b: i64) -> i64 {
+    match (i32::try_from(a), i32::try_from(b)) {
+        (Ok(a), Ok(b)) if b != 0 && !(a == i32::MIN && b == -1) => i64::from(a / b),
+        _ => a / b,
+    }
+}
+
 fn div_floor(a: i64, b: i64) -> i64 {
-    let q = a / b;
-    if a % b != 0 && ((a < 0) != (b < 0)) {
+    let q = div_trunc(a, b);
+    if q * b != a && ((a < 0) != (b < 0)) {
         q - 1
     } else {
         q
@@ -442,6 +498,27 @@ mod tests {
     use super::*;
     use crate::column::walk::Stage;
     use crate::view::Camera;
+
+    #[test]
+    fn narrow_division_equals_wide_division() {
+        let values = [
+            0,
+            1,
+            -1,
+            7,
+            -7,
+            65_536,
+            i64::from(i32::MAX),
+            i64::from(i32::MIN),
+            1 << 40,
+            -(1 << 40),
+        ];
+        for a in values {
+            for b in values.into_iter().filter(|&b| b != 0) {
+                assert_eq!(div_trunc(a, b), a / b, "{a} / {b}");
+            }
+        }
+    }
 
     #[test]
     fn floor_and_ceil_division_round_toward_infinities() {
@@ -499,6 +576,41 @@ mod tests {
             top: 4,
         };
         view.ray(&terrain, &plan, 32, 0)
+    }
+
+    #[test]
+    fn the_schedule_worked_out_at_set_up_equals_the_one_worked_out_on_demand() {
+        for (forward, eye_x) in [(true, 0.3), (true, 5.0), (false, 63.2), (false, 50.0)] {
+            let mut ray = ray_with_levels(forward, eye_x);
+            for end in [ray.first - 1, ray.first, 3, 9, 17, 30, 61] {
+                ray.end = end;
+                ray.schedule();
+                // On demand: each level's first sample from the one before.
+                let on_demand = |k: i32| {
+                    let (mut level, mut begins) = (0u8, ray.first);
+                    while level < ray.lod.top {
+                        let next = ray.switch_sample(level + 1, begins);
+                        if next > k {
+                            break;
+                        }
+                        level += 1;
+                        begins = next;
+                    }
+                    level
+                };
+                for k in ray.first - 2..80 {
+                    let level = ray.level_at(k);
+                    assert_eq!(level, on_demand(k), "end {end} k {k}");
+                    for l in 0..ray.lod.top {
+                        assert_eq!(
+                            ray.next_switch(l, k),
+                            ray.switch_sample(l + 1, k),
+                            "end {end} k {k} level {l}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
