@@ -3,31 +3,17 @@
 //! accept that, and reject any changed byte, a missing file, or an exceeded
 //! budget, each with one line.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use terracast_sim::board::SceneFile;
+mod common;
 
-fn sim(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::{s, sim};
+use std::path::PathBuf;
+use terracast_sim::board::SceneFile;
 
 fn fresh_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("terracast-board-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// A small scene, and a folder holding what the board would have written

@@ -1,20 +1,10 @@
 //! The `terracast-sim render` command line: outputs as the view contract
 //! says, and bad input ending in one line, a non-zero exit and no panic.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn sim(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::{s, sim};
+use std::path::PathBuf;
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("terracast-cli-{}", std::process::id()));
@@ -31,10 +21,6 @@ fn small_maps() -> (PathBuf, PathBuf) {
         .save(&c)
         .unwrap();
     (h, c)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 #[test]
