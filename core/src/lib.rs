@@ -42,6 +42,7 @@
 
 mod column;
 pub mod config;
+mod pool;
 mod probe;
 mod pyramid;
 mod sink;
@@ -53,6 +54,7 @@ pub type Rgb = [u8; 3];
 
 pub use column::{render, render_column, Coherence, RenderOptions, Resolution, VerticalSamples};
 pub use fixed::types::U8F8;
+pub use pool::{ColumnPool, Task, Wait};
 pub use probe::{CountingProbe, NoProbe, Probe};
 pub use pyramid::{
     level_count, level_side, pyramid_bytes, pyramid_cells, pyramid_points, HeightFilter, Pyramid,

@@ -15,5 +15,6 @@ pub mod metrics;
 pub mod output;
 pub mod reference;
 pub mod scene;
+pub mod sim;
 
 pub use error::{Error, Result};

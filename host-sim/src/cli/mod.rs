@@ -1,5 +1,7 @@
 //! The `terracast-sim` command line (spec/view-contract.md).
 
+mod sim;
+
 use crate::board::{board_views, verify, write_scene};
 use crate::error::{Error, Result};
 use crate::kernel::render_kernel;
@@ -29,6 +31,11 @@ enum Command {
     /// (scripts/board-check runs both around QEMU).
     #[command(subcommand)]
     Board(BoardCommand),
+    /// Fly on the modeled parallel machine (Cohen-Or's PVS by default):
+    /// simulated frame times, deadlines, utilization, bank contention;
+    /// --table for Table 1; --threads for the same column pool on real
+    /// cores.
+    Sim(sim::SimArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -121,8 +128,9 @@ pub enum Method {
     Reference,
 }
 
+/// Where the terrain comes from.
 #[derive(Debug, clap::Args)]
-struct RenderArgs {
+struct SceneArgs {
     /// Height map: 8/16-bit grayscale PNG or SRTM .hgt. Without it, the
     /// built-in procedural scene is rendered.
     #[arg(long, value_name = "H.png")]
@@ -139,6 +147,18 @@ struct RenderArgs {
         value_name = "S"
     )]
     height_scale: f32,
+    /// Side of the procedural scene, used when no --height is given.
+    #[arg(long, default_value_t = 1024, value_name = "N")]
+    procedural_size: u32,
+    /// Seed of the procedural scene.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    seed: u64,
+}
+
+#[derive(Debug, clap::Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Eye position in voxels [default: a view over the middle of the map].
     #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
     eye: Option<[f32; 3]>,
@@ -212,12 +232,6 @@ struct RenderArgs {
     /// Reference: rays per pixel side (n x n rays a pixel).
     #[arg(long, default_value_t = 4, value_name = "N")]
     supersample: u32,
-    /// Side of the procedural scene, used when no --height is given.
-    #[arg(long, default_value_t = 1024, value_name = "N")]
-    procedural_size: u32,
-    /// Seed of the procedural scene.
-    #[arg(long, default_value_t = 1, value_name = "N")]
-    seed: u64,
     /// Output image (8-bit RGB PNG).
     #[arg(long, value_name = "OUT.png")]
     out: PathBuf,
@@ -235,6 +249,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render_command(args),
         Command::Board(BoardCommand::Scene(args)) => board_scene_command(args),
         Command::Board(BoardCommand::Verify(args)) => board_verify_command(args),
+        Command::Sim(args) => sim::sim_command(args),
     }
 }
 
@@ -310,7 +325,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
             )));
         }
     }
-    let scene = load_scene(&args)?;
+    let scene = load_scene(&args.scene)?;
     let camera = Camera {
         eye: args.eye.unwrap_or_else(|| default_eye(&scene)),
         yaw_deg: args.yaw,
@@ -410,7 +425,7 @@ fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
     })
 }
 
-fn load_scene(args: &RenderArgs) -> Result<Scene> {
+fn load_scene(args: &SceneArgs) -> Result<Scene> {
     match (&args.height, &args.color) {
         (None, Some(_)) => Err(Error::new("--color needs --height")),
         (None, None) => {

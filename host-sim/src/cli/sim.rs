@@ -1,0 +1,271 @@
+//! `terracast-sim sim`: a flight on the modeled parallel machine, Table 1,
+//! and the column pool on real threads.
+
+use super::{default_eye, load_scene, parse_size, parse_triple, SceneArgs};
+use crate::error::{Error, Result};
+use crate::scene::KernelScene;
+use crate::sim::threads::render_threads;
+use crate::sim::{
+    flight, record_flight, simulate, Machine, SimResult, Table, TABLE_PITCH, TABLE_PROCESSORS,
+};
+use std::path::PathBuf;
+use terracast::{Camera, RenderOptions};
+
+#[derive(Debug, clap::Args)]
+pub(super) struct SimArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Machine description (TOML); fields left out keep the PVS defaults.
+    #[arg(long, value_name = "MACHINE.toml")]
+    machine: Option<PathBuf>,
+    /// Processors, master included (overrides the machine file).
+    #[arg(long, value_name = "N")]
+    processors: Option<u32>,
+    /// Frame deadline in milliseconds (overrides the machine file).
+    #[arg(long, value_name = "MS")]
+    deadline_ms: Option<f64>,
+    /// First eye position [default: over the map's south edge].
+    #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    eye: Option<[f32; 3]>,
+    /// Heading in degrees.
+    #[arg(
+        long,
+        default_value_t = 90.0,
+        allow_negative_numbers = true,
+        value_name = "DEG"
+    )]
+    yaw: f32,
+    /// Degrees below the horizon.
+    #[arg(
+        long,
+        default_value_t = 14.6,
+        allow_negative_numbers = true,
+        value_name = "DEG"
+    )]
+    pitch: f32,
+    /// Horizontal field of view.
+    #[arg(long, default_value_t = 60.0, value_name = "DEG")]
+    hfov: f32,
+    /// Image size.
+    #[arg(long, default_value = "640x480", value_parser = parse_size, value_name = "WxH")]
+    size: (u32, u32),
+    /// Frames of the flight.
+    #[arg(long, default_value_t = 8, value_name = "N")]
+    frames: u32,
+    /// Voxels the eye advances a frame.
+    #[arg(long, default_value_t = 4.0, value_name = "V")]
+    speed: f32,
+    /// Print Table 1 instead: fps for 2 to 32 processors at pitch 14.6°,
+    /// 26.5° and 39° (a flight of --frames frames at each).
+    #[arg(long)]
+    table: bool,
+    /// With --table: print it as JSON.
+    #[arg(long, requires = "table")]
+    json: bool,
+    /// With --table: draw it as a PNG chart here.
+    #[arg(long, requires = "table", value_name = "OUT.png")]
+    chart: Option<PathBuf>,
+    /// Instead of simulating, render the flight on this many real threads
+    /// (a list: 1,2,4) sharing the kernel's column pool, and print Mpx/s.
+    #[arg(long, value_delimiter = ',', value_name = "N,N,...")]
+    threads: Vec<usize>,
+}
+
+pub(super) fn sim_command(args: SimArgs) -> Result<()> {
+    let mut machine = match &args.machine {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| Error::new(format!("cannot read {}: {e}", path.display())))?;
+            Machine::from_toml(&text).map_err(|e| Error::new(format!("{}: {e}", path.display())))?
+        }
+        None => Machine::default(),
+    };
+    if let Some(p) = args.processors {
+        machine.processors = p;
+    }
+    if let Some(d) = args.deadline_ms {
+        machine.frame.deadline_ms = d;
+    }
+    machine.check()?;
+    if args.frames == 0 || args.frames > 10_000 {
+        return Err(Error::new("--frames must be between 1 and 10000"));
+    }
+    if !args.speed.is_finite() {
+        return Err(Error::new("--speed must be a finite number"));
+    }
+    let scene = load_scene(&args.scene)?;
+    let kernel = scene.to_kernel()?;
+    let start = Camera {
+        eye: args.eye.unwrap_or_else(|| default_eye(&scene)),
+        yaw_deg: args.yaw,
+        pitch_deg: args.pitch,
+        roll_deg: 0.0,
+        hfov_deg: args.hfov,
+    };
+    let options = RenderOptions::default();
+    if !args.threads.is_empty() {
+        return threads_command(&kernel, &start, &args, &options);
+    }
+    if args.table {
+        let table = table(&kernel, &start, &args, &options, &machine)?;
+        if let Some(path) = &args.chart {
+            crate::sim::chart::draw_table(path, &table)?;
+        }
+        if args.json {
+            println!("{}", table.to_json());
+        } else {
+            print!("{}", table.markdown());
+        }
+        return Ok(());
+    }
+    let cameras = flight(&start, args.frames, args.speed);
+    let traces = record_flight(&kernel, &cameras, args.size, &options, &machine, |done| {
+        eprint!(
+            "\rrecording the kernel's work: frame {done}/{}",
+            cameras.len()
+        );
+    })?;
+    eprintln!();
+    let result = simulate(&machine, &traces);
+    print!("{}", report(&machine, &result));
+    Ok(())
+}
+
+/// The per-frame table and the summary.
+fn report(machine: &Machine, result: &SimResult) -> String {
+    let ms = |ps: u64| ps as f64 / 1e9;
+    let mut out = format!(
+        "{} processors ({} workers) at {} MHz, deadline {} ms\n",
+        machine.processors,
+        machine.workers(),
+        machine.clock_mhz,
+        machine.frame.deadline_ms
+    );
+    out += "frame  time ms  deadline  compute ms  transfer ms  bank wait ms  disk wait ms  disk reads (critical)\n";
+    for (i, f) in result.frames.iter().enumerate() {
+        let verdict = match f.miss {
+            None => "met".to_string(),
+            Some(reason) => format!("MISSED ({})", reason.as_str()),
+        };
+        out += &format!(
+            "{i:>5}  {:>7.2}  {verdict:<8}  {:>10.2}  {:>11.2}  {:>12.2}  {:>12.2}  {} ({})\n",
+            ms(f.time),
+            ms(f.compute),
+            ms(f.transfer),
+            ms(f.bank_wait),
+            ms(f.disk_wait),
+            f.disk_reads,
+            f.critical_loads
+        );
+    }
+    let utilization = &result.utilization;
+    let mean = utilization.iter().sum::<f64>() / utilization.len().max(1) as f64;
+    let (lo, hi) = utilization
+        .iter()
+        .fold((f64::MAX, 0f64), |(lo, hi), &u| (lo.min(u), hi.max(u)));
+    let banks = &result.bank_utilization;
+    let bank_max = banks.iter().copied().fold(0.0, f64::max);
+    let bank_mean = banks.iter().sum::<f64>() / banks.len().max(1) as f64;
+    out += &format!(
+        "fps (frames after the first): {:.2}; deadline misses: {}/{}\n",
+        result.fps(),
+        result.misses(),
+        result.frames.len()
+    );
+    out += &format!(
+        "worker utilization: mean {:.1} %, min {:.1} %, max {:.1} %; master {:.1} %\n",
+        100.0 * mean,
+        100.0 * lo.min(hi),
+        100.0 * hi,
+        100.0 * result.master_utilization
+    );
+    out += &format!(
+        "bank utilization: mean {:.1} %, max {:.1} %; bank contention {:.3} ms in all\n",
+        100.0 * bank_mean,
+        100.0 * bank_max,
+        ms(result.bank_contention)
+    );
+    out
+}
+
+/// Table 1: one recorded flight per pitch, simulated at each processor
+/// count.
+fn table(
+    kernel: &KernelScene,
+    start: &Camera,
+    args: &SimArgs,
+    options: &RenderOptions,
+    machine: &Machine,
+) -> Result<Table> {
+    let mut fps = Vec::new();
+    for (row, &pitch) in TABLE_PITCH.iter().enumerate() {
+        let cameras = flight(
+            &Camera {
+                pitch_deg: pitch as f32,
+                ..*start
+            },
+            args.frames,
+            args.speed,
+        );
+        let traces = record_flight(kernel, &cameras, args.size, options, machine, |done| {
+            eprint!(
+                "\rrecording pitch {pitch}° ({}/{}): frame {done}/{}   ",
+                row + 1,
+                TABLE_PITCH.len(),
+                cameras.len()
+            );
+        })?;
+        fps.push(
+            TABLE_PROCESSORS
+                .iter()
+                .map(|&processors| {
+                    let machine = Machine {
+                        processors,
+                        ..machine.clone()
+                    };
+                    simulate(&machine, &traces).fps()
+                })
+                .collect(),
+        );
+    }
+    eprintln!();
+    Ok(Table {
+        processors: TABLE_PROCESSORS.to_vec(),
+        pitch: TABLE_PITCH.to_vec(),
+        fps,
+    })
+}
+
+fn threads_command(
+    kernel: &KernelScene,
+    start: &Camera,
+    args: &SimArgs,
+    options: &RenderOptions,
+) -> Result<()> {
+    if args.threads.iter().any(|&t| t == 0 || t > 1024) {
+        return Err(Error::new("--threads counts must be between 1 and 1024"));
+    }
+    let cameras = flight(start, args.frames, args.speed);
+    let available = std::thread::available_parallelism().map_or(1, |n| n.get());
+    println!(
+        "{} frames of {}x{} on the column pool; this machine has {available} cores",
+        cameras.len(),
+        args.size.0,
+        args.size.1
+    );
+    println!("threads  Mpx/s  speed-up vs {} thread(s)", args.threads[0]);
+    let mut baseline: Option<(f64, Vec<Vec<terracast::Rgb>>)> = None;
+    for &threads in &args.threads {
+        let run = render_threads(kernel, &cameras, args.size, options, threads)?;
+        let mpx = run.mpx_per_s(args.size);
+        let (base, frames) = baseline.get_or_insert_with(|| (mpx, run.frames.clone()));
+        if *frames != run.frames {
+            return Err(Error::new(format!(
+                "{threads} threads rendered different frames than {}",
+                args.threads[0]
+            )));
+        }
+        println!("{threads:>7}  {mpx:>5.2}  {:.2}x", mpx / *base);
+    }
+    Ok(())
+}

@@ -1,0 +1,114 @@
+//! Table 1 as a chart (plotters): frames a second (log scale) against
+//! processors, one line per pitch; Cohen-Or's PVS figures beside ours as
+//! lighter lines of the same colors.
+
+use super::{Table, COHEN_OR_TABLE_1, TABLE_PITCH, TABLE_PROCESSORS};
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// Where a sans-serif TrueType font is looked for (the chart's labels).
+const FONT_PATHS: [&str; 4] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
+];
+
+/// Registers a system font as plotters' "sans-serif" once.
+fn font() -> Result<()> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        FONT_PATHS.iter().any(|path| {
+            std::fs::read(path).is_ok_and(|bytes| {
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok()
+            })
+        })
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::new(format!(
+            "no font for the chart's labels (looked for {}); install fonts-dejavu-core",
+            FONT_PATHS.join(", ")
+        )))
+    }
+}
+
+/// Draws `table` (and Cohen-Or's Table 1 where the pitches match) to a PNG.
+pub fn draw_table(path: &Path, table: &Table) -> Result<()> {
+    font()?;
+    let failed = |e: &dyn std::fmt::Display| {
+        Error::new(format!("cannot draw the chart {}: {e}", path.display()))
+    };
+    let root = BitMapBackend::new(path, (800, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| failed(&e))?;
+    let mut all: Vec<f64> = table.fps.iter().flatten().copied().collect();
+    all.extend(COHEN_OR_TABLE_1.iter().flatten());
+    let lo = all.iter().copied().fold(f64::MAX, f64::min).max(1e-3) * 0.7;
+    let hi = all.iter().copied().fold(0.0, f64::max).max(lo * 2.0) * 1.4;
+    let max_p = f64::from(*table.processors.iter().max().unwrap_or(&32)) + 2.0;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Frames a second by processors (simulated, and Cohen-Or's PVS)",
+            ("sans-serif", 20),
+        )
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..max_p, (lo..hi).log_scale())
+        .map_err(|e| failed(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("processors (one of them the master)")
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_desc("frames a second")
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(|e| failed(&e))?;
+    let colors = [RED, BLUE, GREEN, MAGENTA, CYAN];
+    for (row, (fps, pitch)) in table.fps.iter().zip(&table.pitch).enumerate() {
+        let color = colors[row % colors.len()];
+        let ours: Vec<(f64, f64)> = table
+            .processors
+            .iter()
+            .zip(fps)
+            .map(|(&p, &f)| (f64::from(p), f.max(lo)))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(ours.clone(), color.stroke_width(2)))
+            .map_err(|e| failed(&e))?
+            .label(format!("terracast, pitch {pitch}°"))
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
+        chart
+            .draw_series(ours.iter().map(|&p| Circle::new(p, 4, color.filled())))
+            .map_err(|e| failed(&e))?;
+        if let Some(i) = TABLE_PITCH.iter().position(|p| p == pitch) {
+            let theirs: Vec<(f64, f64)> = TABLE_PROCESSORS
+                .iter()
+                .zip(COHEN_OR_TABLE_1[i])
+                .map(|(&p, f)| (f64::from(p), f))
+                .collect();
+            let light = color.mix(0.4);
+            chart
+                .draw_series(LineSeries::new(theirs, light.stroke_width(2)))
+                .map_err(|e| failed(&e))?
+                .label(format!("Cohen-Or PVS, pitch {pitch}°"))
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 20, y)], light.stroke_width(2))
+                });
+        }
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .label_font(("sans-serif", 13))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| failed(&e))?;
+    root.present().map_err(|e| failed(&e))?;
+    Ok(())
+}

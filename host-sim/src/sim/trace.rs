@@ -1,0 +1,278 @@
+//! What the kernel does for each column, recorded once through its probe and
+//! replayed by the simulator on any machine.
+//!
+//! The kernel runs unchanged: a [`Recorder`] (a [`Probe`]) turns its events
+//! into a list of [`Event`]s per column — work counts, then a run of fetches
+//! from one terrain tile. The machine's costs are applied only at replay, so
+//! one recording serves every machine description.
+
+use super::footprint::footprint_tiles;
+use super::machine::Machine;
+use crate::error::{Error, Result};
+use crate::scene::KernelScene;
+use terracast::{
+    level_side, render_column, Camera, Probe, Pyramid, RenderOptions, Sample, Sink, View,
+};
+
+/// A terrain tile: pyramid level and tile coordinates on that level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct TileKey {
+    /// Pyramid level.
+    pub level: u8,
+    /// Tile column.
+    pub x: u32,
+    /// Tile row.
+    pub y: u32,
+}
+
+/// Work, then fetches from one tile.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Event {
+    /// Rays set up.
+    pub rays: u32,
+    /// Traversal steps and bound tests.
+    pub steps: u32,
+    /// Hits shaded.
+    pub colors: u32,
+    /// The tile the fetches read.
+    pub tile: TileKey,
+    /// Voxels (or bounds) fetched from it.
+    pub fetches: u32,
+}
+
+/// One frame's recording.
+#[derive(Debug, Clone)]
+pub struct FrameTrace {
+    /// Events of each image column.
+    pub columns: Vec<Vec<Event>>,
+    /// Pixels of the frame.
+    pub pixels: u64,
+    /// The tiles the master loads for the frame: its footprint.
+    pub footprint: Vec<TileKey>,
+    /// Tiles the master tested to find the footprint.
+    pub tiles_tested: u64,
+    /// Kernel steps of the frame.
+    pub steps: u64,
+}
+
+/// Records the kernel's events of one column.
+#[derive(Debug)]
+pub struct Recorder<'a> {
+    /// Width of each level's voxel grid.
+    widths: &'a [u32],
+    tile_side: u32,
+    current: Option<Event>,
+    /// The recording so far.
+    pub events: Vec<Event>,
+    pending: (u32, u32, u32),
+    /// Steps recorded.
+    pub steps: u64,
+}
+
+impl<'a> Recorder<'a> {
+    /// A recorder for a pyramid whose level grids are `widths` wide.
+    pub fn new(widths: &'a [u32], tile_side: u32) -> Self {
+        Self {
+            widths,
+            tile_side,
+            current: None,
+            events: Vec::new(),
+            pending: (0, 0, 0),
+            steps: 0,
+        }
+    }
+
+    fn fetch(&mut self, level: u8, index: usize, row_width: u32, voxels: u32) {
+        let row_width = row_width.max(1) as usize;
+        let tile = TileKey {
+            level,
+            x: (index % row_width) as u32 / self.tile_side,
+            y: (index / row_width) as u32 / self.tile_side,
+        };
+        match &mut self.current {
+            Some(event) if event.tile == tile => {
+                let (rays, steps, colors) = std::mem::take(&mut self.pending);
+                event.rays += rays;
+                event.steps += steps;
+                event.colors += colors;
+                event.fetches += voxels;
+            }
+            _ => {
+                if let Some(done) = self.current.take() {
+                    self.events.push(done);
+                }
+                let (rays, steps, colors) = std::mem::take(&mut self.pending);
+                self.current = Some(Event {
+                    rays,
+                    steps,
+                    colors,
+                    tile,
+                    fetches: voxels,
+                });
+            }
+        }
+    }
+
+    fn width(&self, level: u8) -> u32 {
+        self.widths.get(usize::from(level)).copied().unwrap_or(1)
+    }
+
+    /// Ends the column: every event recorded.
+    pub fn finish(&mut self) -> Vec<Event> {
+        if let Some(done) = self.current.take() {
+            self.events.push(done);
+        }
+        // Work after the last fetch (a ray that saw sky at once) joins the
+        // last event; a column with no fetch at all keeps it on a tile of
+        // its own.
+        let (rays, steps, colors) = std::mem::take(&mut self.pending);
+        match self.events.last_mut() {
+            Some(last) => {
+                last.rays += rays;
+                last.steps += steps;
+                last.colors += colors;
+            }
+            None if rays + steps + colors > 0 => self.events.push(Event {
+                rays,
+                steps,
+                colors,
+                tile: TileKey {
+                    level: 0,
+                    x: 0,
+                    y: 0,
+                },
+                fetches: 0,
+            }),
+            None => {}
+        }
+        std::mem::take(&mut self.events)
+    }
+
+    /// Adds work to the event being recorded (or the next one).
+    fn work(&mut self, rays: u32, steps: u32, colors: u32) {
+        self.pending.0 += rays;
+        self.pending.1 += steps;
+        self.pending.2 += colors;
+    }
+}
+
+impl Probe for Recorder<'_> {
+    fn visit(&mut self, level: u8, voxel: usize) {
+        self.steps += 1;
+        self.work(0, 1, 0);
+        // The voxel and its neighbour across the minor grid line.
+        self.fetch(level, voxel, self.width(level), 2);
+    }
+
+    fn bound(&mut self, level: u8, cell: usize) {
+        self.steps += 1;
+        self.work(0, 1, 0);
+        self.fetch(level, cell, self.width(level).saturating_sub(1), 1);
+    }
+
+    fn color(&mut self, level: u8, voxel: usize) {
+        self.work(0, 0, 1);
+        self.fetch(level, voxel, self.width(level), 2);
+    }
+
+    fn ray(&mut self) {
+        self.work(1, 0, 0);
+    }
+}
+
+/// A sink that keeps nothing: the simulator needs the kernel's work, not
+/// its pixels.
+struct Discard;
+
+impl Sink for Discard {
+    fn put(&mut self, _x: u32, _y: u32, _sample: Sample) {}
+}
+
+/// Records every column of a view.
+pub fn record_frame(
+    scene: &KernelScene,
+    camera: &Camera,
+    size: (u32, u32),
+    options: &RenderOptions,
+    machine: &Machine,
+) -> Result<FrameTrace> {
+    let pyramid: Pyramid<'_> = scene.pyramid_for(options)?;
+    let view =
+        View::new(camera, size.0, size.1).map_err(|e| Error::new(format!("bad view: {e}")))?;
+    let base = pyramid.base();
+    let widths: Vec<u32> = (0..pyramid.levels())
+        .map(|l| level_side(base.width(), l as u32))
+        .collect();
+    let mut columns = Vec::with_capacity(size.0 as usize);
+    let mut steps = 0;
+    for column in 0..size.0 {
+        let mut recorder = Recorder::new(&widths, machine.tiles.side);
+        render_column(
+            &pyramid,
+            &view,
+            options,
+            column,
+            &mut Discard,
+            &mut recorder,
+        );
+        steps += recorder.steps;
+        columns.push(recorder.finish());
+    }
+    let (footprint, tiles_tested) = footprint_tiles(
+        camera,
+        size,
+        (base.width(), base.depth()),
+        pyramid.levels(),
+        machine.tiles.side,
+    );
+    Ok(FrameTrace {
+        columns,
+        pixels: u64::from(size.0) * u64::from(size.1),
+        footprint,
+        tiles_tested,
+        steps,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use terracast::{render, CountingProbe};
+
+    #[test]
+    fn the_recording_holds_all_of_the_kernels_work() {
+        let scene = crate::scene::procedural(256, 2).to_kernel().unwrap();
+        let camera = Camera {
+            eye: [128.0, 20.0, 150.0],
+            yaw_deg: 90.0,
+            pitch_deg: 15.0,
+            roll_deg: 0.0,
+            hfov_deg: 60.0,
+        };
+        let options = RenderOptions::default();
+        let machine = Machine::default();
+        let trace = record_frame(&scene, &camera, (80, 60), &options, &machine).unwrap();
+        let mut counts = CountingProbe::default();
+        let view = View::new(&camera, 80, 60).unwrap();
+        render(
+            &scene.pyramid_for(&options).unwrap(),
+            &view,
+            &options,
+            &mut Discard,
+            &mut counts,
+        );
+        let events = trace.columns.iter().flatten();
+        let sum = |f: fn(&Event) -> u32| events.clone().map(|e| u64::from(f(e))).sum::<u64>();
+        assert_eq!(sum(|e| e.rays), counts.rays);
+        assert_eq!(sum(|e| e.steps), counts.steps);
+        assert_eq!(sum(|e| e.colors), counts.color_fetches);
+        assert_eq!(trace.steps, counts.steps);
+        assert_eq!(trace.pixels, 80 * 60);
+        // Each event names the tile its fetches read, inside the map.
+        let side = machine.tiles.side;
+        assert!(events
+            .clone()
+            .all(|e| e.tile.x <= 256 / side && e.tile.y <= 256 / side));
+        assert!(!trace.footprint.is_empty());
+    }
+}

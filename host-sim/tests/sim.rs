@@ -1,0 +1,116 @@
+//! `terracast-sim sim`: Table 1 as JSON, a flight report, real threads, and
+//! bad input ending in one line.
+
+mod common;
+
+use common::{s, sim};
+
+#[test]
+fn table_json_has_one_row_of_fps_per_pitch() {
+    let (code, out, err) = sim(&[
+        "sim",
+        "--table",
+        "--json",
+        "--procedural-size",
+        "128",
+        "--size",
+        "48x36",
+        "--frames",
+        "2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let table: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(table["processors"], serde_json::json!([2, 4, 8, 16, 32]));
+    assert_eq!(table["pitch"], serde_json::json!([14.6, 26.5, 39.0]));
+    let rows = table["fps"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    for row in rows {
+        let fps: Vec<f64> = row
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(fps.len(), 5);
+        assert!(
+            fps.windows(2).all(|w| w[1] > w[0]),
+            "more processors, more fps: {fps:?}"
+        );
+    }
+}
+
+#[test]
+fn a_flight_reports_every_frame_and_the_machine() {
+    let dir = std::env::temp_dir().join(format!("terracast-sim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let machine = dir.join("machine.toml");
+    std::fs::write(&machine, "processors = 8\n[frame]\ndeadline_ms = 50.0\n").unwrap();
+    let args = [
+        "sim",
+        "--machine",
+        s(&machine),
+        "--procedural-size",
+        "128",
+        "--size",
+        "64x48",
+        "--frames",
+        "3",
+    ];
+    let (code, out, err) = sim(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.starts_with("8 processors (7 workers) at 40 MHz, deadline 50 ms"),
+        "{out}"
+    );
+    assert_eq!(
+        out.lines()
+            .filter(|l| l.starts_with(' ') && l.trim_start().starts_with(char::is_numeric))
+            .count(),
+        3
+    );
+    assert!(
+        out.contains("worker utilization") && out.contains("bank contention"),
+        "{out}"
+    );
+    // Deterministic: the same report again.
+    assert_eq!(sim(&args).1, out);
+
+    std::fs::write(&machine, "processors = 8\nbanks = 3\n").unwrap();
+    let (code, _, err) = sim(&["sim", "--machine", s(&machine)]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("machine.toml") && err.contains("unknown field `banks`"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    let (code, _, err) = sim(&["sim", "--processors", "1"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("processors must be between 2"), "{err}");
+    let (code, _, err) = sim(&["sim", "--machine", "/nonexistent/m.toml"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("cannot read /nonexistent/m.toml"), "{err}");
+}
+
+#[test]
+fn threads_render_the_same_frames_and_report_mpx() {
+    let (code, out, err) = sim(&[
+        "sim",
+        "--threads",
+        "1,2",
+        "--procedural-size",
+        "128",
+        "--size",
+        "64x48",
+        "--frames",
+        "2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.lines()
+            .any(|l| l.trim_start().starts_with("2 ") && l.ends_with('x')),
+        "{out}"
+    );
+    let (code, _, err) = sim(&["sim", "--threads", "0"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--threads"), "{err}");
+}

@@ -1,0 +1,178 @@
+//! The deadline budget on the simulated parallel machine: configurations
+//! that must meet a 100 ms deadline do, and ones that cannot miss it for the
+//! reason their design says (steps, bank contention, disk), identically on
+//! every run.
+
+use terracast::RenderOptions;
+use terracast_sim::scene::{procedural, KernelScene};
+use terracast_sim::sim::{
+    flight, record_flight, simulate, FrameTrace, Machine, MissReason, SimResult,
+};
+
+const SIZE: (u32, u32) = (160, 120);
+
+fn scene() -> KernelScene {
+    procedural(512, 7).to_kernel().unwrap()
+}
+
+/// A flight over the map's south edge looking north, `speed` voxels a frame.
+fn traces(scene: &KernelScene, speed: f32, machine: &Machine) -> Vec<FrameTrace> {
+    let start = terracast::Camera {
+        eye: [256.0, 60.0, 200.0],
+        yaw_deg: 90.0,
+        pitch_deg: 14.6,
+        roll_deg: 0.0,
+        hfov_deg: 60.0,
+    };
+    let cameras = flight(&start, 6, speed);
+    record_flight(
+        scene,
+        &cameras,
+        SIZE,
+        &RenderOptions::default(),
+        machine,
+        |_| {},
+    )
+    .unwrap()
+}
+
+fn reasons(result: &SimResult) -> Vec<Option<MissReason>> {
+    result.frames.iter().map(|f| f.miss).collect()
+}
+
+#[test]
+fn each_configuration_meets_or_misses_for_its_reason_identically_every_run() {
+    let scene = scene();
+    let pvs = Machine::default();
+    let slow_flight = traces(&scene, 4.0, &pvs);
+
+    // 31 workers: the work fits; only the first frame, whose footprint
+    // comes off the disk, is late.
+    let meets = simulate(&pvs, &slow_flight);
+    let expected: Vec<_> = std::iter::once(Some(MissReason::Disk))
+        .chain(std::iter::repeat_n(None, 5))
+        .collect();
+    assert_eq!(reasons(&meets), expected, "{:?}", meets.frames);
+    assert!(meets.fps() > 10.0, "{}", meets.fps());
+    assert_eq!(
+        meets.frames[0].critical_loads, 0,
+        "the footprint covered frame 0"
+    );
+
+    // 3 workers cannot do the steps in time, whatever the memories do.
+    let few = Machine {
+        processors: 4,
+        ..pvs.clone()
+    };
+    let steps = simulate(&few, &slow_flight);
+    assert!(
+        reasons(&steps)
+            .iter()
+            .all(|r| *r == Some(MissReason::Steps)),
+        "{:?}",
+        steps.frames
+    );
+
+    // No local memory to speak of and one slow bank: every tile switch is a
+    // transfer, and the workers queue for the bank.
+    let mut starved = pvs.clone();
+    starved.local_memory.mib = 0;
+    starved.global_memory.cards = 1;
+    starved.global_memory.banks_per_card = 1;
+    starved.global_memory.card_mb_per_s = 20.0;
+    let banks = simulate(&starved, &slow_flight);
+    for frame in &banks.frames[1..] {
+        assert_eq!(frame.miss, Some(MissReason::BankContention), "{frame:?}");
+        assert!(frame.bank_wait > frame.compute, "{frame:?}");
+    }
+
+    // Turning a quarter turn a frame on a slow disk: every frame faces
+    // tiles not loaded yet, and their loads hold it back.
+    let turning: Vec<_> = (0..4)
+        .map(|i| terracast::Camera {
+            eye: [256.0, 256.0, 200.0],
+            yaw_deg: 90.0 * i as f32,
+            pitch_deg: 14.6,
+            roll_deg: 0.0,
+            hfov_deg: 60.0,
+        })
+        .collect();
+    let turning = record_flight(
+        &scene,
+        &turning,
+        SIZE,
+        &RenderOptions::default(),
+        &pvs,
+        |_| {},
+    )
+    .unwrap();
+    let mut slow_disk = pvs.clone();
+    slow_disk.disk.mb_per_s = 0.5;
+    let disk = simulate(&slow_disk, &turning);
+    for frame in &disk.frames[1..] {
+        assert_eq!(frame.miss, Some(MissReason::Disk), "{frame:?}");
+        assert!(frame.disk_reads > 0, "{frame:?}");
+    }
+    // Turning one field of view a second (6° a frame at 10 frames a
+    // second), the PVS's disk keeps up: the master loads a frame's new
+    // tiles while the workers render the one before.
+    let steady: Vec<_> = (0..8)
+        .map(|i| terracast::Camera {
+            eye: [256.0, 256.0, 200.0],
+            yaw_deg: 6.0 * i as f32,
+            pitch_deg: 14.6,
+            roll_deg: 0.0,
+            hfov_deg: 60.0,
+        })
+        .collect();
+    let steady = record_flight(
+        &scene,
+        &steady,
+        SIZE,
+        &RenderOptions::default(),
+        &pvs,
+        |_| {},
+    )
+    .unwrap();
+    let kept = simulate(&pvs, &steady);
+    assert!(
+        kept.frames[1..].iter().all(|f| f.miss.is_none()),
+        "{:?}",
+        kept.frames
+    );
+    assert!(
+        kept.frames[1..].iter().any(|f| f.disk_reads > 0),
+        "the turn loads tiles"
+    );
+
+    // Same inputs, same simulated times: recording and replay both.
+    assert_eq!(simulate(&pvs, &traces(&scene, 4.0, &pvs)), meets);
+    assert_eq!(simulate(&starved, &slow_flight), banks);
+    assert_eq!(simulate(&slow_disk, &turning), disk);
+}
+
+#[test]
+fn speed_up_is_near_linear_and_the_master_is_not_a_worker() {
+    let scene = scene();
+    let pvs = Machine::default();
+    let traces = traces(&scene, 4.0, &pvs);
+    let fps = |processors| {
+        simulate(
+            &Machine {
+                processors,
+                ..pvs.clone()
+            },
+            &traces,
+        )
+        .fps()
+    };
+    let (two, thirty_two) = (fps(2), fps(32));
+    // 31 workers against 1. A little over 31 is possible: with frame
+    // overlap, idle workers start the next frame before the last column of
+    // a frame is done, and the rate is measured from frame 0's end.
+    let speed_up = thirty_two / two;
+    assert!(
+        (25.0..=33.0).contains(&speed_up),
+        "{two} {thirty_two} {speed_up}"
+    );
+}
