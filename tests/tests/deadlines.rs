@@ -15,6 +15,23 @@ fn scene() -> KernelScene {
     procedural(512, 7).to_kernel().unwrap()
 }
 
+/// The kernel's work on each view, at the suite's image size.
+fn record(
+    scene: &KernelScene,
+    cameras: &[terracast::Camera],
+    machine: &Machine,
+) -> Vec<FrameTrace> {
+    record_flight(
+        scene,
+        cameras,
+        SIZE,
+        &RenderOptions::default(),
+        machine,
+        |_| {},
+    )
+    .unwrap()
+}
+
 /// A flight over the map's south edge looking north, `speed` voxels a frame.
 fn traces(scene: &KernelScene, speed: f32, machine: &Machine) -> Vec<FrameTrace> {
     let start = terracast::Camera {
@@ -25,15 +42,21 @@ fn traces(scene: &KernelScene, speed: f32, machine: &Machine) -> Vec<FrameTrace>
         hfov_deg: 60.0,
     };
     let cameras = flight(&start, 6, speed);
-    record_flight(
-        scene,
-        &cameras,
-        SIZE,
-        &RenderOptions::default(),
-        machine,
-        |_| {},
-    )
-    .unwrap()
+    record(scene, &cameras, machine)
+}
+
+/// `frames` views from the map's center, turning `step` degrees a frame.
+fn turning(scene: &KernelScene, step: f32, frames: u32, machine: &Machine) -> Vec<FrameTrace> {
+    let cameras: Vec<_> = (0..frames)
+        .map(|i| terracast::Camera {
+            eye: [256.0, 256.0, 200.0],
+            yaw_deg: step * i as f32,
+            pitch_deg: 14.6,
+            roll_deg: 0.0,
+            hfov_deg: 60.0,
+        })
+        .collect();
+    record(scene, &cameras, machine)
 }
 
 fn reasons(result: &SimResult) -> Vec<Option<MissReason>> {
@@ -88,27 +111,10 @@ fn each_configuration_meets_or_misses_for_its_reason_identically_every_run() {
 
     // Turning a quarter turn a frame on a slow disk: every frame faces
     // tiles not loaded yet, and their loads hold it back.
-    let turning: Vec<_> = (0..4)
-        .map(|i| terracast::Camera {
-            eye: [256.0, 256.0, 200.0],
-            yaw_deg: 90.0 * i as f32,
-            pitch_deg: 14.6,
-            roll_deg: 0.0,
-            hfov_deg: 60.0,
-        })
-        .collect();
-    let turning = record_flight(
-        &scene,
-        &turning,
-        SIZE,
-        &RenderOptions::default(),
-        &pvs,
-        |_| {},
-    )
-    .unwrap();
+    let quarter_turns = turning(&scene, 90.0, 4, &pvs);
     let mut slow_disk = pvs.clone();
     slow_disk.disk.mb_per_s = 0.5;
-    let disk = simulate(&slow_disk, &turning);
+    let disk = simulate(&slow_disk, &quarter_turns);
     for frame in &disk.frames[1..] {
         assert_eq!(frame.miss, Some(MissReason::Disk), "{frame:?}");
         assert!(frame.disk_reads > 0, "{frame:?}");
@@ -116,24 +122,7 @@ fn each_configuration_meets_or_misses_for_its_reason_identically_every_run() {
     // Turning one field of view a second (6° a frame at 10 frames a
     // second), the PVS's disk keeps up: the master loads a frame's new
     // tiles while the workers render the one before.
-    let steady: Vec<_> = (0..8)
-        .map(|i| terracast::Camera {
-            eye: [256.0, 256.0, 200.0],
-            yaw_deg: 6.0 * i as f32,
-            pitch_deg: 14.6,
-            roll_deg: 0.0,
-            hfov_deg: 60.0,
-        })
-        .collect();
-    let steady = record_flight(
-        &scene,
-        &steady,
-        SIZE,
-        &RenderOptions::default(),
-        &pvs,
-        |_| {},
-    )
-    .unwrap();
+    let steady = turning(&scene, 6.0, 8, &pvs);
     let kept = simulate(&pvs, &steady);
     assert!(
         kept.frames[1..].iter().all(|f| f.miss.is_none()),
@@ -148,7 +137,7 @@ fn each_configuration_meets_or_misses_for_its_reason_identically_every_run() {
     // Same inputs, same simulated times: recording and replay both.
     assert_eq!(simulate(&pvs, &traces(&scene, 4.0, &pvs)), meets);
     assert_eq!(simulate(&starved, &slow_flight), banks);
-    assert_eq!(simulate(&slow_disk, &turning), disk);
+    assert_eq!(simulate(&slow_disk, &quarter_turns), disk);
 }
 
 #[test]

@@ -155,11 +155,11 @@ struct SceneArgs {
     seed: u64,
 }
 
+/// Where the camera is and where it looks.
 #[derive(Debug, clap::Args)]
-struct RenderArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
-    /// Eye position in voxels [default: a view over the middle of the map].
+struct CameraArgs {
+    /// Eye position in voxels [default: over the middle of the map's south
+    /// edge, a little above the highest terrain].
     #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
     eye: Option<[f32; 3]>,
     /// Heading in degrees, from +x toward +y.
@@ -178,14 +178,6 @@ struct RenderArgs {
         value_name = "DEG"
     )]
     pitch: f32,
-    /// Bank in degrees, positive = right wing down.
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        allow_negative_numbers = true,
-        value_name = "DEG"
-    )]
-    roll: f32,
     /// Full horizontal field of view in degrees.
     #[arg(
         long,
@@ -194,6 +186,22 @@ struct RenderArgs {
         value_name = "DEG"
     )]
     hfov: f32,
+}
+
+#[derive(Debug, clap::Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// Bank in degrees, positive = right wing down.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_negative_numbers = true,
+        value_name = "DEG"
+    )]
+    roll: f32,
     /// Image size.
     #[arg(long, default_value = "640x360", value_parser = parse_size, value_name = "WxH")]
     size: (u32, u32),
@@ -327,11 +335,11 @@ fn render_command(args: RenderArgs) -> Result<()> {
     }
     let scene = load_scene(&args.scene)?;
     let camera = Camera {
-        eye: args.eye.unwrap_or_else(|| default_eye(&scene)),
-        yaw_deg: args.yaw,
-        pitch_deg: args.pitch,
+        eye: args.camera.eye.unwrap_or_else(|| default_eye(&scene)),
+        yaw_deg: args.camera.yaw,
+        pitch_deg: args.camera.pitch,
         roll_deg: args.roll,
-        hfov_deg: args.hfov,
+        hfov_deg: args.camera.hfov,
     };
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
     let (frame, stats) = match args.method {

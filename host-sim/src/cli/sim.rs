@@ -1,7 +1,7 @@
 //! `terracast-sim sim`: a flight on the modeled parallel machine, Table 1,
 //! and the column pool on real threads.
 
-use super::{default_eye, load_scene, parse_size, parse_triple, SceneArgs};
+use super::{default_eye, load_scene, parse_size, CameraArgs, SceneArgs};
 use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use crate::sim::threads::render_threads;
@@ -24,28 +24,9 @@ pub(super) struct SimArgs {
     /// Frame deadline in milliseconds (overrides the machine file).
     #[arg(long, value_name = "MS")]
     deadline_ms: Option<f64>,
-    /// First eye position [default: over the map's south edge].
-    #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
-    eye: Option<[f32; 3]>,
-    /// Heading in degrees.
-    #[arg(
-        long,
-        default_value_t = 90.0,
-        allow_negative_numbers = true,
-        value_name = "DEG"
-    )]
-    yaw: f32,
-    /// Degrees below the horizon.
-    #[arg(
-        long,
-        default_value_t = 14.6,
-        allow_negative_numbers = true,
-        value_name = "DEG"
-    )]
-    pitch: f32,
-    /// Horizontal field of view.
-    #[arg(long, default_value_t = 60.0, value_name = "DEG")]
-    hfov: f32,
+    /// The flight's first camera (it flies along its heading).
+    #[command(flatten)]
+    camera: CameraArgs,
     /// Image size.
     #[arg(long, default_value = "640x480", value_parser = parse_size, value_name = "WxH")]
     size: (u32, u32),
@@ -96,11 +77,11 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let kernel = scene.to_kernel()?;
     let start = Camera {
-        eye: args.eye.unwrap_or_else(|| default_eye(&scene)),
-        yaw_deg: args.yaw,
-        pitch_deg: args.pitch,
+        eye: args.camera.eye.unwrap_or_else(|| default_eye(&scene)),
+        yaw_deg: args.camera.yaw,
+        pitch_deg: args.camera.pitch,
         roll_deg: 0.0,
-        hfov_deg: args.hfov,
+        hfov_deg: args.camera.hfov,
     };
     let options = RenderOptions::default();
     if !args.threads.is_empty() {
