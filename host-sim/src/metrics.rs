@@ -17,6 +17,20 @@ pub fn psnr(test: &[Rgb], reference: &[Rgb]) -> f64 {
     10.0 * (255.0f64 * 255.0 / (sum / n as f64)).log10()
 }
 
+/// Structural similarity of the two images' luma (Rec. 601), mean SSIM
+/// over 8 × 8 windows (image-compare's `MSSIMSimple`): 1 for identical
+/// images. `None` when the slices do not match `width` × `height`.
+pub fn ssim(test: &[Rgb], reference: &[Rgb], width: u32, height: u32) -> Option<f64> {
+    let luma = |pixels: &[Rgb]| {
+        let raw: Vec<u8> = pixels.iter().flatten().copied().collect();
+        image::RgbImage::from_raw(width, height, raw).map(|rgb| image::imageops::grayscale(&rgb))
+    };
+    let (a, b) = (luma(test)?, luma(reference)?);
+    image_compare::gray_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &a, &b)
+        .ok()
+        .map(|similarity| similarity.score)
+}
+
 /// Mean absolute difference per channel (0–255) between two images: the
 /// frame-to-frame change of a flight.
 pub fn mean_abs_difference(a: &[Rgb], b: &[Rgb]) -> f64 {
@@ -74,6 +88,26 @@ pub fn differing_pixels(a: &[Rgb], b: &[Rgb]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ssim_is_one_for_equal_images_and_falls_with_noise() {
+        let (w, h) = (32u32, 24u32);
+        let image: Vec<Rgb> = (0..w * h)
+            .map(|i| [(i * 7 % 256) as u8, (i / w * 10) as u8, 128])
+            .collect();
+        assert!((ssim(&image, &image, w, h).unwrap() - 1.0).abs() < 1e-9);
+        let mut state = 1u32;
+        let noisy: Vec<Rgb> = image
+            .iter()
+            .map(|p| {
+                state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
+                p.map(|v| v.saturating_add((state >> 27) as u8))
+            })
+            .collect();
+        let s = ssim(&noisy, &image, w, h).unwrap();
+        assert!(s < 0.99 && s > 0.0, "{s}");
+        assert_eq!(ssim(&image, &image, w, h + 1), None);
+    }
 
     #[test]
     fn psnr_of_known_error() {

@@ -2,6 +2,7 @@
 
 mod sim;
 
+use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
 use crate::board::{board_views, verify, write_scene};
 use crate::error::{Error, Result};
 use crate::kernel::render_kernel;
@@ -126,6 +127,11 @@ pub enum Method {
     Kernel,
     /// The exact float reference (bilinear surface, supersampled).
     Reference,
+    /// Comanche's Voxel Space (front-to-back slices, y-buffer); its pitch
+    /// is a horizon shift, not a rotation.
+    Voxelspace,
+    /// A naive per-pixel float ray march with a fixed step.
+    March,
 }
 
 /// Where the terrain comes from.
@@ -237,6 +243,22 @@ struct RenderArgs {
     /// Kernel: rays per pixel, spread over its height (1, 2, 4 or 8).
     #[arg(long, default_value_t = 1, value_name = "N")]
     vertical_samples: u32,
+    /// Voxel Space: growth of the slice spacing each slice.
+    #[arg(
+        long,
+        default_value_t = 0.005,
+        allow_negative_numbers = true,
+        value_name = "G"
+    )]
+    voxelspace_growth: f64,
+    /// March: step length in voxels.
+    #[arg(
+        long,
+        default_value_t = 0.5,
+        allow_negative_numbers = true,
+        value_name = "V"
+    )]
+    march_step: f64,
     /// Reference: rays per pixel side (n x n rays a pixel).
     #[arg(long, default_value_t = 4, value_name = "N")]
     supersample: u32,
@@ -375,6 +397,30 @@ fn render_command(args: RenderArgs) -> Result<()> {
                 sky,
             };
             Reference::new(&scene).render(&camera, width, height, &options)
+        }
+        Method::Voxelspace | Method::March => {
+            View::new(&camera, width, height).map_err(view_error)?;
+            if args.method == Method::Voxelspace {
+                if !(0.0..=10.0).contains(&args.voxelspace_growth) {
+                    return Err(Error::new("--voxelspace-growth must be between 0 and 10"));
+                }
+                let options = VoxelSpaceOptions {
+                    spacing_growth: args.voxelspace_growth,
+                    sky,
+                };
+                voxel_space(&scene, &camera, width, height, &options)
+            } else {
+                if !(0.01..=64.0).contains(&args.march_step) {
+                    return Err(Error::new(
+                        "--march-step must be between 0.01 and 64 voxels",
+                    ));
+                }
+                let options = MarchOptions {
+                    step: args.march_step,
+                    sky,
+                };
+                march(&scene, &camera, width, height, &options)
+            }
         }
     };
     write_png(&args.out, &frame)?;
