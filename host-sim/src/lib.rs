@@ -6,8 +6,10 @@
 #![deny(missing_docs, unsafe_code)]
 
 pub mod baselines;
+pub mod bench;
 pub mod board;
 pub mod camera;
+pub mod chart;
 pub mod cli;
 pub mod error;
 pub mod frame;
@@ -17,5 +19,6 @@ pub mod output;
 pub mod reference;
 pub mod scene;
 pub mod sim;
+pub mod stability;
 
 pub use error::{Error, Result};

@@ -66,6 +66,13 @@ pub fn sky_agreement(test: &[f32], reference: &[f32]) -> f64 {
 /// Median of |test − reference| / reference over pixels where both see
 /// terrain; `None` if there are none.
 pub fn median_relative_depth_error(test: &[f32], reference: &[f32]) -> Option<f64> {
+    relative_depth_error_quantile(test, reference, 0.5)
+}
+
+/// The `q` quantile (0 to 1; 0.95 for the 95th percentile) of
+/// |test − reference| / reference over pixels where both see terrain;
+/// `None` if there are none.
+pub fn relative_depth_error_quantile(test: &[f32], reference: &[f32], q: f64) -> Option<f64> {
     let mut errors: Vec<f64> = test
         .iter()
         .zip(reference)
@@ -75,9 +82,9 @@ pub fn median_relative_depth_error(test: &[f32], reference: &[f32]) -> Option<f6
     if errors.is_empty() {
         return None;
     }
-    let mid = errors.len() / 2;
-    let (_, median, _) = errors.select_nth_unstable_by(mid, f64::total_cmp);
-    Some(*median)
+    let at = ((errors.len() - 1) as f64 * q.clamp(0.0, 1.0)).round() as usize;
+    let (_, value, _) = errors.select_nth_unstable_by(at, f64::total_cmp);
+    Some(*value)
 }
 
 /// Number of pixels whose colors differ.
@@ -125,5 +132,19 @@ mod tests {
         let t = [11.0, 20.0, f32::INFINITY, f32::INFINITY];
         assert_eq!(sky_agreement(&t, &r), 0.75);
         assert_eq!(median_relative_depth_error(&t, &r), Some(0.1));
+        let spread: Vec<f32> = (0..101).map(|i| 100.0 + i as f32).collect();
+        let exact = vec![100.0f32; 101];
+        assert_eq!(
+            relative_depth_error_quantile(&spread, &exact, 0.95),
+            Some(0.95)
+        );
+        assert_eq!(
+            relative_depth_error_quantile(&spread, &exact, 0.0),
+            Some(0.0)
+        );
+        assert_eq!(
+            relative_depth_error_quantile(&[f32::INFINITY], &[1.0], 0.5),
+            None
+        );
     }
 }

@@ -114,3 +114,38 @@ fn threads_render_the_same_frames_and_report_mpx() {
     assert_eq!(code, 1);
     assert!(err.contains("--threads"), "{err}");
 }
+
+#[test]
+fn bench_writes_one_csv_row_per_view_and_setting_and_marks_the_front() {
+    let dir = std::env::temp_dir().join(format!("terracast-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (csv, chart) = (dir.join("b.csv"), dir.join("b.png"));
+    let (code, out, err) = sim(&[
+        "bench",
+        "--quick",
+        "--size",
+        "48x36",
+        "--repeats",
+        "1",
+        "--csv",
+        s(&csv),
+        "--chart",
+        s(&chart),
+    ]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    // Two views (pitch 0 and 15 of the first scene), nine settings.
+    assert_eq!(text.lines().count(), 1 + 2 * 9, "{text}");
+    assert!(text.starts_with("scene,view,pitch,setting,psnr_db,ssim"));
+    let fonts = std::path::Path::new("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf").exists();
+    if fonts {
+        assert_eq!(code, 0, "{err}");
+        assert!(image::open(&chart).is_ok());
+        assert!(
+            out.contains("| kernel |") && out.contains("pitch 0: the kernel is"),
+            "{out}"
+        );
+    }
+    let (code, _, err) = sim(&["bench", "--repeats", "0"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--repeats"), "{err}");
+}

@@ -1,5 +1,6 @@
 //! The `terracast-sim` command line (spec/view-contract.md).
 
+mod bench;
 mod sim;
 
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
@@ -37,6 +38,9 @@ enum Command {
     /// --table for Table 1; --threads for the same column pool on real
     /// cores.
     Sim(sim::SimArgs),
+    /// Speed against accuracy: every method and setting on a fixed suite
+    /// of views, against the reference; writes a CSV and a chart.
+    Bench(bench::BenchArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -280,6 +284,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Board(BoardCommand::Scene(args)) => board_scene_command(args),
         Command::Board(BoardCommand::Verify(args)) => board_verify_command(args),
         Command::Sim(args) => sim::sim_command(args),
+        Command::Bench(args) => bench::bench_command(args),
     }
 }
 
@@ -343,17 +348,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
         .into_iter()
         .flatten()
     {
-        let dir = path
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(std::path::Path::new("."));
-        if !dir.is_dir() {
-            return Err(Error::new(format!(
-                "cannot write {}: folder {} does not exist",
-                path.display(),
-                dir.display()
-            )));
-        }
+        check_writable(path)?;
     }
     let scene = load_scene(&args.scene)?;
     let camera = Camera {
@@ -432,6 +427,23 @@ fn render_command(args: RenderArgs) -> Result<()> {
         write_stats(path, &stats_json(&stats, width, height, sky_pixels))?;
     }
     Ok(())
+}
+
+/// Refuses an output whose folder does not exist.
+fn check_writable(path: &std::path::Path) -> Result<()> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    if dir.is_dir() {
+        Ok(())
+    } else {
+        Err(Error::new(format!(
+            "cannot write {}: folder {} does not exist",
+            path.display(),
+            dir.display()
+        )))
+    }
 }
 
 /// The kernel's options from the flags, each checked.

@@ -90,7 +90,7 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
     if args.table {
         let table = table(&kernel, &start, &args, &options, &machine)?;
         if let Some(path) = &args.chart {
-            crate::sim::chart::draw_table(path, &table)?;
+            crate::chart::draw_table(path, &table)?;
         }
         if args.json {
             println!("{}", table.to_json());

@@ -10,7 +10,6 @@
 //! 3. [`threads::render_threads`] drives std threads from the same
 //!    [`terracast::ColumnPool`] and measures real time.
 
-pub mod chart;
 pub mod engine;
 pub mod footprint;
 pub mod machine;

@@ -1,9 +1,9 @@
-//! Table 1 as a chart (plotters): frames a second (log scale) against
-//! processors, one line per pitch; Cohen-Or's PVS figures beside ours as
-//! lighter lines of the same colors.
+//! Charts (plotters): the simulator's Table 1, and the bench's speed
+//! against accuracy.
 
-use super::{Table, COHEN_OR_TABLE_1, TABLE_PITCH, TABLE_PROCESSORS};
+use crate::bench::Summary;
 use crate::error::{Error, Result};
+use crate::sim::{Table, COHEN_OR_TABLE_1, TABLE_PITCH, TABLE_PROCESSORS};
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::OnceLock;
@@ -37,7 +37,9 @@ fn font() -> Result<()> {
     }
 }
 
-/// Draws `table` (and Cohen-Or's Table 1 where the pitches match) to a PNG.
+/// Draws `table` to a PNG: frames a second (log scale) against processors,
+/// one line per pitch, Cohen-Or's PVS figures beside ours as lighter lines
+/// of the same colors.
 pub fn draw_table(path: &Path, table: &Table) -> Result<()> {
     font()?;
     let failed = |e: &dyn std::fmt::Display| {
@@ -104,6 +106,85 @@ pub fn draw_table(path: &Path, table: &Table) -> Result<()> {
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperLeft)
+        .label_font(("sans-serif", 13))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| failed(&e))?;
+    root.present().map_err(|e| failed(&e))?;
+    Ok(())
+}
+
+/// Draws the bench summary to a PNG: mean PSNR against Mpx/s (log scale),
+/// a point per setting, the Pareto front joined by a line.
+pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
+    font()?;
+    let failed = |e: &dyn std::fmt::Display| {
+        Error::new(format!("cannot draw the chart {}: {e}", path.display()))
+    };
+    let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| failed(&e))?;
+    let speeds = summaries.iter().map(|s| s.mpx_per_s);
+    let lo_x = speeds.clone().fold(f64::MAX, f64::min).max(1e-3) / 2.0;
+    let hi_x = speeds.fold(0.0, f64::max).max(lo_x * 4.0) * 2.0;
+    let qualities = summaries.iter().map(|s| s.psnr);
+    let lo_y = qualities.clone().fold(f64::MAX, f64::min) - 2.0;
+    let hi_y = qualities.fold(f64::MIN, f64::max) + 2.0;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Speed against accuracy (bench suite, single thread)",
+            ("sans-serif", 20),
+        )
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
+        .build_cartesian_2d((lo_x..hi_x).log_scale(), lo_y..hi_y)
+        .map_err(|e| failed(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("Mpx/s (one thread)")
+        .y_desc("mean PSNR against the reference, dB")
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(|e| failed(&e))?;
+    let mut front: Vec<(f64, f64)> = summaries
+        .iter()
+        .filter(|s| s.pareto)
+        .map(|s| (s.mpx_per_s, s.psnr))
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    chart
+        .draw_series(LineSeries::new(front, BLACK.mix(0.5).stroke_width(2)))
+        .map_err(|e| failed(&e))?
+        .label("Pareto front")
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.mix(0.5).stroke_width(2)));
+    for (i, s) in summaries.iter().enumerate() {
+        let color = if s.setting.starts_with("kernel") {
+            RED
+        } else if s.setting.starts_with("voxelspace") {
+            BLUE
+        } else {
+            GREEN
+        };
+        let point = (s.mpx_per_s, s.psnr);
+        chart
+            .draw_series([Circle::new(point, 5, color.filled())])
+            .map_err(|e| failed(&e))?;
+        // The label beside its point, above or below by turns so that
+        // neighbours do not print over each other.
+        let offset = if i % 2 == 0 { -16 } else { 6 };
+        chart
+            .draw_series([EmptyElement::at(point)
+                + Text::new(
+                    s.setting.to_string(),
+                    (8, offset),
+                    ("sans-serif", 13).into_font(),
+                )])
+            .map_err(|e| failed(&e))?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
         .label_font(("sans-serif", 13))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)

@@ -1,0 +1,449 @@
+//! `terracast-sim bench`: every method and setting on a fixed suite of
+//! views, measured against the exact reference in the same process, speed
+//! charted against accuracy.
+//!
+//! Speed is single-threaded Mpx/s of the render call alone, the best of a
+//! few runs (the machines here are shared; the best run is the least
+//! disturbed). Accuracy is PSNR and SSIM of the colors, sky agreement, and
+//! the median and 95th percentile of the relative depth error.
+
+use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
+use crate::error::{Error, Result};
+use crate::frame::{Frame, RenderStats};
+use crate::kernel::render_kernel;
+use crate::metrics::{psnr, relative_depth_error_quantile, sky_agreement, ssim};
+use crate::reference::{Reference, ReferenceOptions};
+use crate::scene::{KernelScene, Scene};
+use std::fmt::Write as _;
+use terracast::{Camera, Coherence, RenderOptions, Resolution, VerticalSamples, U8F8};
+
+/// One way of rendering.
+#[derive(Debug, Clone)]
+pub enum Method {
+    /// The kernel with these options.
+    Kernel(RenderOptions),
+    /// Voxel Space with this slice-spacing growth.
+    VoxelSpace(f64),
+    /// The fixed-step march with this step.
+    March(f64),
+}
+
+/// A method and its setting, named for tables and the chart.
+#[derive(Debug, Clone)]
+pub struct Setting {
+    /// Short name (CSV and chart).
+    pub name: &'static str,
+    /// What renders.
+    pub method: Method,
+}
+
+/// The settings every bench run measures.
+pub fn settings() -> Vec<Setting> {
+    let default = RenderOptions::default();
+    let kernel = |name, options| Setting {
+        name,
+        method: Method::Kernel(options),
+    };
+    vec![
+        kernel("kernel", default),
+        kernel(
+            "kernel coherence off",
+            RenderOptions {
+                coherence: Coherence::Off,
+                ..default
+            },
+        ),
+        kernel(
+            "kernel single resolution",
+            RenderOptions {
+                resolution: Resolution::Single,
+                ..default
+            },
+        ),
+        kernel(
+            "kernel pixel-to-voxel 2",
+            RenderOptions {
+                resolution: Resolution::Multi {
+                    pixel_to_voxel: U8F8::from_num(2),
+                },
+                ..default
+            },
+        ),
+        kernel(
+            "kernel 4 vertical samples",
+            RenderOptions {
+                vertical_samples: VerticalSamples::Four,
+                ..default
+            },
+        ),
+        Setting {
+            name: "voxelspace",
+            method: Method::VoxelSpace(0.005),
+        },
+        Setting {
+            name: "voxelspace growth 0.02",
+            method: Method::VoxelSpace(0.02),
+        },
+        Setting {
+            name: "march 0.5",
+            method: Method::March(0.5),
+        },
+        Setting {
+            name: "march 2",
+            method: Method::March(2.0),
+        },
+    ]
+}
+
+/// A scene of the suite.
+#[derive(Debug)]
+pub struct BenchScene {
+    /// Name for tables.
+    pub name: String,
+    /// The float scene (reference and baselines).
+    pub scene: Scene,
+    /// The kernel's form of it.
+    pub kernel: KernelScene,
+}
+
+/// One view of the suite.
+#[derive(Debug, Clone)]
+pub struct BenchView {
+    /// Index into the scenes.
+    pub scene: usize,
+    /// Name for tables.
+    pub name: String,
+    /// The camera.
+    pub camera: Camera,
+}
+
+/// The suite's views of `scene`: from over its south edge at pitch 0°,
+/// 5°, 15°, 30° and 60° (far), and from low inside the map (near).
+pub fn views(index: usize, scene: &Scene) -> Vec<BenchView> {
+    let (w, d) = (scene.width as f32, scene.depth as f32);
+    let top = scene.max_height();
+    let far = [w * 0.5, d * 0.12, top + 0.04 * w.min(d)];
+    let mut views: Vec<BenchView> = [0.0f32, 5.0, 15.0, 30.0, 60.0]
+        .iter()
+        .map(|&pitch| BenchView {
+            scene: index,
+            name: format!("far pitch {pitch}"),
+            camera: Camera {
+                eye: far,
+                yaw_deg: 90.0,
+                pitch_deg: pitch,
+                roll_deg: 0.0,
+                hfov_deg: 60.0,
+            },
+        })
+        .collect();
+    let (nx, ny) = (w * 0.35, d * 0.4);
+    let ground = scene.height(nx as usize, ny as usize);
+    views.push(BenchView {
+        scene: index,
+        name: "near pitch 10".into(),
+        camera: Camera {
+            eye: [nx, ny, ground + 25.0],
+            yaw_deg: 60.0,
+            pitch_deg: 10.0,
+            roll_deg: 0.0,
+            hfov_deg: 60.0,
+        },
+    });
+    views
+}
+
+/// One setting on one view.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measure {
+    /// Scene name.
+    pub scene: String,
+    /// View name.
+    pub view: String,
+    /// Pitch of the view.
+    pub pitch: f32,
+    /// Setting name.
+    pub setting: &'static str,
+    /// Colors against the reference, dB.
+    pub psnr: f64,
+    /// Luma structure against the reference.
+    pub ssim: f64,
+    /// Share of pixels agreeing on sky or terrain.
+    pub sky_agreement: f64,
+    /// Relative depth error, median and 95th percentile (NaN when no pixel
+    /// sees terrain in both).
+    pub depth_median: f64,
+    /// See `depth_median`.
+    pub depth_p95: f64,
+    /// Traversal steps a pixel (method-specific: voxel visits, slice
+    /// samples, march samples).
+    pub steps_per_pixel: f64,
+    /// Single-threaded speed, best of the runs.
+    pub mpx_per_s: f64,
+    /// Terrain bytes the method holds.
+    pub resident_bytes: u64,
+}
+
+fn render(
+    setting: &Setting,
+    scene: &BenchScene,
+    camera: &Camera,
+    size: (u32, u32),
+    sky: terracast::Rgb,
+) -> Result<(Frame, RenderStats)> {
+    Ok(match &setting.method {
+        Method::Kernel(options) => render_kernel(
+            &scene.kernel,
+            camera,
+            size.0,
+            size.1,
+            &RenderOptions { sky, ..*options },
+        )?,
+        Method::VoxelSpace(growth) => voxel_space(
+            &scene.scene,
+            camera,
+            size.0,
+            size.1,
+            &VoxelSpaceOptions {
+                spacing_growth: *growth,
+                sky,
+            },
+        ),
+        Method::March(step) => march(
+            &scene.scene,
+            camera,
+            size.0,
+            size.1,
+            &MarchOptions { step: *step, sky },
+        ),
+    })
+}
+
+/// Measures every setting on every view; `progress(done, total)` after
+/// each view.
+pub fn run(
+    scenes: &[BenchScene],
+    views: &[BenchView],
+    size: (u32, u32),
+    repeats: u32,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<Measure>> {
+    let sky = terracast::config::DEFAULT_SKY;
+    let settings = settings();
+    let mut measures = Vec::new();
+    for (done, view) in views.iter().enumerate() {
+        let scene = scenes
+            .get(view.scene)
+            .ok_or_else(|| Error::new("bench view names a missing scene"))?;
+        let (exact, _) = Reference::new(&scene.scene).render(
+            &view.camera,
+            size.0,
+            size.1,
+            &ReferenceOptions {
+                supersample: 3,
+                sky,
+            },
+        );
+        for setting in &settings {
+            let (frame, stats) = render(setting, scene, &view.camera, size, sky)?;
+            let mut best = stats.render_ns;
+            for _ in 1..repeats {
+                best = best.min(render(setting, scene, &view.camera, size, sky)?.1.render_ns);
+            }
+            let pixels = stats.pixels as f64;
+            measures.push(Measure {
+                scene: scene.name.clone(),
+                view: view.name.clone(),
+                pitch: view.camera.pitch_deg,
+                setting: setting.name,
+                psnr: psnr(&frame.colors, &exact.colors),
+                ssim: ssim(&frame.colors, &exact.colors, size.0, size.1).unwrap_or(f64::NAN),
+                sky_agreement: sky_agreement(&frame.depth, &exact.depth),
+                depth_median: relative_depth_error_quantile(&frame.depth, &exact.depth, 0.5)
+                    .unwrap_or(f64::NAN),
+                depth_p95: relative_depth_error_quantile(&frame.depth, &exact.depth, 0.95)
+                    .unwrap_or(f64::NAN),
+                steps_per_pixel: stats.steps as f64 / pixels,
+                mpx_per_s: pixels / (best.max(1) as f64 / 1e9) / 1e6,
+                resident_bytes: stats.resident_bytes,
+            });
+        }
+        progress(done + 1, views.len());
+    }
+    Ok(measures)
+}
+
+/// A setting over the whole suite.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// Setting name.
+    pub setting: &'static str,
+    /// Mean PSNR over the views (identical views count as 99 dB).
+    pub psnr: f64,
+    /// Mean SSIM.
+    pub ssim: f64,
+    /// Mean sky agreement.
+    pub sky_agreement: f64,
+    /// Mean steps a pixel.
+    pub steps_per_pixel: f64,
+    /// All pixels over all render time (the harmonic mean of the views'
+    /// speeds).
+    pub mpx_per_s: f64,
+    /// On the Pareto front of speed and PSNR.
+    pub pareto: bool,
+}
+
+/// Per-setting summaries, Pareto front marked (no other setting is both
+/// faster and more accurate).
+pub fn summarize(measures: &[Measure]) -> Vec<Summary> {
+    let mut out: Vec<Summary> = Vec::new();
+    for setting in settings() {
+        let mine: Vec<&Measure> = measures
+            .iter()
+            .filter(|m| m.setting == setting.name)
+            .collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let n = mine.len() as f64;
+        let mean = |f: fn(&Measure) -> f64| mine.iter().map(|m| f(m)).sum::<f64>() / n;
+        out.push(Summary {
+            setting: setting.name,
+            psnr: mean(|m| m.psnr.min(99.0)),
+            ssim: mean(|m| m.ssim),
+            sky_agreement: mean(|m| m.sky_agreement),
+            steps_per_pixel: mean(|m| m.steps_per_pixel),
+            mpx_per_s: n / mine.iter().map(|m| 1.0 / m.mpx_per_s).sum::<f64>(),
+            pareto: false,
+        });
+    }
+    let points: Vec<(f64, f64)> = out.iter().map(|s| (s.mpx_per_s, s.psnr)).collect();
+    for (i, s) in out.iter_mut().enumerate() {
+        s.pareto = !points.iter().enumerate().any(|(j, &(speed, quality))| {
+            j != i
+                && speed >= points[i].0
+                && quality >= points[i].1
+                && (speed > points[i].0 || quality > points[i].1)
+        });
+    }
+    out
+}
+
+/// The measures as CSV, one row per view and setting.
+pub fn csv(measures: &[Measure]) -> String {
+    let mut out = String::from(
+        "scene,view,pitch,setting,psnr_db,ssim,sky_agreement,depth_error_median,depth_error_p95,steps_per_pixel,mpx_per_s,resident_bytes\n",
+    );
+    for m in measures {
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{:.3},{:.4},{:.4},{:.5},{:.5},{:.3},{:.3},{}",
+            m.scene,
+            m.view,
+            m.pitch,
+            m.setting,
+            m.psnr.min(99.0),
+            m.ssim,
+            m.sky_agreement,
+            m.depth_median,
+            m.depth_p95,
+            m.steps_per_pixel,
+            m.mpx_per_s,
+            m.resident_bytes
+        );
+    }
+    out
+}
+
+/// The summary as a Markdown table.
+pub fn summary_table(summaries: &[Summary]) -> String {
+    let mut out = String::from(
+        "| setting | Mpx/s | PSNR dB | SSIM | sky agreement | steps/px | Pareto |\n|---|---|---|---|---|---|---|\n",
+    );
+    for s in summaries {
+        let _ = writeln!(
+            out,
+            "| {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.2} | {} |",
+            s.setting,
+            s.mpx_per_s,
+            s.psnr,
+            s.ssim,
+            s.sky_agreement,
+            s.steps_per_pixel,
+            if s.pareto { "yes" } else { "" }
+        );
+    }
+    out
+}
+
+/// At pitch 0, the kernel's default against Voxel Space over the same
+/// views, measured in this run: (speed ratio, kernel PSNR, Voxel Space
+/// PSNR), means over the views.
+pub fn kernel_vs_voxel_space_at_pitch_0(measures: &[Measure]) -> Option<(f64, f64, f64)> {
+    let at = |name: &str| -> Vec<&Measure> {
+        measures
+            .iter()
+            .filter(|m| m.setting == name && m.pitch == 0.0)
+            .collect()
+    };
+    let (kernel, voxel) = (at("kernel"), at("voxelspace"));
+    if kernel.is_empty() || kernel.len() != voxel.len() {
+        return None;
+    }
+    let time = |ms: &[&Measure]| ms.iter().map(|m| 1.0 / m.mpx_per_s).sum::<f64>();
+    let mean_psnr =
+        |ms: &[&Measure]| ms.iter().map(|m| m.psnr.min(99.0)).sum::<f64>() / ms.len() as f64;
+    Some((
+        time(&voxel) / time(&kernel),
+        mean_psnr(&kernel),
+        mean_psnr(&voxel),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn summary(setting: &'static str, mpx_per_s: f64, psnr: f64) -> Measure {
+        Measure {
+            scene: "s".into(),
+            view: "v".into(),
+            pitch: 0.0,
+            setting,
+            psnr,
+            ssim: 0.5,
+            sky_agreement: 1.0,
+            depth_median: 0.0,
+            depth_p95: 0.0,
+            steps_per_pixel: 1.0,
+            mpx_per_s,
+            resident_bytes: 0,
+        }
+    }
+
+    #[test]
+    fn the_pareto_front_keeps_exactly_the_undominated_settings() {
+        let measures = [
+            summary("kernel", 4.0, 30.0),
+            summary("voxelspace", 8.0, 20.0),
+            summary("march 0.5", 0.5, 31.0),
+            summary("march 2", 1.0, 25.0), // slower and worse than kernel
+        ];
+        let front: Vec<(&str, bool)> = summarize(&measures)
+            .iter()
+            .map(|s| (s.setting, s.pareto))
+            .collect();
+        assert_eq!(
+            front,
+            [
+                ("kernel", true),
+                ("voxelspace", true),
+                ("march 0.5", true),
+                ("march 2", false)
+            ]
+        );
+        let (ratio, k, v) = kernel_vs_voxel_space_at_pitch_0(&measures).unwrap();
+        assert_eq!((ratio, k, v), (0.5, 30.0, 20.0));
+        assert!(csv(&measures).lines().count() == 5);
+    }
+}

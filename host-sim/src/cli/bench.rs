@@ -1,0 +1,117 @@
+//! `terracast-sim bench`: speed against accuracy for every method.
+
+use super::parse_size;
+use crate::bench::{
+    csv, kernel_vs_voxel_space_at_pitch_0, run, summarize, summary_table, views, BenchScene,
+};
+use crate::chart::draw_bench;
+use crate::error::{Error, Result};
+use crate::scene::{load_pair, procedural, Scene};
+use std::path::PathBuf;
+
+#[derive(Debug, clap::Args)]
+pub(super) struct BenchArgs {
+    /// Shared data folder: adds the Comanche maps C1W/D1 and C7W/D7 to the
+    /// built-in scenes.
+    #[arg(long, value_name = "DIR")]
+    data: Option<PathBuf>,
+    /// Image size of every view.
+    #[arg(long, default_value = "320x240", value_parser = parse_size, value_name = "WxH")]
+    size: (u32, u32),
+    /// Timed runs of each render; the best counts.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    repeats: u32,
+    /// Only the first scene's pitch-0 and pitch-15 views (a smoke run).
+    #[arg(long)]
+    quick: bool,
+    /// Per-view measures (CSV).
+    #[arg(long, default_value = "bench.csv", value_name = "OUT.csv")]
+    csv: PathBuf,
+    /// The chart (PNG).
+    #[arg(long, default_value = "bench.png", value_name = "OUT.png")]
+    chart: PathBuf,
+    /// Run only the stability suite (each method where methods fail) and
+    /// print its table.
+    #[arg(long)]
+    stability: bool,
+}
+
+pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
+    if !(1..=20).contains(&args.repeats) {
+        return Err(Error::new("--repeats must be between 1 and 20"));
+    }
+    if args.stability {
+        let outcomes = crate::stability::run(args.size, |done, total| {
+            eprint!("\rstability: condition {done}/{total}   ");
+        })?;
+        eprintln!();
+        print!("{}", crate::stability::table(&outcomes));
+        return Ok(());
+    }
+    for path in [&args.csv, &args.chart] {
+        super::check_writable(path)?;
+    }
+    let mut named: Vec<(String, Scene)> = vec![
+        ("procedural 1024".into(), procedural(1024, 1)),
+        ("procedural 512 seed 9".into(), procedural(512, 9)),
+    ];
+    if let Some(dir) = &args.data {
+        let comanche = dir.join("comanche");
+        for (color, height) in [("C1W", "D1"), ("C7W", "D7")] {
+            let (h, c) = (
+                comanche.join(format!("{height}.png")),
+                comanche.join(format!("{color}.png")),
+            );
+            named.push((
+                format!("{color}/{height}"),
+                load_pair(&h, Some(&c), 1.0, 0)?,
+            ));
+        }
+    }
+    if args.quick {
+        named.truncate(1);
+    }
+    let scenes = named
+        .into_iter()
+        .map(|(name, scene)| {
+            let kernel = scene.to_kernel()?;
+            Ok(BenchScene {
+                name,
+                scene,
+                kernel,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut suite: Vec<_> = scenes
+        .iter()
+        .enumerate()
+        .flat_map(|(i, s)| views(i, &s.scene))
+        .collect();
+    if args.quick {
+        suite.retain(|v| v.camera.pitch_deg == 0.0 || v.camera.pitch_deg == 15.0);
+    }
+    let measures = run(&scenes, &suite, args.size, args.repeats, |done, total| {
+        eprint!("\rbench: view {done}/{total} (reference, then every setting)   ");
+    })?;
+    eprintln!();
+    std::fs::write(&args.csv, csv(&measures))
+        .map_err(|e| Error::new(format!("cannot write {}: {e}", args.csv.display())))?;
+    let summaries = summarize(&measures);
+    draw_bench(&args.chart, &summaries)?;
+    println!(
+        "{} views of {}x{}, {} settings; best of {} runs, one thread",
+        suite.len(),
+        args.size.0,
+        args.size.1,
+        summaries.len(),
+        args.repeats
+    );
+    print!("{}", summary_table(&summaries));
+    if let Some((ratio, kernel, voxel)) = kernel_vs_voxel_space_at_pitch_0(&measures) {
+        println!(
+            "pitch 0: the kernel is {ratio:.2}x the speed of voxelspace, at {kernel:.2} dB against {voxel:.2} dB"
+        );
+    }
+    println!("wrote {} and {}", args.csv.display(), args.chart.display());
+    Ok(())
+}
