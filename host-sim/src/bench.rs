@@ -11,7 +11,9 @@ use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
 use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
 use crate::kernel::render_kernel;
-use crate::metrics::{psnr, relative_depth_error_quantile, sky_agreement, ssim};
+use crate::metrics::{
+    mean_abs_difference, psnr, relative_depth_error_quantile, sky_agreement, ssim,
+};
 use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{KernelScene, Scene};
 use std::fmt::Write as _;
@@ -291,6 +293,9 @@ pub struct Summary {
     pub mpx_per_s: f64,
     /// On the Pareto front of speed and PSNR.
     pub pareto: bool,
+    /// Frame-to-frame change along a flight minus the reference's (0–255
+    /// a channel; 0 is as steady as the exact picture), when measured.
+    pub flicker: Option<f64>,
 }
 
 /// Per-setting summaries, Pareto front marked (no other setting is both
@@ -315,6 +320,7 @@ pub fn summarize(measures: &[Measure]) -> Vec<Summary> {
             steps_per_pixel: mean(|m| m.steps_per_pixel),
             mpx_per_s: n / mine.iter().map(|m| 1.0 / m.mpx_per_s).sum::<f64>(),
             pareto: false,
+            flicker: None,
         });
     }
     let points: Vec<(f64, f64)> = out.iter().map(|s| (s.mpx_per_s, s.psnr)).collect();
@@ -327,6 +333,62 @@ pub fn summarize(measures: &[Measure]) -> Vec<Summary> {
         });
     }
     out
+}
+
+/// Flicker of every setting: on each scene, a flight of `frames` frames
+/// from the far pitch-15° view, the eye advancing one voxel a frame; the
+/// mean frame-to-frame change of the setting minus the reference's,
+/// averaged over the scenes.
+pub fn flicker(
+    scenes: &[BenchScene],
+    size: (u32, u32),
+    frames: u32,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<(&'static str, f64)>> {
+    let sky = terracast::config::DEFAULT_SKY;
+    let settings = settings();
+    let mut sums = vec![0.0; settings.len()];
+    for (done, scene) in scenes.iter().enumerate() {
+        let start = views(0, &scene.scene)
+            .into_iter()
+            .find(|v| v.camera.pitch_deg == 15.0)
+            .ok_or_else(|| Error::new("the suite has no pitch-15 view"))?
+            .camera;
+        let cameras = crate::sim::flight(&start, frames, 1.0);
+        let change = |frames: &[Vec<terracast::Rgb>]| {
+            frames
+                .windows(2)
+                .map(|pair| mean_abs_difference(&pair[0], &pair[1]))
+                .sum::<f64>()
+                / (frames.len().max(2) - 1) as f64
+        };
+        let reference = Reference::new(&scene.scene);
+        let exact: Vec<_> = cameras
+            .iter()
+            .map(|c| {
+                let options = ReferenceOptions {
+                    supersample: 3,
+                    sky,
+                };
+                reference.render(c, size.0, size.1, &options).0.colors
+            })
+            .collect();
+        let exact_change = change(&exact);
+        for (sum, setting) in sums.iter_mut().zip(&settings) {
+            let rendered = cameras
+                .iter()
+                .map(|c| Ok(render(setting, scene, c, size, sky)?.0.colors))
+                .collect::<Result<Vec<_>>>()?;
+            *sum += change(&rendered) - exact_change;
+        }
+        progress(done + 1, scenes.len());
+    }
+    let n = scenes.len().max(1) as f64;
+    Ok(settings
+        .iter()
+        .zip(sums)
+        .map(|(s, sum)| (s.name, sum / n))
+        .collect())
 }
 
 /// The measures as CSV, one row per view and setting.
@@ -358,18 +420,19 @@ pub fn csv(measures: &[Measure]) -> String {
 /// The summary as a Markdown table.
 pub fn summary_table(summaries: &[Summary]) -> String {
     let mut out = String::from(
-        "| setting | Mpx/s | PSNR dB | SSIM | sky agreement | steps/px | Pareto |\n|---|---|---|---|---|---|---|\n",
+        "| setting | Mpx/s | PSNR dB | SSIM | sky agreement | steps/px | flicker | Pareto |\n|---|---|---|---|---|---|---|---|\n",
     );
     for s in summaries {
         let _ = writeln!(
             out,
-            "| {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.2} | {} |",
+            "| {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.2} | {} | {} |",
             s.setting,
             s.mpx_per_s,
             s.psnr,
             s.ssim,
             s.sky_agreement,
             s.steps_per_pixel,
+            s.flicker.map_or("–".to_string(), |f| format!("{f:+.2}")),
             if s.pareto { "yes" } else { "" }
         );
     }
@@ -445,5 +508,22 @@ mod tests {
         let (ratio, k, v) = kernel_vs_voxel_space_at_pitch_0(&measures).unwrap();
         assert_eq!((ratio, k, v), (0.5, 30.0, 20.0));
         assert!(csv(&measures).lines().count() == 5);
+    }
+
+    #[test]
+    fn flicker_is_measured_for_every_setting_and_a_still_camera_has_none() {
+        let scene = crate::scene::procedural(96, 2);
+        let kernel = scene.to_kernel().unwrap();
+        let scenes = [BenchScene {
+            name: "small".into(),
+            scene,
+            kernel,
+        }];
+        let moving = flicker(&scenes, (32, 24), 3, |_, _| {}).unwrap();
+        assert_eq!(moving.len(), settings().len());
+        assert!(moving.iter().all(|(_, f)| f.is_finite()), "{moving:?}");
+        // One frame: no change at all, for the method and the reference.
+        let still = flicker(&scenes, (32, 24), 1, |_, _| {}).unwrap();
+        assert!(still.iter().all(|(_, f)| *f == 0.0), "{still:?}");
     }
 }

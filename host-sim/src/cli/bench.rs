@@ -2,7 +2,8 @@
 
 use super::parse_size;
 use crate::bench::{
-    csv, kernel_vs_voxel_space_at_pitch_0, run, summarize, summary_table, views, BenchScene,
+    csv, flicker, kernel_vs_voxel_space_at_pitch_0, run, summarize, summary_table, views,
+    BenchScene,
 };
 use crate::chart::draw_bench;
 use crate::error::{Error, Result};
@@ -21,7 +22,8 @@ pub(super) struct BenchArgs {
     /// Timed runs of each render; the best counts.
     #[arg(long, default_value_t = 3, value_name = "N")]
     repeats: u32,
-    /// Only the first scene's pitch-0 and pitch-15 views (a smoke run).
+    /// Only the first scene's pitch-0 and pitch-15 views, and no flicker
+    /// flights (a smoke run).
     #[arg(long)]
     quick: bool,
     /// Per-view measures (CSV).
@@ -96,7 +98,19 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
     eprintln!();
     std::fs::write(&args.csv, csv(&measures))
         .map_err(|e| Error::new(format!("cannot write {}: {e}", args.csv.display())))?;
-    let summaries = summarize(&measures);
+    let mut summaries = summarize(&measures);
+    if !args.quick {
+        let flicker = flicker(&scenes, args.size, 8, |done, total| {
+            eprint!("\rbench: flicker, scene {done}/{total} (an 8-frame flight)   ");
+        })?;
+        eprintln!();
+        for summary in &mut summaries {
+            summary.flicker = flicker
+                .iter()
+                .find(|(n, _)| *n == summary.setting)
+                .map(|(_, f)| *f);
+        }
+    }
     draw_bench(&args.chart, &summaries)?;
     println!(
         "{} views of {}x{}, {} settings; best of {} runs, one thread",
