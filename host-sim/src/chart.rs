@@ -37,6 +37,24 @@ fn font() -> Result<()> {
     }
 }
 
+/// Draws the series' legend in a framed white box at `position`.
+fn legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font(("sans-serif", 13))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+}
+
 /// Draws `table` to a PNG: frames a second (log scale) against processors,
 /// one line per pitch, Cohen-Or's PVS figures beside ours as lighter lines
 /// of the same colors.
@@ -103,14 +121,7 @@ pub fn draw_table(path: &Path, table: &Table) -> Result<()> {
                 });
         }
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font(("sans-serif", 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| failed(&e))?;
+    legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(|e| failed(&e))?;
     root.present().map_err(|e| failed(&e))?;
     Ok(())
 }
@@ -182,14 +193,7 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
                 )])
             .map_err(|e| failed(&e))?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::LowerRight)
-        .label_font(("sans-serif", 13))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| failed(&e))?;
+    legend(&mut chart, SeriesLabelPosition::LowerRight).map_err(|e| failed(&e))?;
     root.present().map_err(|e| failed(&e))?;
     Ok(())
 }
