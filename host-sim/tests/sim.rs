@@ -83,6 +83,9 @@ fn a_flight_reports_every_frame_and_the_machine() {
         "{err}"
     );
     assert_eq!(err.lines().count(), 1, "{err}");
+    let (code, _, err) = sim(&["sim", "--frames", "400", "--size", "640x480"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("frames x image pixels"), "{err}");
     let (code, _, err) = sim(&["sim", "--processors", "1"]);
     assert_eq!(code, 1);
     assert!(err.contains("processors must be between 2"), "{err}");

@@ -11,6 +11,9 @@ use crate::sim::{
 use std::path::PathBuf;
 use terracast::{Camera, RenderOptions};
 
+/// Most pixels a run records (frames × image size), about 4 GiB of events.
+const MAX_RECORDED_PIXELS: u64 = 100_000_000;
+
 #[derive(Debug, clap::Args)]
 pub(super) struct SimArgs {
     #[command(flatten)]
@@ -68,8 +71,13 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
         machine.frame.deadline_ms = d;
     }
     machine.check()?;
-    if args.frames == 0 || args.frames > 10_000 {
-        return Err(Error::new("--frames must be between 1 and 10000"));
+    // The recording holds every frame's events (about 40 bytes a pixel)
+    // until the replay: keep it to a few GiB.
+    let pixels = u64::from(args.size.0) * u64::from(args.size.1);
+    if args.frames == 0 || u64::from(args.frames) * pixels > MAX_RECORDED_PIXELS {
+        return Err(Error::new(format!(
+            "--frames must be at least 1, and frames x image pixels at most {MAX_RECORDED_PIXELS} (the recording keeps about 40 bytes a pixel)"
+        )));
     }
     if !args.speed.is_finite() {
         return Err(Error::new("--speed must be a finite number"));
