@@ -37,6 +37,19 @@ pub fn voxel_space(
     height: u32,
     options: &VoxelSpaceOptions,
 ) -> (Frame, RenderStats) {
+    voxel_space_touching(scene, camera, width, height, options, &mut |_| {})
+}
+
+/// [`voxel_space`], calling `touch` with the index of every voxel it reads
+/// (a no-op closure compiles away).
+pub fn voxel_space_touching(
+    scene: &Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    options: &VoxelSpaceOptions,
+    touch: &mut impl FnMut(usize),
+) -> (Frame, RenderStats) {
     let started = Instant::now();
     let mut frame = Frame::new(width, height);
     frame.colors.fill(options.sky);
@@ -75,6 +88,7 @@ pub fn voxel_space(
             }
             samples += 1;
             let voxel = y as usize * map_w + x as usize;
+            touch(voxel);
             let top = horizon + (ez - f64::from(scene.heights[voxel])) * focal / z;
             let bottom = y_buffer[i];
             if top < bottom {
@@ -123,6 +137,19 @@ pub fn march(
     height: u32,
     options: &MarchOptions,
 ) -> (Frame, RenderStats) {
+    march_touching(scene, camera, width, height, options, &mut |_| {})
+}
+
+/// [`march`], calling `touch` with the index of the lower-left corner of
+/// every cell it samples (the sample reads the cell's four corners).
+pub fn march_touching(
+    scene: &Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    options: &MarchOptions,
+    touch: &mut impl FnMut(usize),
+) -> (Frame, RenderStats) {
     let started = Instant::now();
     let rays = ContractCamera::new(camera, width, height);
     let mut frame = Frame::new(width, height);
@@ -142,6 +169,8 @@ pub fn march(
                 let inside = (0.0..=map_w).contains(&p[0]) && (0.0..=map_d).contains(&p[1]);
                 if inside {
                     samples += 1;
+                    let (i, j, _, _) = cell(scene, p[0], p[1]);
+                    touch(j * scene.width as usize + i);
                     if p[2] <= bilinear_height(scene, p[0], p[1]) {
                         frame.colors[index] = bilinear_color(scene, p[0], p[1]);
                         frame.depth[index] = t as f32;

@@ -7,7 +7,9 @@
 //! disturbed). Accuracy is PSNR and SSIM of the colors, sky agreement, and
 //! the median and 95th percentile of the relative depth error.
 
-use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
+use crate::baselines::{
+    march, march_touching, voxel_space, voxel_space_touching, MarchOptions, VoxelSpaceOptions,
+};
 use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
 use crate::kernel::render_kernel;
@@ -16,8 +18,10 @@ use crate::metrics::{
 };
 use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{KernelScene, Scene};
+use crate::sim::trace::Discard;
+use std::collections::HashSet;
 use std::fmt::Write as _;
-use terracast::{Camera, Coherence, RenderOptions, Resolution, VerticalSamples, U8F8};
+use terracast::{Camera, Coherence, Probe, RenderOptions, Resolution, VerticalSamples, View, U8F8};
 
 /// One way of rendering.
 #[derive(Debug, Clone)]
@@ -184,6 +188,9 @@ pub struct Measure {
     pub mpx_per_s: f64,
     /// Terrain bytes the method holds.
     pub resident_bytes: u64,
+    /// Terrain bytes the frame read: distinct voxels (and bounds) read,
+    /// times their bytes in the method's storage (see [`bytes_touched`]).
+    pub bytes_touched: u64,
 }
 
 fn render(
@@ -218,6 +225,80 @@ fn render(
             size.1,
             &MarchOptions { step: *step, sky },
         ),
+    })
+}
+
+/// Records every distinct terrain element the kernel reads.
+#[derive(Debug, Default)]
+struct TouchProbe {
+    heights: HashSet<(u8, usize)>,
+    colors: HashSet<(u8, usize)>,
+    bounds: HashSet<(u8, usize)>,
+}
+
+impl Probe for TouchProbe {
+    fn visit(&mut self, level: u8, voxel: usize) {
+        self.heights.insert((level, voxel));
+    }
+    fn bound(&mut self, level: u8, cell: usize) {
+        self.bounds.insert((level, cell));
+    }
+    fn color(&mut self, level: u8, voxel: usize) {
+        self.colors.insert((level, voxel));
+    }
+}
+
+/// Terrain bytes a frame reads, by method:
+/// - kernel: each visit reads two U12.4 heights (the voxel and its
+///   neighbour across the minor grid line), each shading two RGB colors
+///   and as many on the level below (past level 0), each bound test one
+///   u16; distinct (level, index) pairs, neighbours counted with each;
+/// - Voxel Space: an f32 height and an RGB color for each distinct voxel;
+/// - march: the four corners (f32 height and RGB color) of each distinct
+///   cell sampled.
+pub fn bytes_touched(
+    setting: &Setting,
+    scene: &BenchScene,
+    camera: &Camera,
+    size: (u32, u32),
+) -> Result<u64> {
+    let sky = terracast::config::DEFAULT_SKY;
+    Ok(match &setting.method {
+        Method::Kernel(options) => {
+            let pyramid = scene.kernel.pyramid_for(options)?;
+            let view = View::new(camera, size.0, size.1)
+                .map_err(|e| Error::new(format!("bad view: {e}")))?;
+            let mut probe = TouchProbe::default();
+            terracast::render(&pyramid, &view, options, &mut Discard, &mut probe);
+            let colors: u64 = probe
+                .colors
+                .iter()
+                .map(|&(level, _)| if level > 0 { 12 } else { 6 })
+                .sum();
+            probe.heights.len() as u64 * 4 + colors + probe.bounds.len() as u64 * 2
+        }
+        Method::VoxelSpace(growth) => {
+            let mut seen = HashSet::new();
+            let options = VoxelSpaceOptions {
+                spacing_growth: *growth,
+                sky,
+            };
+            voxel_space_touching(&scene.scene, camera, size.0, size.1, &options, &mut |v| {
+                seen.insert(v);
+            });
+            seen.len() as u64 * 7
+        }
+        Method::March(step) => {
+            let mut seen = HashSet::new();
+            let options = MarchOptions { step: *step, sky };
+            let width = scene.scene.width as usize;
+            march_touching(&scene.scene, camera, size.0, size.1, &options, &mut |v| {
+                for corner in [v, v + 1, v + width, v + width + 1] {
+                    seen.insert(corner);
+                }
+            });
+            seen.len() as u64 * 7
+        }
     })
 }
 
@@ -268,6 +349,7 @@ pub fn run(
                 steps_per_pixel: stats.steps as f64 / pixels,
                 mpx_per_s: pixels / (best.max(1) as f64 / 1e9) / 1e6,
                 resident_bytes: stats.resident_bytes,
+                bytes_touched: bytes_touched(setting, scene, &view.camera, size)?,
             });
         }
         progress(done + 1, views.len());
@@ -293,6 +375,8 @@ pub struct Summary {
     pub mpx_per_s: f64,
     /// On the Pareto front of speed and PSNR.
     pub pareto: bool,
+    /// Mean terrain KiB a frame reads.
+    pub kib_touched: f64,
     /// Frame-to-frame change along a flight minus the reference's (0–255
     /// a channel; 0 is as steady as the exact picture), when measured.
     pub flicker: Option<f64>,
@@ -318,6 +402,7 @@ pub fn summarize(measures: &[Measure]) -> Vec<Summary> {
             ssim: mean(|m| m.ssim),
             sky_agreement: mean(|m| m.sky_agreement),
             steps_per_pixel: mean(|m| m.steps_per_pixel),
+            kib_touched: mean(|m| m.bytes_touched as f64 / 1024.0),
             mpx_per_s: n / mine.iter().map(|m| 1.0 / m.mpx_per_s).sum::<f64>(),
             pareto: false,
             flicker: None,
@@ -394,12 +479,12 @@ pub fn flicker(
 /// The measures as CSV, one row per view and setting.
 pub fn csv(measures: &[Measure]) -> String {
     let mut out = String::from(
-        "scene,view,pitch,setting,psnr_db,ssim,sky_agreement,depth_error_median,depth_error_p95,steps_per_pixel,mpx_per_s,resident_bytes\n",
+        "scene,view,pitch,setting,psnr_db,ssim,sky_agreement,depth_error_median,depth_error_p95,steps_per_pixel,mpx_per_s,resident_bytes,bytes_touched\n",
     );
     for m in measures {
         let _ = writeln!(
             out,
-            "{},{},{},{},{:.3},{:.4},{:.4},{:.5},{:.5},{:.3},{:.3},{}",
+            "{},{},{},{},{:.3},{:.4},{:.4},{:.5},{:.5},{:.3},{:.3},{},{}",
             m.scene,
             m.view,
             m.pitch,
@@ -411,7 +496,8 @@ pub fn csv(measures: &[Measure]) -> String {
             m.depth_p95,
             m.steps_per_pixel,
             m.mpx_per_s,
-            m.resident_bytes
+            m.resident_bytes,
+            m.bytes_touched
         );
     }
     out
@@ -420,18 +506,19 @@ pub fn csv(measures: &[Measure]) -> String {
 /// The summary as a Markdown table.
 pub fn summary_table(summaries: &[Summary]) -> String {
     let mut out = String::from(
-        "| setting | Mpx/s | PSNR dB | SSIM | sky agreement | steps/px | flicker | Pareto |\n|---|---|---|---|---|---|---|---|\n",
+        "| setting | Mpx/s | PSNR dB | SSIM | sky agreement | steps/px | KiB read | flicker | Pareto |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for s in summaries {
         let _ = writeln!(
             out,
-            "| {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.2} | {} | {} |",
+            "| {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.2} | {:.0} | {} | {} |",
             s.setting,
             s.mpx_per_s,
             s.psnr,
             s.ssim,
             s.sky_agreement,
             s.steps_per_pixel,
+            s.kib_touched,
             s.flicker.map_or("–".to_string(), |f| format!("{f:+.2}")),
             if s.pareto { "yes" } else { "" }
         );
@@ -481,6 +568,7 @@ mod tests {
             steps_per_pixel: 1.0,
             mpx_per_s,
             resident_bytes: 0,
+            bytes_touched: 0,
         }
     }
 
@@ -508,6 +596,33 @@ mod tests {
         let (ratio, k, v) = kernel_vs_voxel_space_at_pitch_0(&measures).unwrap();
         assert_eq!((ratio, k, v), (0.5, 30.0, 20.0));
         assert!(csv(&measures).lines().count() == 5);
+    }
+
+    #[test]
+    fn every_setting_reads_some_terrain_and_finer_marches_read_more() {
+        let scene = crate::scene::procedural(96, 2);
+        let kernel = scene.to_kernel().unwrap();
+        let bench = BenchScene {
+            name: "small".into(),
+            scene,
+            kernel,
+        };
+        let view = &views(0, &bench.scene)[2];
+        let touched: Vec<(&str, u64)> = settings()
+            .iter()
+            .map(|s| {
+                (
+                    s.name,
+                    bytes_touched(s, &bench, &view.camera, (48, 36)).unwrap(),
+                )
+            })
+            .collect();
+        assert!(touched.iter().all(|(_, b)| *b > 0), "{touched:?}");
+        let of = |name| touched.iter().find(|(n, _)| *n == name).unwrap().1;
+        assert!(of("march 0.5") >= of("march 2"), "{touched:?}");
+        // The kernel reads a part of what it holds: 5 bytes a voxel, plus
+        // the pyramid and bounds.
+        assert!(of("kernel") < 96 * 96 * 5 * 2, "{touched:?}");
     }
 
     #[test]

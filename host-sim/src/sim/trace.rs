@@ -182,7 +182,8 @@ impl Probe for Recorder<'_> {
 
 /// A sink that keeps nothing: the simulator needs the kernel's work, not
 /// its pixels.
-struct Discard;
+#[derive(Debug)]
+pub(crate) struct Discard;
 
 impl Sink for Discard {
     fn put(&mut self, _x: u32, _y: u32, _sample: Sample) {}
