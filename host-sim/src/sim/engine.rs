@@ -192,7 +192,10 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
             pool.publish(f as u32);
             for w in workers.iter_mut().filter(|w| w.waiting) {
                 w.waiting = false;
-                w.clock = w.clock.max(master_clock);
+                if master_clock > w.clock {
+                    books[f].disk_wait += master_clock - w.clock;
+                    w.clock = master_clock;
+                }
             }
             master_next += 1;
             continue;
