@@ -36,13 +36,7 @@ fn scene() -> (Scene, &'static str) {
 }
 
 fn camera(pitch: f32) -> Camera {
-    Camera {
-        eye: [300.0, 700.0, 170.0],
-        yaw_deg: 20.0,
-        pitch_deg: pitch,
-        roll_deg: 0.0,
-        hfov_deg: 60.0,
-    }
+    terracast_sim::camera::looking([300.0, 700.0, 170.0], 20.0, pitch)
 }
 
 /// One benchmarked render.

@@ -169,10 +169,11 @@ pub fn march_touching(
                 let inside = (0.0..=map_w).contains(&p[0]) && (0.0..=map_d).contains(&p[1]);
                 if inside {
                     samples += 1;
-                    let (i, j, _, _) = cell(scene, p[0], p[1]);
+                    let (i, j, _, _) = scene.cell_at(p[0], p[1]);
                     touch(j * scene.width as usize + i);
-                    if p[2] <= bilinear_height(scene, p[0], p[1]) {
-                        frame.colors[index] = bilinear_color(scene, p[0], p[1]);
+                    if p[2] <= scene.height_at(p[0], p[1]) {
+                        let color = scene.color_at(p[0], p[1]);
+                        frame.colors[index] = color.map(|v| v.round().clamp(0.0, 255.0) as u8);
                         frame.depth[index] = t as f32;
                         break;
                     }
@@ -212,30 +213,6 @@ fn scene_bytes(scene: &Scene) -> u64 {
     (scene.heights.len() * (4 + 3)) as u64
 }
 
-fn cell(scene: &Scene, x: f64, y: f64) -> (usize, usize, f64, f64) {
-    let i = (x.floor().max(0.0) as usize).min(scene.width as usize - 2);
-    let j = (y.floor().max(0.0) as usize).min(scene.depth as usize - 2);
-    (i, j, x - i as f64, y - j as f64)
-}
-
-fn bilinear_height(scene: &Scene, x: f64, y: f64) -> f64 {
-    let (i, j, fx, fy) = cell(scene, x, y);
-    let h = |a: usize, b: usize| f64::from(scene.heights[b * scene.width as usize + a]);
-    (h(i, j) * (1.0 - fx) + h(i + 1, j) * fx) * (1.0 - fy)
-        + (h(i, j + 1) * (1.0 - fx) + h(i + 1, j + 1) * fx) * fy
-}
-
-fn bilinear_color(scene: &Scene, x: f64, y: f64) -> Rgb {
-    let (i, j, fx, fy) = cell(scene, x, y);
-    let c = |a: usize, b: usize| scene.colors[b * scene.width as usize + a];
-    core::array::from_fn(|k| {
-        let v = |a, b| f64::from(c(a, b)[k]);
-        let value = (v(i, j) * (1.0 - fx) + v(i + 1, j) * fx) * (1.0 - fy)
-            + (v(i, j + 1) * (1.0 - fx) + v(i + 1, j + 1) * fx) * fy;
-        value.round().clamp(0.0, 255.0) as u8
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -247,13 +224,7 @@ mod tests {
     }
 
     fn camera(pitch: f32) -> Camera {
-        Camera {
-            eye: [128.0, 20.0, 170.0],
-            yaw_deg: 90.0,
-            pitch_deg: pitch,
-            roll_deg: 0.0,
-            hfov_deg: 60.0,
-        }
+        crate::camera::looking([128.0, 20.0, 170.0], 90.0, pitch)
     }
 
     fn reference(scene: &Scene, camera: &Camera) -> Frame {

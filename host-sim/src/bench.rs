@@ -10,6 +10,7 @@
 use crate::baselines::{
     march, march_touching, voxel_space, voxel_space_touching, MarchOptions, VoxelSpaceOptions,
 };
+use crate::camera::looking;
 use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
 use crate::kernel::render_kernel;
@@ -134,13 +135,7 @@ pub fn views(index: usize, scene: &Scene) -> Vec<BenchView> {
         .map(|&pitch| BenchView {
             scene: index,
             name: format!("far pitch {pitch}"),
-            camera: Camera {
-                eye: far,
-                yaw_deg: 90.0,
-                pitch_deg: pitch,
-                roll_deg: 0.0,
-                hfov_deg: 60.0,
-            },
+            camera: looking(far, 90.0, pitch),
         })
         .collect();
     let (nx, ny) = (w * 0.35, d * 0.4);
@@ -148,13 +143,7 @@ pub fn views(index: usize, scene: &Scene) -> Vec<BenchView> {
     views.push(BenchView {
         scene: index,
         name: "near pitch 10".into(),
-        camera: Camera {
-            eye: [nx, ny, ground + 25.0],
-            yaw_deg: 60.0,
-            pitch_deg: 10.0,
-            roll_deg: 0.0,
-            hfov_deg: 60.0,
-        },
+        camera: looking([nx, ny, ground + 25.0], 60.0, 10.0),
     });
     views
 }

@@ -207,19 +207,7 @@ impl<'s> Reference<'s> {
 
     /// Bilinear color of the grid at world (x, y).
     pub fn color_at(&self, x: f64, y: f64) -> [f64; 3] {
-        let s = self.scene;
-        let (w, d) = (s.width as usize, s.depth as usize);
-        let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (d - 1) as f64));
-        let (i, j) = (
-            (x.floor() as usize).min(w - 2),
-            (y.floor() as usize).min(d - 2),
-        );
-        let (fx, fy) = (x - i as f64, y - j as f64);
-        let at = |x: usize, y: usize| s.colors[y * w + x].map(f64::from);
-        let (a, b, c, e) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
-        core::array::from_fn(|k| {
-            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy
-        })
+        self.scene.color_at(x, y)
     }
 
     /// Renders a view: colors from `n × n` rays a pixel, depth from the ray

@@ -89,6 +89,36 @@ impl Scene {
         self.heights[y * self.width as usize + x]
     }
 
+    /// The grid cell holding world (x, y) (clamped into the map) and the
+    /// position within it.
+    pub fn cell_at(&self, x: f64, y: f64) -> (usize, usize, f64, f64) {
+        let (w, d) = (self.width as usize, self.depth as usize);
+        let (x, y) = (x.clamp(0.0, (w - 1) as f64), y.clamp(0.0, (d - 1) as f64));
+        let (i, j) = (
+            (x.floor() as usize).min(w - 2),
+            (y.floor() as usize).min(d - 2),
+        );
+        (i, j, x - i as f64, y - j as f64)
+    }
+
+    /// Height of the bilinear surface at world (x, y).
+    pub fn height_at(&self, x: f64, y: f64) -> f64 {
+        let (i, j, fx, fy) = self.cell_at(x, y);
+        let h = |a: usize, b: usize| f64::from(self.heights[b * self.width as usize + a]);
+        (h(i, j) * (1.0 - fx) + h(i + 1, j) * fx) * (1.0 - fy)
+            + (h(i, j + 1) * (1.0 - fx) + h(i + 1, j + 1) * fx) * fy
+    }
+
+    /// Bilinear color of the grid at world (x, y).
+    pub fn color_at(&self, x: f64, y: f64) -> [f64; 3] {
+        let (i, j, fx, fy) = self.cell_at(x, y);
+        let at = |a: usize, b: usize| self.colors[b * self.width as usize + a].map(f64::from);
+        let (a, b, c, e) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
+        core::array::from_fn(|k| {
+            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy
+        })
+    }
+
     /// Highest height in voxels.
     pub fn max_height(&self) -> f32 {
         self.heights.iter().copied().fold(f32::MIN, f32::max)

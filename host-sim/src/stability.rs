@@ -31,11 +31,8 @@ pub struct Condition {
 
 fn camera(eye: [f32; 3], yaw: f32, pitch: f32, hfov: f32) -> Camera {
     Camera {
-        eye,
-        yaw_deg: yaw,
-        pitch_deg: pitch,
-        roll_deg: 0.0,
         hfov_deg: hfov,
+        ..crate::camera::looking(eye, yaw, pitch)
     }
 }
 

@@ -12,17 +12,6 @@ fn lcg(state: &mut u64) -> f64 {
     (*state >> 11) as f64 / (1u64 << 53) as f64
 }
 
-fn bilinear(scene: &Scene, x: f64, y: f64) -> f64 {
-    let (i, j) = (
-        (x.floor() as usize).min(scene.width as usize - 2),
-        (y.floor() as usize).min(scene.depth as usize - 2),
-    );
-    let (fx, fy) = (x - i as f64, y - j as f64);
-    let h = |a, b| f64::from(scene.height(a, b));
-    (h(i, j) * (1.0 - fx) + h(i + 1, j) * fx) * (1.0 - fy)
-        + (h(i, j + 1) * (1.0 - fx) + h(i + 1, j + 1) * fx) * fy
-}
-
 /// First t with the ray at or below the surface, found with steps of `step`
 /// (in t) and refined by bisection.
 fn march(scene: &Scene, o: [f64; 3], d: [f64; 3], step: f64) -> Option<f64> {
@@ -31,7 +20,7 @@ fn march(scene: &Scene, o: [f64; 3], d: [f64; 3], step: f64) -> Option<f64> {
         let (x, y) = (o[0] + t * d[0], o[1] + t * d[1]);
         (0.0..=ext[0]).contains(&x) && (0.0..=ext[1]).contains(&y)
     };
-    let below = |t: f64| o[2] + t * d[2] <= bilinear(scene, o[0] + t * d[0], o[1] + t * d[1]);
+    let below = |t: f64| o[2] + t * d[2] <= scene.height_at(o[0] + t * d[0], o[1] + t * d[1]);
     let mut t = 0.0;
     let mut was_inside = false;
     while t < 200.0 {

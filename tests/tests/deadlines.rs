@@ -4,6 +4,7 @@
 //! every run.
 
 use terracast::RenderOptions;
+use terracast_sim::camera::looking;
 use terracast_sim::scene::{procedural, KernelScene};
 use terracast_sim::sim::{
     flight, record_flight, simulate, FrameTrace, Machine, MissReason, SimResult,
@@ -34,13 +35,7 @@ fn record(
 
 /// A flight over the map's south edge looking north, `speed` voxels a frame.
 fn traces(scene: &KernelScene, speed: f32, machine: &Machine) -> Vec<FrameTrace> {
-    let start = terracast::Camera {
-        eye: [256.0, 60.0, 200.0],
-        yaw_deg: 90.0,
-        pitch_deg: 14.6,
-        roll_deg: 0.0,
-        hfov_deg: 60.0,
-    };
+    let start = looking([256.0, 60.0, 200.0], 90.0, 14.6);
     let cameras = flight(&start, 6, speed);
     record(scene, &cameras, machine)
 }
@@ -48,13 +43,7 @@ fn traces(scene: &KernelScene, speed: f32, machine: &Machine) -> Vec<FrameTrace>
 /// `frames` views from the map's center, turning `step` degrees a frame.
 fn turning(scene: &KernelScene, step: f32, frames: u32, machine: &Machine) -> Vec<FrameTrace> {
     let cameras: Vec<_> = (0..frames)
-        .map(|i| terracast::Camera {
-            eye: [256.0, 256.0, 200.0],
-            yaw_deg: step * i as f32,
-            pitch_deg: 14.6,
-            roll_deg: 0.0,
-            hfov_deg: 60.0,
-        })
+        .map(|i| looking([256.0, 256.0, 200.0], step * i as f32, 14.6))
         .collect();
     record(scene, &cameras, machine)
 }

@@ -83,8 +83,6 @@ pub struct SimResult {
     pub bank_utilization: Vec<f64>,
     /// Total waiting for banks busy with other processors.
     pub bank_contention: Ps,
-    /// Pixels of each frame.
-    pub pixels: u64,
 }
 
 impl SimResult {
@@ -302,7 +300,6 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
         master_utilization: master_busy as f64 / makespan,
         bank_utilization: banks.busy.iter().map(|&b| b as f64 / makespan).collect(),
         bank_contention: banks.contention,
-        pixels: frames.first().map_or(0, |f| f.pixels),
         frames: results,
     }
 }

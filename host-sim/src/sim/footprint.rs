@@ -124,13 +124,7 @@ mod tests {
     use super::*;
 
     fn camera(pitch: f32) -> Camera {
-        Camera {
-            eye: [512.0, 100.0, 300.0],
-            yaw_deg: 90.0,
-            pitch_deg: pitch,
-            roll_deg: 0.0,
-            hfov_deg: 60.0,
-        }
+        crate::camera::looking([512.0, 100.0, 300.0], 90.0, pitch)
     }
 
     #[test]

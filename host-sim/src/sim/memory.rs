@@ -70,7 +70,6 @@ impl Banks {
 /// where the tile lies in that memory).
 #[derive(Debug, Clone)]
 pub struct LruCache<K> {
-    capacity: usize,
     tick: u64,
     entries: HashMap<K, (u64, usize)>,
     by_age: BTreeMap<u64, K>,
@@ -82,7 +81,6 @@ impl<K: Copy + Eq + Hash> LruCache<K> {
     pub fn new(capacity: usize) -> Self {
         let capacity = capacity.max(1);
         Self {
-            capacity,
             tick: 0,
             entries: HashMap::new(),
             by_age: BTreeMap::new(),
@@ -133,11 +131,6 @@ impl<K: Copy + Eq + Hash> LruCache<K> {
     /// Whether nothing is resident.
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
-    }
-
-    /// Most keys it holds.
-    pub fn capacity(&self) -> usize {
-        self.capacity
     }
 }
 
