@@ -1,12 +1,18 @@
-//! A display sink: the kernel's columns streamed to an SPI display controller.
+//! A display driver: a frame streamed to an SPI display controller, column
+//! by column.
 //!
 //! The controller speaks the ILI9341 command set (shared by the ST7789 and
 //! most small TFT controllers): a command byte is sent with the data/command
 //! line low, its parameters and pixels with it high. Each image column is
 //! sent as its own one-pixel-wide window (`CASET`, `PASET`, `RAMWR`), top to
-//! bottom, in 16-bit RGB565, most significant byte first. The kernel finishes
-//! columns bottom to top, so the driver holds one column (`H` pixels, two
-//! bytes each) and sends it when the column is complete: no framebuffer.
+//! bottom, in 16-bit RGB565, most significant byte first. The driver holds
+//! one column (`H` pixels, two bytes each) and sends it when the column is
+//! complete.
+//!
+//! Pixels must arrive column by column (in any order within a column). The
+//! kernel finishes pixels line by line through the vertical's vanishing
+//! point, which are columns only at pitch 0, so a board renders into a
+//! framebuffer and hands it over with [`SpiDisplay::send_frame`].
 //!
 //! The frame-done line goes high and back low after a frame's last column
 //! has been sent: a logic analyzer (or the board's LED) sees one pulse per
@@ -58,6 +64,9 @@ pub enum DisplayError {
     /// The image is taller than the driver's column buffer, or wider than
     /// the controller can address.
     ImageSize,
+    /// A frame handed to [`SpiDisplay::send_frame`] has fewer colors than
+    /// the image has pixels.
+    FrameTooSmall,
 }
 
 impl fmt::Display for DisplayError {
@@ -65,6 +74,7 @@ impl fmt::Display for DisplayError {
         match self {
             Self::Bus(kind) => write!(f, "display SPI bus failed: {kind}"),
             Self::Pin(kind) => write!(f, "display pin failed: {kind}"),
+            Self::FrameTooSmall => f.write_str("frame has fewer colors than width x height"),
             Self::ImageSize => {
                 f.write_str("image is taller than the display column buffer or wider than 65535")
             }
@@ -161,6 +171,30 @@ where
         }
     }
 
+    /// Sends a row-major frame of `width × height` colors (the driver's image
+    /// size) column by column, then [finishes](Self::finish) it.
+    pub fn send_frame(&mut self, colors: &[Rgb]) -> Result<(), DisplayError> {
+        let (width, height) = (usize::from(self.width), usize::from(self.height));
+        if colors.len() < width * height {
+            return Err(DisplayError::FrameTooSmall);
+        }
+        for x in 0..width {
+            for y in (0..height).rev() {
+                let color = colors.get(y * width + x).copied().unwrap_or_default();
+                self.put(
+                    x as u32,
+                    y as u32,
+                    Sample {
+                        color,
+                        distance: 0,
+                        elevation: 0,
+                    },
+                );
+            }
+        }
+        self.finish()
+    }
+
     /// Gives the bus and pins back.
     pub fn release(self) -> (SPI, DC, DONE) {
         (self.spi, self.data_command, self.frame_done)
@@ -211,7 +245,7 @@ where
             return;
         }
         // A pixel of another column: the held one is finished (complete or
-        // not, as the sink contract has columns arrive one at a time).
+        // not, as columns arrive one at a time).
         if matches!(self.filling, Some((held, _)) if held != x) {
             let result = self.send_column();
             self.keep(result);

@@ -2,9 +2,9 @@
 //!
 //! What the terracast kernel needs to run on a board, beyond the kernel:
 //!
-//! - [`display`]: a [`terracast::Sink`] that streams each finished image
-//!   column to an SPI display controller (an ILI9341-style command set),
-//!   written against the embedded-hal 1.0 traits: `SpiDevice` for pixels,
+//! - [`display`]: a driver that streams a rendered frame, column by column,
+//!   to an SPI display controller (an ILI9341-style command set), written
+//!   against the embedded-hal 1.0 traits: `SpiDevice` for pixels,
 //!   `OutputPin` for data/command and for a frame-done line a logic analyzer
 //!   can watch.
 //! - [`wire`]: a capture of what crosses those lines (the bytes, each tagged

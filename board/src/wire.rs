@@ -14,20 +14,15 @@
 //! the pixels into an image, so a test can check what the panel would show.
 //!
 //! ```
-//! use terracast::{Sample, Sink};
 //! use terracast_board::{decode, rgb565, CaptureBus, SpiDisplay};
 //!
+//! // A 2 x 3 frame, row-major, as a kernel render into a framebuffer leaves it.
+//! let frame: [[u8; 3]; 6] = core::array::from_fn(|i| [(i % 2 * 100) as u8, (i / 2 * 80) as u8, 7]);
 //! let mut wire = [0u8; 256];
 //! let bus = CaptureBus::new(&mut wire);
 //! let mut display: SpiDisplay<_, _, _, 4> =
 //!     SpiDisplay::new(bus.spi(), bus.data_command(), bus.frame_done(), 2, 3).unwrap();
-//! for x in 0..2 {
-//!     for y in (0..3).rev() {
-//!         let color = [(x * 100) as u8, (y * 80) as u8, 7];
-//!         display.put(x, y, Sample { color, distance: 1, elevation: 0 });
-//!     }
-//! }
-//! display.finish().unwrap();
+//! display.send_frame(&frame).unwrap();
 //! let _ = display.release();
 //! let bytes = bus.into_written().unwrap();
 //!

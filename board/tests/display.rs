@@ -26,7 +26,7 @@ fn color_at(x: u32, y: u32) -> [u8; 3] {
 }
 
 /// Streams a `width` × `height` frame, columns left to right, each bottom
-/// to top as the kernel does.
+/// to top, as `send_frame` does.
 fn stream_frame<S: Sink>(sink: &mut S, width: u32, height: u32) {
     for x in 0..width {
         for y in (0..height).rev() {
@@ -202,4 +202,29 @@ fn malformed_captures_are_named_errors() {
         decode(&[], &mut [0u16; 3], 2, 2),
         Err(DecodeError::ImageTooSmall)
     );
+}
+
+#[test]
+fn a_framebuffer_sent_whole_decodes_to_itself() {
+    let (w, h) = (6, 4);
+    let colors: Vec<[u8; 3]> = (0..w * h).map(|i| color_at(i % w, i / w)).collect();
+    let mut wire = vec![0u8; frame_capture_bytes(w, h)];
+    let bus = CaptureBus::new(&mut wire);
+    let mut display: SpiDisplay<_, _, _, 4> =
+        SpiDisplay::new(bus.spi(), bus.data_command(), bus.frame_done(), w, h).unwrap();
+    display.init(&mut NoDelay).unwrap();
+    // Too few colors for the image: refused before anything is sent.
+    assert_eq!(
+        display.send_frame(&colors[1..]),
+        Err(DisplayError::FrameTooSmall)
+    );
+    display.send_frame(&colors).unwrap();
+    let _ = display.release();
+    let bytes = bus.into_written().unwrap();
+    assert_eq!(bytes.len(), frame_capture_bytes(w, h));
+    let mut image = vec![0u16; (w * h) as usize];
+    let decoded = decode(bytes, &mut image, w, h).unwrap();
+    assert_eq!(decoded.frames, 1);
+    let expected: Vec<u16> = colors.iter().map(|&c| rgb565(c)).collect();
+    assert_eq!(image, expected);
 }

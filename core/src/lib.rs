@@ -40,7 +40,7 @@
 #![deny(missing_docs, unsafe_code, missing_debug_implementations)]
 #![deny(rustdoc::broken_intra_doc_links)]
 
-mod column;
+mod caster;
 pub mod config;
 mod pool;
 mod probe;
@@ -52,9 +52,9 @@ mod view;
 /// An 8-bit RGB color.
 pub type Rgb = [u8; 3];
 
-pub use column::{render, render_column, Coherence, RenderOptions, Resolution, VerticalSamples};
+pub use caster::{render, render_line, Coherence, RenderOptions, Resolution, VerticalSamples};
 pub use fixed::types::U8F8;
-pub use pool::{ColumnPool, Task, Wait};
+pub use pool::{LinePool, Task, Wait};
 pub use probe::{CountingProbe, NoProbe, Probe};
 pub use pyramid::{
     level_count, level_side, pyramid_bytes, pyramid_cells, pyramid_points, HeightFilter, Pyramid,
@@ -62,4 +62,4 @@ pub use pyramid::{
 };
 pub use sink::{Framebuffer, FramebufferError, Sample, Sink};
 pub use terrain::{Terrain, TerrainError};
-pub use view::{Camera, View, ViewError};
+pub use view::{max_lines, Camera, View, ViewError};

@@ -1,53 +1,55 @@
-//! The column pool: image columns handed out one at a time to any number of
-//! workers, across frames (Cohen-Or §3.2).
+//! The line pool: image lines handed out one at a time to any number of
+//! workers, across frames (Cohen-Or §3.2 hands out columns; the caster's
+//! unit is the image line through the vertical's vanishing point, which is
+//! a column at pitch 0).
 //!
-//! Each worker takes a column, renders it with [`render_column`], and takes
-//! the next. When the last column of a frame has been taken, the next take
-//! returns the first column of the next frame, as soon as the master has
-//! [published](ColumnPool::publish) that frame's view: no worker waits for
-//! the slowest column of a frame. The pool's state is two numbers behind a
+//! Each worker takes a line, renders it with [`render_line`], and takes
+//! the next. When the last line of a frame has been taken, the next take
+//! returns the first line of the next frame, as soon as the master has
+//! [published](LinePool::publish) that frame's view: no worker waits for
+//! the slowest line of a frame. The pool's state is two numbers behind a
 //! [`critical_section::Mutex`], so the same code serves a single-core board
 //! (interrupts masked), a multi-core one, and host threads (with
 //! `critical-section`'s `std` implementation).
 //!
 //! ```
-//! use terracast::{ColumnPool, Task};
+//! use terracast::{LinePool, Task};
 //!
-//! let pool = ColumnPool::new(3, 2); // 3 columns a frame, 2 frames
+//! let pool = LinePool::new(3, 2); // 3 lines a frame, 2 frames
 //! pool.publish(0);
-//! assert_eq!(pool.take(), Ok(Task { frame: 0, column: 0 }));
-//! assert_eq!(pool.take(), Ok(Task { frame: 0, column: 1 }));
-//! assert_eq!(pool.take(), Ok(Task { frame: 0, column: 2 }));
+//! assert_eq!(pool.take(), Ok(Task { frame: 0, line: 0 }));
+//! assert_eq!(pool.take(), Ok(Task { frame: 0, line: 1 }));
+//! assert_eq!(pool.take(), Ok(Task { frame: 0, line: 2 }));
 //! // Frame 1's view is not set up yet: come back later.
 //! assert_eq!(pool.take(), Err(terracast::Wait::NotPublished { frame: 1 }));
 //! pool.publish(1);
-//! assert_eq!(pool.take(), Ok(Task { frame: 1, column: 0 }));
+//! assert_eq!(pool.take(), Ok(Task { frame: 1, line: 0 }));
 //! ```
 //!
-//! [`render_column`]: crate::render_column
+//! [`render_line`]: crate::render_line
 
 use core::cell::Cell;
 use critical_section::Mutex;
 
-/// One unit of work: a column of a frame.
+/// One unit of work: a line of a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Task {
     /// Frame number, from 0.
     pub frame: u32,
-    /// Image column.
-    pub column: u32,
+    /// Image line (see [`View::lines`](crate::View::lines)).
+    pub line: u32,
 }
 
-/// Why [`ColumnPool::take`] gave no column.
+/// Why [`LinePool::take`] gave no line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Wait {
-    /// The next column belongs to `frame`, whose view the master has not
+    /// The next line belongs to `frame`, whose view the master has not
     /// published yet.
     NotPublished {
         /// The frame waited for.
         frame: u32,
     },
-    /// Every column of every frame has been taken.
+    /// Every line of every frame has been taken.
     Finished,
 }
 
@@ -58,33 +60,33 @@ struct State {
     published: u32,
 }
 
-/// Columns of `frames` frames of `width` columns each, taken in order.
+/// Lines of `frames` frames of `lines` lines each, taken in order. Frames
+/// of one image size have different numbers of lines; size the pool with
+/// [`max_lines`](crate::max_lines) and let the lines past a frame's last
+/// render nothing.
 #[derive(Debug)]
-pub struct ColumnPool {
+pub struct LinePool {
     state: Mutex<Cell<State>>,
-    width: u32,
+    lines: u32,
     frames: u32,
 }
 
-impl ColumnPool {
-    /// A pool for `frames` frames of `width` columns; nothing published.
-    pub const fn new(width: u32, frames: u32) -> Self {
+impl LinePool {
+    /// A pool for `frames` frames of `lines` lines; nothing published.
+    pub const fn new(lines: u32, frames: u32) -> Self {
         Self {
             state: Mutex::new(Cell::new(State {
-                next: Task {
-                    frame: 0,
-                    column: 0,
-                },
+                next: Task { frame: 0, line: 0 },
                 published: 0,
             })),
-            width,
+            lines,
             frames,
         }
     }
 
-    /// Columns a frame.
-    pub fn width(&self) -> u32 {
-        self.width
+    /// Lines a frame.
+    pub fn lines(&self) -> u32 {
+        self.lines
     }
 
     /// Frames in all.
@@ -92,7 +94,7 @@ impl ColumnPool {
         self.frames
     }
 
-    /// The master has set up `frame`'s view: its columns (and those of
+    /// The master has set up `frame`'s view: its lines (and those of
     /// every earlier frame) may be taken.
     pub fn publish(&self, frame: u32) {
         critical_section::with(|cs| {
@@ -103,27 +105,27 @@ impl ColumnPool {
         });
     }
 
-    /// The next column, in frame order then column order.
+    /// The next line, in frame order then line order.
     pub fn take(&self) -> Result<Task, Wait> {
         critical_section::with(|cs| {
             let cell = self.state.borrow(cs);
             let mut state = cell.get();
             let task = state.next;
-            if task.frame >= self.frames || self.width == 0 {
+            if task.frame >= self.frames || self.lines == 0 {
                 return Err(Wait::Finished);
             }
             if task.frame >= state.published {
                 return Err(Wait::NotPublished { frame: task.frame });
             }
-            state.next = if task.column + 1 < self.width {
+            state.next = if task.line + 1 < self.lines {
                 Task {
                     frame: task.frame,
-                    column: task.column + 1,
+                    line: task.line + 1,
                 }
             } else {
                 Task {
                     frame: task.frame + 1,
-                    column: 0,
+                    line: 0,
                 }
             };
             cell.set(state);
@@ -137,12 +139,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_column_of_every_frame_is_taken_once_in_order() {
-        let pool = ColumnPool::new(4, 3);
+    fn every_line_of_every_frame_is_taken_once_in_order() {
+        let pool = LinePool::new(4, 3);
         pool.publish(2);
         let mut taken = std::vec::Vec::new();
         while let Ok(task) = pool.take() {
-            taken.push((task.frame, task.column));
+            taken.push((task.frame, task.line));
         }
         let expected: std::vec::Vec<_> = (0..3).flat_map(|f| (0..4).map(move |c| (f, c))).collect();
         assert_eq!(taken, expected);
@@ -150,8 +152,8 @@ mod tests {
     }
 
     #[test]
-    fn threads_share_the_pool_without_losing_or_repeating_a_column() {
-        let pool = ColumnPool::new(97, 5);
+    fn threads_share_the_pool_without_losing_or_repeating_a_line() {
+        let pool = LinePool::new(97, 5);
         pool.publish(4);
         let mut all: std::vec::Vec<Task> = std::thread::scope(|scope| {
             let workers: std::vec::Vec<_> = (0..4)
@@ -170,20 +172,17 @@ mod tests {
                 .flat_map(|w| w.join().unwrap())
                 .collect()
         });
-        all.sort_by_key(|t| (t.frame, t.column));
+        all.sort_by_key(|t| (t.frame, t.line));
         assert_eq!(all.len(), 97 * 5);
         for (i, task) in all.iter().enumerate() {
-            assert_eq!(
-                (task.frame, task.column),
-                ((i / 97) as u32, (i % 97) as u32)
-            );
+            assert_eq!((task.frame, task.line), ((i / 97) as u32, (i % 97) as u32));
         }
     }
 
     #[test]
     fn empty_pools_are_finished() {
-        assert_eq!(ColumnPool::new(0, 3).take(), Err(Wait::Finished));
-        let none = ColumnPool::new(5, 0);
+        assert_eq!(LinePool::new(0, 3).take(), Err(Wait::Finished));
+        let none = LinePool::new(5, 0);
         none.publish(0);
         assert_eq!(none.take(), Err(Wait::Finished));
     }

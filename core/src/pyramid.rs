@@ -184,9 +184,8 @@ impl<'a> Pyramid<'a> {
             let (c, c_rest) = colors.split_at(points);
             let (b, b_rest) = bounds.split_at(cells);
             (heights, colors, bounds) = (h_rest, c_rest, b_rest);
-            // Coarse levels never exceed the base's highest height, and the
-            // filters keep its steepest slope per voxel (see `slope_bound`).
-            let coarse = Terrain::with_bounds(w, d, h, c, terrain.max_height(), terrain.max_step());
+            // Coarse levels never exceed the base's highest height.
+            let coarse = Terrain::with_bounds(w, d, h, c, terrain.max_height());
             // Capacities hold every level a map of MAX_MAP_SIDE can have.
             let _ = pyramid.levels.push(coarse);
             let _ = pyramid.bounds.push(b);
@@ -274,18 +273,6 @@ impl<'a> Pyramid<'a> {
     /// Whether the hierarchical first hit can be used.
     pub fn has_bounds(&self) -> bool {
         !self.bounds.is_empty()
-    }
-
-    /// A neighbour-difference bound (U12.4 per voxel) that holds on every
-    /// level: both filters keep level 0's slope per voxel, and the mean's
-    /// rounding adds at most half a unit per level over `2^l` voxels.
-    pub fn slope_bound(&self) -> u16 {
-        let base = self.base().max_step();
-        if self.levels.len() > 1 {
-            base.saturating_add(1)
-        } else {
-            base
-        }
     }
 
     /// Bytes of terrain the pyramid lends the caster: every level and the

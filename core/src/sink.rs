@@ -29,7 +29,11 @@ impl Sample {
     }
 }
 
-/// Receives pixels column by column, each column bottom to top.
+/// Receives finished pixels, each once, line by line through the
+/// vertical's vanishing point (see [`View::lines`](crate::View::lines)):
+/// at pitch 0 each column bottom to top, under pitch in no row or column
+/// order. A sink that needs columns (a display) takes them from a
+/// [`Framebuffer`].
 pub trait Sink {
     /// Pixel `(x, y)` (y = 0 at the top) is finished. Out-of-range pixels are
     /// the sink's to discard; they must never panic.

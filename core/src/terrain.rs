@@ -15,7 +15,6 @@ pub struct Terrain<'a> {
     width: u32,
     depth: u32,
     max_height: u16,
-    max_step: u16,
 }
 
 /// Why a terrain was refused.
@@ -67,32 +66,18 @@ impl<'a> Terrain<'a> {
             return Err(TerrainError::ColorsLength);
         }
         let max_height = heights.iter().copied().max().unwrap_or(0);
-        let w = width as usize;
-        let along_x = heights
-            .windows(2)
-            .enumerate()
-            .filter(|(i, _)| (i + 1) % w != 0);
-        let along_y = heights.iter().zip(&heights[w..]);
-        let max_step = along_x
-            .map(|(_, p)| p[0].abs_diff(p[1]))
-            .chain(along_y.map(|(a, b)| a.abs_diff(*b)))
-            .max()
-            .unwrap_or(0);
-        Ok(Self::with_bounds(
-            width, depth, heights, colors, max_height, max_step,
-        ))
+        Ok(Self::with_bounds(width, depth, heights, colors, max_height))
     }
 
-    /// A terrain whose highest height and steepest step are already known
-    /// (checked by [`Terrain::new`], or a pyramid level, bounded by the
-    /// level below: see [`crate::Pyramid::new`]).
+    /// A terrain whose highest height is already known (checked by
+    /// [`Terrain::new`], or a pyramid level, bounded by the level below:
+    /// see [`crate::Pyramid::new`]).
     pub(crate) fn with_bounds(
         width: u32,
         depth: u32,
         heights: &'a [u16],
         colors: &'a [Rgb],
         max_height: u16,
-        max_step: u16,
     ) -> Self {
         Self {
             heights,
@@ -100,7 +85,6 @@ impl<'a> Terrain<'a> {
             width,
             depth,
             max_height,
-            max_step,
         }
     }
 
@@ -138,11 +122,6 @@ impl<'a> Terrain<'a> {
     pub fn max_height(&self) -> u16 {
         self.max_height
     }
-    /// The largest height difference between neighbouring grid points
-    /// (U12.4): the slope bound that makes vertical ray coherence exact.
-    pub fn max_step(&self) -> u16 {
-        self.max_step
-    }
     /// Bytes of terrain this view of the data covers (heights and colors).
     pub fn bytes(&self) -> usize {
         core::mem::size_of_val(self.heights) + core::mem::size_of_val(self.colors)
@@ -174,17 +153,6 @@ mod tests {
             TerrainError::TooLarge
         );
         assert!(Terrain::new(2, 2, &h, &c).is_ok());
-    }
-
-    #[test]
-    fn max_step_looks_along_both_axes_but_not_across_rows() {
-        // 3 x 2: rows [0 5 7] and [1 5 40]; the wrap 7 -> 1 is not a neighbour.
-        let h = [0, 5, 7, 1, 5, 40];
-        let c = [[0u8; 3]; 6];
-        assert_eq!(Terrain::new(3, 2, &h, &c).unwrap().max_step(), 35);
-        // Here the wrap 7 -> 1 (6) would be the largest: it must not count.
-        let h = [0, 5, 7, 1, 5, 8];
-        assert_eq!(Terrain::new(3, 2, &h, &c).unwrap().max_step(), 5);
     }
 
     #[test]

@@ -72,8 +72,8 @@ pub struct FrameCheck {
     pub display_differing_pixels: usize,
     /// Kernel steps of the host render (same traversal as the board's).
     pub steps: u64,
-    /// The board's core clock ticks for the kernel render and for the
-    /// render through the display driver.
+    /// The board's core clock ticks for the kernel render, and for the
+    /// render plus sending the frame through the display driver.
     pub kernel_ticks: u64,
     /// See `kernel_ticks`.
     pub display_ticks: u64,
@@ -306,8 +306,13 @@ fn display_capture(
     display
         .init(&mut NoDelay)
         .map_err(|e| Error::new(e.to_string()))?;
-    render(pyramid, view, options, &mut display, &mut NoProbe);
-    display.finish().map_err(|e| Error::new(e.to_string()))?;
+    let mut colors = vec![[0u8; 3]; width as usize * height as usize];
+    let mut framebuffer =
+        Framebuffer::new(&mut colors, width, height).map_err(|e| Error::new(e.to_string()))?;
+    render(pyramid, view, options, &mut framebuffer, &mut NoProbe);
+    display
+        .send_frame(&colors)
+        .map_err(|e| Error::new(e.to_string()))?;
     let _ = display.release();
     let wire = bus.into_written().map_err(|e| Error::new(e.to_string()))?;
     Ok(wire.to_vec())

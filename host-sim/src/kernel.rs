@@ -83,7 +83,7 @@ pub fn render_kernel(
         method: match options.coherence {
             Coherence::Off => "kernel-no-coherence",
             Coherence::Exact => "kernel-exact-coherence",
-            Coherence::Bounded { .. } => "kernel",
+            Coherence::AcrossLevels => "kernel",
         },
         pixels,
         rays: probe.rays,

@@ -4,6 +4,8 @@
 //! the camera into three fixed-point direction vectors, and every ray of the
 //! frame is derived from them with integer arithmetic only (see [`ray`]).
 
+pub(crate) mod lines;
+pub use lines::max_lines;
 pub(crate) mod ray;
 
 use crate::config::{
@@ -91,6 +93,8 @@ pub struct View {
     /// Pixels per unit of depth (`W / 2·tan(hfov/2)`), Q16: a voxel at depth
     /// `D` is `focal / D` pixels wide.
     pub(crate) focal: i64,
+    /// The image lines through the vertical's vanishing point.
+    pub(crate) lines: lines::Lines,
     width: u32,
     height: u32,
 }
@@ -155,6 +159,7 @@ impl View {
             per_column: to_fixed(right * step),
             per_row: to_fixed(up * step),
             focal: (w / (2.0 * tangent) * 65536.0) as i64,
+            lines: lines::Lines::new(width, height, pitch, tangent),
             width,
             height,
         })

@@ -133,36 +133,75 @@ pub(crate) struct Cursor {
     pub t: i32,
 }
 
+/// The horizontal direction every ray of an image line shares: which grid
+/// lines it crosses and its minor slope. Sharing it bit for bit puts the
+/// rays of a line in one vertical plane, sample for sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Heading {
+    pub key: RayKey,
+    /// Minor-axis increment per major-axis step, Q16 (within ±1).
+    dminor: i64,
+}
+
+impl Heading {
+    /// The heading of direction `d` (I32F32 bits).
+    pub fn of(d: &[i64; 3]) -> Self {
+        let x_major = d[0].abs() >= d[1].abs();
+        let (d_major, d_minor) = if x_major { (d[0], d[1]) } else { (d[1], d[0]) };
+        let run = d_major.abs();
+        // Directions are I32F32 below 2^10 in magnitude (a line's far-edge
+        // point lies within a few image sizes), so `<< 16` cannot overflow;
+        // |d_minor| <= run keeps the minor slope within ±1.
+        Self {
+            key: RayKey {
+                x_major,
+                forward: d_major >= 0,
+            },
+            dminor: if run == 0 {
+                0
+            } else {
+                (d_minor << COORD_FRAC_BITS) / run
+            },
+        }
+    }
+}
+
 impl View {
-    /// Sets up the ray of pixel column `column` at `row16` sixteenths of a
-    /// pixel above the center of the bottom row.
+    /// The height change per major-axis step (Q16) of direction `d` under
+    /// `heading`, and the run: `d`'s major component (I32F32 bits).
+    #[inline]
+    pub(crate) fn slope(d: &[i64; 3], heading: &Heading) -> (i64, i64) {
+        let RayKey { x_major, forward } = heading.key;
+        let d_major = if x_major { d[0] } else { d[1] };
+        // Within rounding of the vanishing point the sign may disagree: that
+        // ray is vertical.
+        let run = if forward { d_major } else { -d_major }.max(0);
+        let max_slope = i64::from(MAX_RAY_SLOPE) << COORD_FRAC_BITS;
+        let dz = if run == 0 {
+            if d[2] < 0 {
+                -max_slope
+            } else {
+                max_slope
+            }
+        } else {
+            ((d[2] << COORD_FRAC_BITS) / run).clamp(-max_slope, max_slope)
+        };
+        (dz, run)
+    }
+
+    /// Sets up the ray along direction `d` (I32F32 bits) with `heading`'s
+    /// horizontal direction: `d`'s horizontal part only sets how steep the
+    /// ray is (it is parallel to the heading's, up to rounding).
     pub(crate) fn ray(
         &self,
         terrain: &Terrain<'_>,
         plan: &LodPlan,
-        column: u32,
-        row16: i64,
+        d: [i64; 3],
+        heading: &Heading,
     ) -> Ray {
-        let d: [i64; 3] = core::array::from_fn(|i| {
-            self.base[i].to_bits()
-                + self.per_column[i].to_bits() * i64::from(column)
-                + ((self.per_row[i].to_bits() * row16) >> 4)
-        });
-        let x_major = d[0].abs() >= d[1].abs();
-        let (d_major, d_minor) = if x_major { (d[0], d[1]) } else { (d[1], d[0]) };
-        let forward = d_major >= 0;
-        let run = d_major.abs();
-        let max_slope = i64::from(MAX_RAY_SLOPE) << COORD_FRAC_BITS;
-        // Directions are I32F32 below 2^7 in magnitude, so `<< 16` cannot
-        // overflow; |d_minor| <= run keeps the minor slope within ±1.
-        let (dminor, dz) = if run == 0 {
-            (0, if d[2] < 0 { -max_slope } else { max_slope })
-        } else {
-            (
-                (d_minor << COORD_FRAC_BITS) / run,
-                ((d[2] << COORD_FRAC_BITS) / run).clamp(-max_slope, max_slope),
-            )
-        };
+        let RayKey { x_major, forward } = heading.key;
+        let (dz, run) = Self::slope(&d, heading);
+        let dminor = heading.dminor;
 
         let [ex, ey, ez] = self.eye.map(|v| v.to_bits());
         let (e_major, e_minor) = if x_major { (ex, ey) } else { (ey, ex) };
@@ -469,6 +508,27 @@ impl Ray {
     }
 }
 
+#[cfg(test)]
+impl View {
+    /// The ray through the center of pixel column `column`, `row16`
+    /// sixteenths of a pixel above the bottom row's center, with its own
+    /// heading (for tests of the ray itself).
+    pub(crate) fn pixel_ray(
+        &self,
+        terrain: &Terrain<'_>,
+        plan: &LodPlan,
+        column: u32,
+        row16: i64,
+    ) -> Ray {
+        let d: [i64; 3] = core::array::from_fn(|i| {
+            self.base[i].to_bits()
+                + self.per_column[i].to_bits() * i64::from(column)
+                + ((self.per_row[i].to_bits() * row16) >> 4)
+        });
+        self.ray(terrain, plan, d, &Heading::of(&d))
+    }
+}
+
 /// `a / b`, truncated, as `i64` division does; by the 32-bit divide when
 /// both fit. The quotient is the same, and on 32-bit cores a 64-bit
 /// division is a library call of a hundred instructions or more.
@@ -496,7 +556,7 @@ fn div_ceil(a: i64, b: i64) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::column::walk::Stage;
+    use crate::caster::walk::Stage;
     use crate::view::Camera;
 
     #[test]
@@ -550,7 +610,7 @@ mod tests {
             let view = View::new(&cam, 32, 8).unwrap();
             for col in 0..32 {
                 for row in 0..8 {
-                    let ray = view.ray(&terrain, &LodPlan::SINGLE, col, row * 16);
+                    let ray = view.pixel_ray(&terrain, &LodPlan::SINGLE, col, row * 16);
                     let stage = Stage::new(&pyramid, &ray, 0);
                     for k in ray.first..=ray.end {
                         let cur = ray.cursor(&pyramid, k);
@@ -575,7 +635,7 @@ mod tests {
             level1_depth: 3 << 16,
             top: 4,
         };
-        view.ray(&terrain, &plan, 32, 0)
+        view.pixel_ray(&terrain, &plan, 32, 0)
     }
 
     #[test]

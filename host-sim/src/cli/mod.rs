@@ -13,8 +13,8 @@ use crate::scene::{load_pair, procedural, Scene};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use terracast::{
-    Camera, Coherence, HeightFilter, RenderOptions, Resolution, Rgb, Terrain, VerticalSamples,
-    View, ViewError, U8F8,
+    Camera, Coherence, HeightFilter, RenderOptions, Resolution, Rgb, VerticalSamples, View,
+    ViewError, U8F8,
 };
 
 /// Real-time terrain flythrough: the terracast kernel on the host.
@@ -91,10 +91,10 @@ struct BoardVerifyArgs {
 pub enum CoherenceArg {
     /// Every ray from the eye.
     Off,
-    /// Skip only where no hit can be missed: same image as `off`.
+    /// Resume only between rays on the same levels: same image as `off`.
     Exact,
-    /// Skip assuming a slope bound.
-    Bounded,
+    /// Resume across level switches too (the default, faster on the pyramid).
+    AcrossLevels,
 }
 
 /// Which pyramid levels the kernel steps on.
@@ -221,14 +221,12 @@ struct RenderArgs {
     /// Renderer.
     #[arg(long, value_enum, default_value_t = Method::Kernel)]
     method: Method,
-    /// Kernel: vertical ray coherence. `exact` gives the same image as `off`
-    /// (every ray cast from the eye); `bounded` assumes terrain no steeper
-    /// than --coherence-slope and is faster under pitch.
-    #[arg(long, value_enum, default_value_t = CoherenceArg::Bounded)]
+    /// Kernel: vertical ray coherence along each image line. `exact` gives
+    /// the same image as `off` (every ray cast from the eye); `across-levels`
+    /// also resumes where the ray before stepped on other pyramid levels,
+    /// which is faster under pitch.
+    #[arg(long, value_enum, default_value_t = CoherenceArg::AcrossLevels)]
     coherence: CoherenceArg,
-    /// Kernel: the slope (height per voxel) that `--coherence bounded` assumes.
-    #[arg(long, default_value_t = 2.0, value_name = "SLOPE")]
-    coherence_slope: f32,
     /// Kernel: step on the pyramid's coarser levels in the distance
     /// (`multi`), or on the full-resolution map only (`single`).
     #[arg(long, value_enum, default_value_t = ResolutionArg::Multi)]
@@ -451,11 +449,7 @@ fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
     let coherence = match args.coherence {
         CoherenceArg::Off => Coherence::Off,
         CoherenceArg::Exact => Coherence::Exact,
-        CoherenceArg::Bounded => {
-            let slope = Terrain::quantize_height(args.coherence_slope)
-                .ok_or_else(|| Error::new("--coherence-slope must be between 0 and 4095"))?;
-            Coherence::Bounded { slope }
-        }
+        CoherenceArg::AcrossLevels => Coherence::AcrossLevels,
     };
     let resolution = match args.resolution {
         ResolutionArg::Single => Resolution::Single,

@@ -2,13 +2,14 @@
 //!
 //! - The **master** sets up each frame's view, tests the map's tiles against
 //!   the frame's footprint, loads the footprint's missing tiles from disk
-//!   into global memory, and publishes the frame to the column pool. It
+//!   into global memory, and publishes the frame to the line pool. It
 //!   works one frame ahead: it prepares frame `f + 1` once the workers have
 //!   started on frame `f`.
-//! - Each **worker** takes a column from the kernel's [`ColumnPool`] (one
-//!   processor at a time holds its lock), replays the column's recorded
-//!   events, and takes the next; past the last column of a frame it goes on
-//!   with the next frame. A tile not in its local memory is copied from
+//! - Each **worker** takes an image line from the kernel's [`LinePool`]
+//!   (one processor at a time holds its lock), replays the line's recorded
+//!   events, and takes the next; past the last line of a frame it goes on
+//!   with the next frame. The pool has as many lines a frame as the frame
+//!   with the most; a frame's lines past its own last are empty. A tile not in its local memory is copied from
 //!   global memory through the banks; a tile not in global memory either is
 //!   a critical load from disk, waited for.
 //!
@@ -18,7 +19,7 @@
 use super::machine::{Machine, Ps};
 use super::memory::{Banks, DiskChannel, LruCache};
 use super::trace::{Event, FrameTrace, TileKey};
-use terracast::{ColumnPool, Task, Wait};
+use terracast::{LinePool, Task, Wait};
 
 /// Why a frame missed its deadline.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -48,7 +49,7 @@ impl MissReason {
 /// One frame's outcome.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameResult {
-    /// When its last column was done.
+    /// When its last line was done.
     pub done: Ps,
     /// Since the previous frame was done (since the start for frame 0).
     pub time: Ps,
@@ -108,8 +109,8 @@ impl SimResult {
 struct Worker {
     clock: Ps,
     busy: Ps,
-    /// The column being replayed and the next event's index.
-    column: Option<(Task, usize)>,
+    /// The line being replayed and the next event's index.
+    line: Option<(Task, usize)>,
     /// Waiting for a frame to be published.
     waiting: bool,
     finished: bool,
@@ -120,7 +121,7 @@ struct Worker {
 struct FrameBook {
     published_at: Option<Ps>,
     started_at: Option<Ps>,
-    columns_done: u32,
+    lines_done: u32,
     done: Ps,
     compute: Ps,
     transfer: Ps,
@@ -132,8 +133,8 @@ struct FrameBook {
 
 /// Runs `frames` (all of one image size) on `machine`.
 pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
-    let width = frames.first().map_or(0, |f| f.columns.len()) as u32;
-    let pool = ColumnPool::new(width, frames.len() as u32);
+    let lines = frames.iter().map(|f| f.lines.len()).max().unwrap_or(0) as u32;
+    let pool = LinePool::new(lines, frames.len() as u32);
     let mut banks = Banks::new(machine);
     let mut disk = DiskChannel::default();
     let mut global: LruCache<TileKey> = LruCache::new(machine.global_tiles());
@@ -143,7 +144,7 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
         .map(|_| Worker {
             clock: 0,
             busy: 0,
-            column: None,
+            line: None,
             waiting: false,
             finished: false,
             local: LruCache::new(machine.local_tiles()),
@@ -202,8 +203,8 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
             break;
         };
         let worker = &mut workers[index];
-        let Some((task, next_event)) = worker.column else {
-            // Take a column, under the pool's lock.
+        let Some((task, next_event)) = worker.line else {
+            // Take a line, under the pool's lock.
             let start = worker.clock.max(lock_free_at);
             lock_free_at = start + lock_time;
             worker.clock = lock_free_at;
@@ -215,10 +216,10 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
                         book.disk_wait += published - worker.clock;
                         worker.clock = published;
                     }
-                    if task.column == 0 {
+                    if task.line == 0 {
                         book.started_at = Some(worker.clock);
                     }
-                    worker.column = Some((task, 0));
+                    worker.line = Some((task, 0));
                 }
                 Err(Wait::NotPublished { .. }) => worker.waiting = true,
                 Err(Wait::Finished) => worker.finished = true,
@@ -226,8 +227,8 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
             continue;
         };
         let book = &mut books[task.frame as usize];
-        let events = &frames[task.frame as usize].columns[task.column as usize];
-        match events.get(next_event) {
+        let events = frames[task.frame as usize].lines.get(task.line as usize);
+        match events.and_then(|e| e.get(next_event)) {
             Some(event) => {
                 let before = worker.clock;
                 if worker.local.touch(event.tile).is_none() {
@@ -250,12 +251,12 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
                 worker.clock += compute;
                 book.compute += compute;
                 worker.busy += worker.clock - before;
-                worker.column = Some((task, next_event + 1));
+                worker.line = Some((task, next_event + 1));
             }
             None => {
-                worker.column = None;
-                book.columns_done += 1;
-                if book.columns_done == width {
+                worker.line = None;
+                book.lines_done += 1;
+                if book.lines_done == lines {
                     book.done = worker.clock;
                 }
             }

@@ -1,14 +1,14 @@
 //! The parallel machine: the kernel's work on a modeled multiprocessor
 //! (processors with local memory, interleaved global memory banks, a disk,
-//! frame deadlines), and the same column pool on the host's real cores.
+//! frame deadlines), and the same line pool on the host's real cores.
 //!
-//! 1. [`trace::record_frame`] runs the kernel unchanged on each column of a
+//! 1. [`trace::record_frame`] runs the kernel unchanged on each image line of a
 //!    view, observing it through its probe.
 //! 2. [`engine::simulate`] replays the recordings on a [`Machine`] in
 //!    simulated time. Nothing depends on the host's speed or load: the same
 //!    inputs give the same times on every run.
 //! 3. [`threads::render_threads`] drives std threads from the same
-//!    [`terracast::ColumnPool`] and measures real time.
+//!    [`terracast::LinePool`] and measures real time.
 
 pub mod engine;
 pub mod footprint;

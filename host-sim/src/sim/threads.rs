@@ -1,24 +1,24 @@
-//! The column pool on the host's real cores: each thread takes columns from
-//! the kernel's [`ColumnPool`] and renders them with
-//! [`render_column`], frame after frame with no barrier between frames.
+//! The line pool on the host's real cores: each thread takes image lines
+//! from the kernel's [`LinePool`] and renders them with [`render_line`],
+//! frame after frame with no barrier between frames.
 
 use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
-    render_column, Camera, ColumnPool, NoProbe, RenderOptions, Rgb, Sample, Sink, View, Wait,
+    render_line, Camera, LinePool, NoProbe, RenderOptions, Rgb, Sample, Sink, View, Wait,
 };
 
-/// One column's pixels, top to bottom.
-struct ColumnBuffer {
-    colors: Vec<Rgb>,
+/// A worker's pixels of one frame, as they come: a line's pixels are
+/// scattered over the image.
+struct Pixels {
+    frame: u32,
+    put: Vec<(u32, u32, Rgb)>,
 }
 
-impl Sink for ColumnBuffer {
-    fn put(&mut self, _x: u32, y: u32, sample: Sample) {
-        if let Some(pixel) = self.colors.get_mut(y as usize) {
-            *pixel = sample.color;
-        }
+impl Sink for Pixels {
+    fn put(&mut self, x: u32, y: u32, sample: Sample) {
+        self.put.push((x, y, sample.color));
     }
 }
 
@@ -56,32 +56,38 @@ pub fn render_threads(
         .iter()
         .map(|c| View::new(c, size.0, size.1).map_err(|e| Error::new(format!("bad view: {e}"))))
         .collect::<Result<Vec<_>>>()?;
-    let pool = ColumnPool::new(size.0, views.len() as u32);
+    let lines = views.iter().map(View::lines).max().unwrap_or(0);
+    let pool = LinePool::new(lines, views.len() as u32);
     let started = Instant::now();
     for frame in 0..views.len() as u32 {
         pool.publish(frame);
     }
-    let done: Vec<(u32, u32, Vec<Rgb>)> = std::thread::scope(|scope| {
+    let done: Vec<Pixels> = std::thread::scope(|scope| {
         let workers: Vec<_> = (0..threads)
             .map(|_| {
                 scope.spawn(|| {
-                    let mut mine = Vec::new();
+                    let mut mine: Vec<Pixels> = Vec::new();
                     loop {
                         match pool.take() {
                             Ok(task) => {
-                                let mut column = ColumnBuffer {
-                                    colors: vec![[0; 3]; size.1 as usize],
+                                if mine.last().is_none_or(|p| p.frame != task.frame) {
+                                    mine.push(Pixels {
+                                        frame: task.frame,
+                                        put: Vec::new(),
+                                    });
+                                }
+                                let Some(pixels) = mine.last_mut() else {
+                                    continue;
                                 };
                                 let view = &views[task.frame as usize];
-                                render_column(
+                                render_line(
                                     &pyramid,
                                     view,
                                     options,
-                                    task.column,
-                                    &mut column,
+                                    task.line,
+                                    pixels,
                                     &mut NoProbe,
                                 );
-                                mine.push((task.frame, task.column, column.colors));
                             }
                             Err(Wait::NotPublished { .. }) => std::thread::yield_now(),
                             Err(Wait::Finished) => break,
@@ -99,9 +105,12 @@ pub fn render_threads(
     let seconds = started.elapsed().as_secs_f64();
     let (w, h) = (size.0 as usize, size.1 as usize);
     let mut frames = vec![vec![[0u8; 3]; w * h]; views.len()];
-    for (frame, column, colors) in done {
-        for (y, color) in colors.into_iter().enumerate() {
-            frames[frame as usize][y * w + column as usize] = color;
+    for pixels in done {
+        let frame = &mut frames[pixels.frame as usize];
+        for (x, y, color) in pixels.put {
+            if let Some(pixel) = frame.get_mut(y as usize * w + x as usize) {
+                *pixel = color;
+            }
         }
     }
     Ok(ThreadedRun { frames, seconds })

@@ -1,8 +1,8 @@
-//! What the kernel does for each column, recorded once through its probe and
+//! What the kernel does for each image line, recorded once through its probe and
 //! replayed by the simulator on any machine.
 //!
 //! The kernel runs unchanged: a [`Recorder`] (a [`Probe`]) turns its events
-//! into a list of [`Event`]s per column — work counts, then a run of fetches
+//! into a list of [`Event`]s per line — work counts, then a run of fetches
 //! from one terrain tile. The machine's costs are applied only at replay, so
 //! one recording serves every machine description.
 
@@ -11,7 +11,7 @@ use super::machine::Machine;
 use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use terracast::{
-    level_side, render_column, Camera, Probe, Pyramid, RenderOptions, Sample, Sink, View,
+    level_side, render_line, Camera, Probe, Pyramid, RenderOptions, Sample, Sink, View,
 };
 
 /// A terrain tile: pyramid level and tile coordinates on that level.
@@ -43,15 +43,15 @@ pub struct Event {
 /// One frame's recording.
 #[derive(Debug, Clone)]
 pub struct FrameTrace {
-    /// Events of each image column.
-    pub columns: Vec<Vec<Event>>,
+    /// Events of each image line (see [`View::lines`]).
+    pub lines: Vec<Vec<Event>>,
     /// The tiles the master loads for the frame: its footprint.
     pub footprint: Vec<TileKey>,
     /// Tiles the master tested to find the footprint.
     pub tiles_tested: u64,
 }
 
-/// Records the kernel's events of one column.
+/// Records the kernel's events of one line.
 #[derive(Debug)]
 pub struct Recorder<'a> {
     /// Width of each level's voxel grid.
@@ -110,13 +110,13 @@ impl<'a> Recorder<'a> {
         self.widths.get(usize::from(level)).copied().unwrap_or(1)
     }
 
-    /// Ends the column: every event recorded.
+    /// Ends the line: every event recorded.
     pub fn finish(&mut self) -> Vec<Event> {
         if let Some(done) = self.current.take() {
             self.events.push(done);
         }
         // Work after the last fetch (a ray that saw sky at once) joins the
-        // last event; a column with no fetch at all keeps it on a tile of
+        // last event; a line with no fetch at all keeps it on a tile of
         // its own.
         let (rays, steps, colors) = std::mem::take(&mut self.pending);
         match self.events.last_mut() {
@@ -180,7 +180,7 @@ impl Sink for Discard {
     fn put(&mut self, _x: u32, _y: u32, _sample: Sample) {}
 }
 
-/// Records every column of a view.
+/// Records every line of a view.
 pub fn record_frame(
     scene: &KernelScene,
     camera: &Camera,
@@ -195,18 +195,11 @@ pub fn record_frame(
     let widths: Vec<u32> = (0..pyramid.levels())
         .map(|l| level_side(base.width(), l as u32))
         .collect();
-    let mut columns = Vec::with_capacity(size.0 as usize);
-    for column in 0..size.0 {
+    let mut lines = Vec::with_capacity(view.lines() as usize);
+    for line in 0..view.lines() {
         let mut recorder = Recorder::new(&widths, machine.tiles.side);
-        render_column(
-            &pyramid,
-            &view,
-            options,
-            column,
-            &mut Discard,
-            &mut recorder,
-        );
-        columns.push(recorder.finish());
+        render_line(&pyramid, &view, options, line, &mut Discard, &mut recorder);
+        lines.push(recorder.finish());
     }
     let (footprint, tiles_tested) = footprint_tiles(
         camera,
@@ -216,7 +209,7 @@ pub fn record_frame(
         machine.tiles.side,
     );
     Ok(FrameTrace {
-        columns,
+        lines,
         footprint,
         tiles_tested,
     })
@@ -243,12 +236,12 @@ mod tests {
             &mut Discard,
             &mut counts,
         );
-        let events = trace.columns.iter().flatten();
+        let events = trace.lines.iter().flatten();
         let sum = |f: fn(&Event) -> u32| events.clone().map(|e| u64::from(f(e))).sum::<u64>();
         assert_eq!(sum(|e| e.rays), counts.rays);
         assert_eq!(sum(|e| e.steps), counts.steps);
         assert_eq!(sum(|e| e.colors), counts.color_fetches);
-        assert_eq!(trace.columns.len(), 80);
+        assert_eq!(trace.lines.len() as u32, view.lines());
         // Each event names the tile its fetches read, inside the map.
         let side = machine.tiles.side;
         assert!(events

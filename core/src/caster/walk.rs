@@ -182,7 +182,7 @@ pub(crate) struct Cell {
     h1: i32,
 }
 
-/// The last two cells a column's rays hit or retraced to: the next ray
+/// The last two cells a line's rays hit or retraced to: the next ray
 /// tests them again.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Recent {
@@ -414,7 +414,7 @@ mod tests {
             // Level 1 begins 14 voxels out (pixel-to-voxel ratio 4).
             let plan = LodPlan::new(&view, 4 << 8, pyramid.top());
             for column in [0, 20, 63] {
-                let ray = view.ray(&terrain, &plan, column, 48);
+                let ray = view.pixel_ray(&terrain, &plan, column, 48);
                 let mut levels_seen = 0u8;
                 let mut k = ray.start;
                 loop {

@@ -1,5 +1,5 @@
 //! The hierarchical first hit (Cohen-Or §2, after Cohen & Shaked [5]): the
-//! bottom ray of a column cannot resume from a ray below it, so it goes
+//! first ray of an image line cannot resume from a ray before it, so it goes
 //! top-down through the pyramid's height bounds instead of voxel by voxel.
 //!
 //! On bound level `b` the ray tests the segment up to its next grid line of

@@ -1,20 +1,14 @@
-//! The column caster: each image column bottom to top, one ray after another.
+//! The caster: each image line through the vertical's vanishing point,
+//! one ray after another by rising elevation (see [`crate::View::lines`]).
 //!
-//! With vertical ray coherence on, each ray starts at the sample where the
-//! ray below it hit (Cohen-Or §2). Under a pitched pinhole camera the rays of
-//! a column are not in one vertical plane: the upper ray drifts sideways as
-//! well as rising, and may pass over ground the lower ray never saw. The
-//! caster keeps coherence exact anyway:
-//!
-//! * a ray that rises faster (per step) than the terrain's steepest
-//!   neighbour difference can climb across its sideways drift is above the
-//!   surface wherever the ray below it was, except within a few steps of the
-//!   eye where fixed-point rounding dominates; those few are walked, then
-//!   the ray jumps to the lower ray's hit ([`resume_plan`]);
-//! * any other ray is cast from the eye.
-//!
-//! So the image with coherence equals the image with every ray cast from
-//! the eye, bit for bit (tested). A resumed ray that starts below the
+//! The rays of a line lie in one vertical plane and share their horizontal
+//! direction bit for bit, so each ray can start at the sample where the ray
+//! before it hit (Cohen-Or §2): it is no lower than that ray at any sample,
+//! and the surface below that ray is the surface below it ([`resume_at`]).
+//! With levels, the ray before may have stepped on other levels than this
+//! one near a switch; [`Coherence::Exact`] casts such a ray from the eye,
+//! so the image equals the image with every ray cast from the eye, bit for
+//! bit (tested), and [`Coherence::AcrossLevels`] resumes it anyway. A resumed ray that starts below the
 //! surface retraces backwards to the last sample above it (Qu et al. §4);
 //! the hit is refined between that sample and the first one below by the
 //! ratio of their clearances, and the color blended across both grid lines.
@@ -22,42 +16,37 @@
 mod first_hit;
 pub(crate) mod walk;
 
-use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS};
 use crate::probe::Probe;
 use crate::pyramid::Pyramid;
 use crate::sink::{Sample, Sink};
-use crate::view::ray::{div_trunc, Cursor, Lod, LodPlan, Ray, RayKey};
+use crate::view::ray::{Cursor, Heading, Lod, LodPlan, Ray, RayKey};
 use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
 use first_hit::first_hit;
 use fixed::types::U8F8;
 use walk::{lerp, walk, Recent, Stage, Walk};
 
-/// How each ray of a column may use the ray below it.
+/// How each ray of an image line may use the ray before it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Coherence {
     /// Every ray is cast from the eye: the slow baseline.
     Off,
-    /// A ray skips ahead only where the terrain's steepest neighbour
-    /// difference could not have hidden a hit from it, and (with levels)
-    /// only from a ray with the same level schedule: the image equals
-    /// [`Coherence::Off`]'s bit for bit.
+    /// A ray starts where the ray before it hit when both step on the same
+    /// levels (always at single resolution): the image equals
+    /// [`Coherence::Off`]'s bit for bit. On the pyramid the rays of a line
+    /// switch levels at different samples, so under pitch most are cast
+    /// from the eye.
     Exact,
-    /// As [`Coherence::Exact`], assuming terrain no steeper than `slope`
-    /// (U12.4 height units per voxel), and resuming across slightly
-    /// different level schedules. Faster under pitch; where the real
-    /// terrain is steeper, a ray may miss a ridge the ray below it passed
-    /// over (the bound measured in the coherence tests).
-    Bounded {
-        /// Assumed steepest neighbour difference, U12.4 (16 = one voxel
-        /// of height per voxel).
-        slope: u16,
-    },
+    /// As [`Coherence::Exact`], and across different level schedules too:
+    /// near a switch the ray before may have cleared a coarser (or finer)
+    /// surface than this ray's, so a hit within a level's difference of it
+    /// can be missed (the bound measured in the coherence tests).
+    AcrossLevels,
 }
 
 impl Coherence {
-    /// The default: [`Coherence::Bounded`] at a slope of 2 (about 63°).
-    pub const DEFAULT: Self = Self::Bounded { slope: 32 };
+    /// The default: [`Coherence::AcrossLevels`].
+    pub const DEFAULT: Self = Self::AcrossLevels;
 }
 
 /// Which levels of the pyramid the caster steps on.
@@ -85,10 +74,10 @@ impl Resolution {
     };
 }
 
-/// How many rays each pixel gets, spread over its height (Cohen-Or §2.1:
-/// at shallow pitch a pixel's footprint is long and thin, and one ray
-/// undersamples it). They share the column's coherence, so they add rays,
-/// not voxels.
+/// How many rays each pixel gets, spread along its image line (Cohen-Or
+/// §2.1: at shallow pitch a pixel's footprint is long and thin, and one ray
+/// undersamples it). They share the line's coherence, so they add rays, not
+/// voxels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum VerticalSamples {
     /// One ray through the pixel center.
@@ -119,14 +108,15 @@ impl VerticalSamples {
 /// Settings of the caster.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RenderOptions {
-    /// Vertical ray coherence: each ray resumes where the ray below it hit.
+    /// Vertical ray coherence: each ray resumes where the ray before it on
+    /// its image line hit.
     pub coherence: Coherence,
     /// Single resolution or the pyramid's levels.
     pub resolution: Resolution,
-    /// Rays cast from the eye (the bottom of each column, and any ray that
+    /// Rays cast from the eye (the first of each image line, and any ray that
     /// cannot resume) skip through the pyramid's height bounds.
     pub hierarchical_first_hit: bool,
-    /// Rays per pixel, spread vertically.
+    /// Rays per pixel, spread along the pixel's image line.
     pub vertical_samples: VerticalSamples,
     /// Color of rays that leave the terrain.
     pub sky: Rgb,
@@ -148,9 +138,8 @@ impl Default for RenderOptions {
 #[derive(Debug, Clone, Copy)]
 struct Frame {
     lod: LodPlan,
-    /// The slope bound the resume proof assumes; `None` casts every ray
-    /// from the eye.
-    slope: Option<u16>,
+    /// Rays may resume where the ray before hit.
+    resume: bool,
     /// Resume only between rays with equal level schedules.
     same_schedule: bool,
     first_hit: bool,
@@ -164,15 +153,14 @@ impl Frame {
                 LodPlan::new(view, pixel_to_voxel.to_bits(), pyramid.top())
             }
         };
-        let bound = pyramid.slope_bound();
-        let (slope, same_schedule) = match options.coherence {
-            Coherence::Off => (None, false),
-            Coherence::Exact => (Some(bound), true),
-            Coherence::Bounded { slope } => (Some(slope.min(bound)), false),
+        let (resume, same_schedule) = match options.coherence {
+            Coherence::Off => (false, false),
+            Coherence::Exact => (true, true),
+            Coherence::AcrossLevels => (true, false),
         };
         Self {
             lod,
-            slope,
+            resume,
             same_schedule,
             first_hit: options.hierarchical_first_hit && pyramid.has_bounds(),
         }
@@ -188,8 +176,8 @@ pub fn render<S: Sink, P: Probe>(
     probe: &mut P,
 ) {
     let frame = Frame::new(pyramid, view, options);
-    for column in 0..view.width() {
-        column_with(pyramid, view, options, &frame, column, sink, probe);
+    for line in 0..view.lines() {
+        line_with(pyramid, view, options, &frame, line, sink, probe);
     }
 }
 
@@ -205,53 +193,60 @@ struct Anchor {
     dz: i32,
 }
 
-/// Renders one image column, bottom to top. Columns are independent: a
-/// column pool may hand them to any number of workers.
-pub fn render_column<S: Sink, P: Probe>(
+/// Renders image line `line` (`0..view.lines()`; a line past the last
+/// renders nothing). Lines are independent and together cover every pixel
+/// once: a pool may hand them to any number of workers.
+pub fn render_line<S: Sink, P: Probe>(
     pyramid: &Pyramid<'_>,
     view: &View,
     options: &RenderOptions,
-    column: u32,
+    line: u32,
     sink: &mut S,
     probe: &mut P,
 ) {
     let frame = Frame::new(pyramid, view, options);
-    column_with(pyramid, view, options, &frame, column, sink, probe);
+    line_with(pyramid, view, options, &frame, line, sink, probe);
 }
 
-fn column_with<S: Sink, P: Probe>(
+fn line_with<S: Sink, P: Probe>(
     pyramid: &Pyramid<'_>,
     view: &View,
     options: &RenderOptions,
     frame: &Frame,
-    column: u32,
+    line: u32,
     sink: &mut S,
     probe: &mut P,
 ) {
+    let Some(line) = view.line(line) else {
+        return;
+    };
+    let heading = Heading::of(&line.reference);
     let terrain = pyramid.base();
     let mut anchor: Option<Anchor> = None;
     let mut recent = Recent::default();
-    let top_row = view.height() - 1;
     let log2 = options.vertical_samples.log2();
     let samples = 1i64 << log2;
-    for row in 0..view.height() {
+    // Sub-rays go by rising elevation too: the way the line is walked.
+    let step = i64::from(line.sector.step);
+    for pixel in line.pixels(view.height()) {
         let mut sum = [0u32; 3];
         let mut center = sky(options);
         for sub in 0..samples {
             // Sub-ray centers, in sixteenths of a pixel from the pixel center.
-            let offset = ((2 * sub + 1 - samples) * 8) >> log2;
+            let offset = (((2 * sub + 1 - samples) * 8) >> log2) * step;
             probe.ray();
-            let ray = view.ray(terrain, &frame.lod, column, i64::from(row) * 16 + offset);
+            let d = view.direction_on(&line, pixel.s, offset);
+            let ray = view.ray(terrain, &frame.lod, d, &heading);
             let sample = if ray.start > ray.end {
                 sky(options)
             } else {
-                let plan = anchor
-                    .zip(frame.slope)
-                    .and_then(|(a, slope)| resume_plan(&a, &ray, slope, frame.same_schedule));
+                let resume = anchor
+                    .filter(|_| frame.resume)
+                    .and_then(|a| resume_at(&a, &ray, frame.same_schedule));
                 let (sample, clear_until) = cast(
                     pyramid,
                     &ray,
-                    plan,
+                    resume,
                     frame.first_hit,
                     options,
                     &mut recent,
@@ -275,50 +270,27 @@ fn column_with<S: Sink, P: Probe>(
             }
         }
         let color = sum.map(|s| ((s + (1 << log2 >> 1)) >> log2) as u8);
-        sink.put(column, top_row - row, Sample { color, ..center });
+        sink.put(pixel.x, pixel.y, Sample { color, ..center });
     }
 }
 
-/// Where a ray may skip to: `(last prefix sample to walk, sample to resume
-/// at)`, or `None` to cast it from the eye.
+/// The sample a ray may start at instead of the eye: where the anchor (the
+/// ray cast before it on its line) hit, or `None` to cast it from the eye.
 ///
-/// Let the anchor ray be above the surface at samples `start..k`. At sample
-/// `i`, at distance `s ≥ i` from the eye, this ray is higher by at least
-/// `s·rise − 1` (Q16 bits) and sideways by at most `s·drift + 1`, and the
-/// sampled surface of level `l` (heights blended by a 12-bit weight of a
-/// level-`l` voxel, so positions are quantized to `16·2^l` Q16 bits) can be
-/// higher there by at most `L/16 · (s·drift + 16·2^l + 1)`, with `L` the
-/// slope bound in U12.4 per voxel, which holds on every level. So this ray
-/// is above wherever `s·(rise − L·drift/16) > 1 + (16·2^l + 1)·L/16`:
-/// everywhere past a short prefix, as long as both rays sample the same
-/// level there (`same_schedule`).
-fn resume_plan(anchor: &Anchor, ray: &Ray, slope: u16, same_schedule: bool) -> Option<(i32, i32)> {
-    if anchor.key != ray.key || (same_schedule && anchor.lod != ray.lod) {
+/// The rays of a line share their heading bit for bit, so at sample `i`
+/// both are at the same major and minor coordinates and read the same
+/// heights there. Their heights are `z0 + i·dz`, with `z0` the eye height
+/// plus `delta0·dz` rounded down (`delta0` the same for both): a ray whose
+/// `dz` is no smaller has a `z0` no smaller and is no lower at any sample
+/// `i >= 0`. So wherever the anchor was above the surface, this ray is too,
+/// on the same levels. With `same_schedule`, rays on other levels are cast
+/// from the eye.
+fn resume_at(anchor: &Anchor, ray: &Ray, same_schedule: bool) -> Option<i32> {
+    let same_plane = anchor.key == ray.key && anchor.dminor == ray.dminor.to_bits();
+    if !same_plane || ray.dz.to_bits() < anchor.dz || (same_schedule && anchor.lod != ray.lod) {
         return None;
     }
-    let steep = i64::from(slope);
-    let rise = i64::from(ray.dz.to_bits()) - i64::from(anchor.dz);
-    let drift = (i64::from(ray.dminor.to_bits()) - i64::from(anchor.dminor)).abs();
-    let unit = 1i64 << HEIGHT_FRAC_BITS;
-    let margin = rise - (steep * drift + unit - 1) / unit;
-    if margin <= 0 {
-        return None;
-    }
-    // The unsafe prefix on each level the skipped samples can be on.
-    let last_level = ray.level_at(anchor.k);
-    let mut unsafe_until = anchor.start - 1;
-    let mut begins = ray.first;
-    for level in 0..=last_level {
-        let quantum = 1i64 << (COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + u32::from(level));
-        let slack = 1 + ((quantum + 1) * steep + unit - 1) / unit;
-        let ends = ray.next_switch(level, begins);
-        let unsafe_here = div_trunc(slack, margin).min(i64::from(i32::MAX)) as i32;
-        if unsafe_here >= begins {
-            unsafe_until = unsafe_until.max(unsafe_here.min(ends.saturating_sub(1)));
-        }
-        begins = ends;
-    }
-    (unsafe_until + 1 < anchor.k).then_some((unsafe_until, anchor.k))
+    (anchor.start < anchor.k).then_some(anchor.k)
 }
 
 fn sky(options: &RenderOptions) -> Sample {
@@ -337,7 +309,7 @@ fn sky(options: &RenderOptions) -> Sample {
 fn cast<P: Probe>(
     pyramid: &Pyramid<'_>,
     ray: &Ray,
-    plan: Option<(i32, i32)>,
+    resume: Option<i32>,
     first_hit_on: bool,
     options: &RenderOptions,
     recent: &mut Recent,
@@ -361,24 +333,8 @@ fn cast<P: Probe>(
             None => Walk::Exit { last: end },
         }
     };
-    let outcome = match plan {
-        Some((prefix_end, resume)) => {
-            // Only the prefix the proof does not cover, then jump.
-            let prefix = if prefix_end >= ray.start {
-                walk_from(ray.start, prefix_end.min(ray.end), recent, probe)
-            } else {
-                Walk::Exit {
-                    last: ray.start - 1,
-                }
-            };
-            match prefix {
-                Walk::Exit { last } if last < ray.end => {
-                    let from = ray.next_visited(resume.max(last + 1));
-                    walk_at(from, ray.end, recent, probe)
-                }
-                other => other,
-            }
-        }
+    let outcome = match resume {
+        Some(resume) => walk_at(ray.next_visited(resume), ray.end, recent, probe),
         None => walk_from(ray.start, ray.end, recent, probe),
     };
     match outcome {
