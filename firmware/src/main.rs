@@ -9,9 +9,12 @@
 //!    match byte for byte;
 //! 2. sends the framebuffer through the SPI display driver, whose wire
 //!    traffic is captured and written as `wire-K.bin` — the stream a panel
-//!    would receive.
+//!    would receive;
+//! 3. renders it again with every ray cast from the eye (coherence off),
+//!    written as `frame-K-from-eye.rgb`: the same rays with many more
+//!    steps, which separates the cost of a step from that of a ray.
 //!
-//! The render, and the render plus the transfer, are timed with SysTick. Under QEMU's `-icount` the clock
+//! The renders, and the render plus the transfer, are timed with SysTick. Under QEMU's `-icount` the clock
 //! advances by instruction count, so ticks convert to instructions exactly
 //! and repeatably (QEMU does not model the DWT cycle counter). A loop of a
 //! known number of instructions is timed first, to calibrate that
@@ -33,7 +36,7 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
-    pyramid_cells, pyramid_points, render, Framebuffer, HeightFilter, NoProbe, Pyramid,
+    pyramid_cells, pyramid_points, render, Coherence, Framebuffer, HeightFilter, NoProbe, Pyramid,
     RenderOptions, Rgb, View,
 };
 use terracast_board::{scene::BoardScene, wire::frame_capture_bytes, CaptureBus, SpiDisplay};
@@ -222,6 +225,10 @@ fn run() -> Result<(), &'static str> {
     let pyramid = Pyramid::new(terrain, coarse_heights, coarse_colors, bounds)
         .map_err(|_| "the kernel refused the pyramid")?;
     let options = RenderOptions::default();
+    let from_eye = RenderOptions {
+        coherence: Coherence::Off,
+        ..options
+    };
 
     let mut results: heapless::String<1024> = heapless::String::new();
     let _ = writeln!(
@@ -277,9 +284,21 @@ fn run() -> Result<(), &'static str> {
         name.clear();
         let _ = write!(name, "wire-{index}.bin\0");
         write_host_file(&name, wire)?;
+
+        // The same view with every ray cast from the eye: many more steps
+        // for the same rays, which separates the cost of a step from the
+        // cost of a ray, and checks the slow path on the board too.
+        let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+            .map_err(|_| "framebuffer too small")?;
+        let start = ticks();
+        render(&pyramid, &view, &from_eye, &mut framebuffer, &mut NoProbe);
+        let from_eye_ticks = ticks() - start;
+        name.clear();
+        let _ = write!(name, "frame-{index}-from-eye.rgb\0");
+        write_host_file(&name, frame.as_flattened())?;
         let _ = writeln!(
             results,
-            "frame {index} kernel_ticks {kernel_ticks} display_ticks {display_ticks}"
+            "frame {index} kernel_ticks {kernel_ticks} display_ticks {display_ticks} from_eye_ticks {from_eye_ticks}"
         );
         hprintln!(
             "terracast-firmware: frame {} rendered in {} ticks ({} with the display)",

@@ -9,8 +9,8 @@ use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
 use terracast::{
-    pyramid_cells, pyramid_points, render, Camera, CountingProbe, Framebuffer, HeightFilter,
-    NoProbe, Pyramid, RenderOptions, View,
+    pyramid_cells, pyramid_points, render, Camera, Coherence, CountingProbe, Framebuffer,
+    HeightFilter, NoProbe, Pyramid, RenderOptions, View,
 };
 use terracast_board::scene::{BoardScene, Header};
 use terracast_board::wire::frame_capture_bytes;
@@ -77,12 +77,22 @@ pub struct FrameCheck {
     pub kernel_ticks: u64,
     /// See `kernel_ticks`.
     pub display_ticks: u64,
+    /// The same view with every ray cast from the eye: pixels that differ
+    /// between board and host, host steps, and board ticks.
+    pub from_eye_differing_pixels: usize,
+    /// See `from_eye_differing_pixels`.
+    pub from_eye_steps: u64,
+    /// See `from_eye_differing_pixels`.
+    pub from_eye_ticks: u64,
 }
 
 impl FrameCheck {
     /// Whether board and host agree on every byte.
     pub fn identical(&self) -> bool {
-        self.differing_pixels == 0 && self.wire_identical && self.display_differing_pixels == 0
+        self.differing_pixels == 0
+            && self.wire_identical
+            && self.display_differing_pixels == 0
+            && self.from_eye_differing_pixels == 0
     }
 }
 
@@ -108,19 +118,41 @@ impl BoardReport {
         ticks as f64 * per_tick / pixels.max(1.0)
     }
 
+    /// The kernel's cost as `(instructions a ray, instructions a step)`:
+    /// the least-squares line through every render's instructions per pixel
+    /// against its steps per pixel (one ray a pixel), the default renders
+    /// and the from-eye ones together. The simulator's default work costs
+    /// are this fit (see `sim::machine`).
+    pub fn cost_fit(&self) -> (f64, f64) {
+        let pixels = f64::from(self.image.0) * f64::from(self.image.1);
+        let per_tick = self.instructions_per_tick;
+        let points: Vec<(f64, f64)> = self
+            .frames
+            .iter()
+            .flat_map(|f| {
+                [
+                    (f.steps, f.kernel_ticks),
+                    (f.from_eye_steps, f.from_eye_ticks),
+                ]
+            })
+            .map(|(steps, ticks)| (steps as f64 / pixels, ticks as f64 * per_tick / pixels))
+            .collect();
+        least_squares(&points)
+    }
+
     /// A table of the views and the summary, for the terminal.
     pub fn table(&self) -> String {
         let per_tick = self.instructions_per_tick;
         let pixels = f64::from(self.image.0) * f64::from(self.image.1);
         let mut out = String::from(
-            "view  frame       wire       display  steps/px  instr/px  instr/step  instr/px with display\n",
+            "view  frame       wire       display  steps/px  instr/px  instr/step  instr/px with display  from eye: frame  steps/px  instr/px\n",
         );
         for f in &self.frames {
             let verdict = |ok: bool| if ok { "identical" } else { "DIFFERENT" };
             let instructions = f.kernel_ticks as f64 * per_tick;
             let _ = writeln!(
                 out,
-                "{:>4}  {:<10}  {:<9}  {:<7}  {:>8.2}  {:>8.0}  {:>10.0}  {:>21.0}",
+                "{:>4}  {:<10}  {:<9}  {:<7}  {:>8.2}  {:>8.0}  {:>10.0}  {:>21.0}  {:>15}  {:>8.2}  {:>8.0}",
                 f.index,
                 verdict(f.differing_pixels == 0),
                 verdict(f.wire_identical),
@@ -133,8 +165,16 @@ impl BoardReport {
                 instructions / pixels,
                 instructions / (f.steps.max(1) as f64),
                 f.display_ticks as f64 * per_tick / pixels,
+                verdict(f.from_eye_differing_pixels == 0),
+                f.from_eye_steps as f64 / pixels,
+                f.from_eye_ticks as f64 * per_tick / pixels,
             );
         }
+        let (per_ray, per_step) = self.cost_fit();
+        let _ = writeln!(
+            out,
+            "cost fit over all renders: {per_ray:.0} instructions a ray + {per_step:.0} a step"
+        );
         let _ = writeln!(
             out,
             "pyramid build at boot: {:.0} instructions",
@@ -153,6 +193,11 @@ pub struct HostFrame {
     pub wire: Vec<u8>,
     /// Kernel steps (the board takes the same ones).
     pub steps: u64,
+    /// The same view with every ray cast from the eye: what the board
+    /// writes as `frame-K-from-eye.rgb`, and its steps.
+    pub from_eye_rgb: Vec<u8>,
+    /// See `from_eye_rgb`.
+    pub from_eye_steps: u64,
 }
 
 /// A board scene file read into aligned storage.
@@ -192,7 +237,8 @@ impl SceneFile {
     }
 
     /// Renders every view as the firmware does: pyramid with mean heights,
-    /// default options, into a framebuffer and through the display driver.
+    /// default options, into a framebuffer and through the display driver;
+    /// then with every ray cast from the eye.
     pub fn render(&self) -> Result<Vec<HostFrame>> {
         let scene = self.scene().map_err(|e| Error::new(e.to_string()))?;
         let header = scene.header;
@@ -213,19 +259,30 @@ impl SceneFile {
         let pyramid = Pyramid::new(terrain, &coarse_heights, &coarse_colors, &bounds)
             .map_err(|e| Error::new(format!("pyramid rejected: {e}")))?;
         let options = RenderOptions::default();
+        let from_eye = RenderOptions {
+            coherence: Coherence::Off,
+            ..options
+        };
         let mut frames = Vec::new();
         for (index, camera) in header.views().iter().enumerate() {
             let view = View::new(camera, width, height)
                 .map_err(|e| Error::new(format!("bad board view {index}: {e}")))?;
-            let mut colors = vec![[0u8; 3]; width as usize * height as usize];
-            let mut framebuffer = Framebuffer::new(&mut colors, width, height)
-                .map_err(|e| Error::new(e.to_string()))?;
-            let mut probe = CountingProbe::default();
-            render(&pyramid, &view, &options, &mut framebuffer, &mut probe);
+            let frame = |options: &RenderOptions| -> Result<(Vec<u8>, u64)> {
+                let mut colors = vec![[0u8; 3]; width as usize * height as usize];
+                let mut framebuffer = Framebuffer::new(&mut colors, width, height)
+                    .map_err(|e| Error::new(e.to_string()))?;
+                let mut probe = CountingProbe::default();
+                render(&pyramid, &view, options, &mut framebuffer, &mut probe);
+                Ok((colors.into_iter().flatten().collect(), probe.steps))
+            };
+            let (rgb, steps) = frame(&options)?;
+            let (from_eye_rgb, from_eye_steps) = frame(&from_eye)?;
             frames.push(HostFrame {
-                rgb: colors.into_iter().flatten().collect(),
+                rgb,
                 wire: display_capture(&pyramid, &view, &options, width, height)?,
-                steps: probe.steps,
+                steps,
+                from_eye_rgb,
+                from_eye_steps,
             });
         }
         Ok(frames)
@@ -241,20 +298,26 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
     let results = parse_results(&read(&from.join("board-results.txt"))?)?;
     let pixels = width as usize * height as usize;
     let mut frames = Vec::new();
-    for (index, host) in file.render()?.into_iter().enumerate() {
-        let board_frame = read(&from.join(format!("frame-{index}.rgb")))?;
+    // Pixels of the board's `name` that differ from the host's `rgb`.
+    let compare = |name: String, rgb: &[u8]| -> Result<usize> {
+        let board_frame = read(&from.join(&name))?;
         if board_frame.len() != pixels * 3 {
             return Err(Error::new(format!(
-                "frame-{index}.rgb has {} bytes, expected {}",
+                "{name} has {} bytes, expected {}",
                 board_frame.len(),
                 pixels * 3
             )));
         }
-        let differing_pixels = board_frame
+        Ok(board_frame
             .chunks_exact(3)
-            .zip(host.rgb.chunks_exact(3))
+            .zip(rgb.chunks_exact(3))
             .filter(|(board, host)| board != host)
-            .count();
+            .count())
+    };
+    for (index, host) in file.render()?.into_iter().enumerate() {
+        let differing_pixels = compare(format!("frame-{index}.rgb"), &host.rgb)?;
+        let from_eye_differing_pixels =
+            compare(format!("frame-{index}-from-eye.rgb"), &host.from_eye_rgb)?;
         let board_wire = read(&from.join(format!("wire-{index}.bin")))?;
         let mut shown = vec![0u16; pixels];
         decode(&board_wire, &mut shown, width, height)
@@ -264,9 +327,10 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
             .zip(host.rgb.chunks_exact(3))
             .filter(|(shown, host)| **shown != rgb565([host[0], host[1], host[2]]))
             .count();
-        let (kernel_ticks, display_ticks) = *results.frames.get(index).ok_or_else(|| {
-            Error::new(format!("board-results.txt has no timing for frame {index}"))
-        })?;
+        let (kernel_ticks, display_ticks, from_eye_ticks) =
+            *results.frames.get(index).ok_or_else(|| {
+                Error::new(format!("board-results.txt has no timing for frame {index}"))
+            })?;
         frames.push(FrameCheck {
             index,
             differing_pixels,
@@ -275,6 +339,9 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
             steps: host.steps,
             kernel_ticks,
             display_ticks,
+            from_eye_differing_pixels,
+            from_eye_steps: host.from_eye_steps,
+            from_eye_ticks,
         });
     }
     Ok(BoardReport {
@@ -329,7 +396,8 @@ struct BoardResults {
     /// Instructions and ticks of the calibration loop.
     calibration: Option<(u64, u64)>,
     pyramid_ticks: u64,
-    frames: Vec<(u64, u64)>,
+    /// Kernel, displayed and from-eye ticks of each frame.
+    frames: Vec<(u64, u64, u64)>,
 }
 
 impl BoardResults {
@@ -346,7 +414,8 @@ impl BoardResults {
 }
 
 /// Reads `board-results.txt`: `calibration instructions N ticks T`,
-/// `pyramid_ticks N` and `frame K kernel_ticks N display_ticks M` lines.
+/// `pyramid_ticks N` and `frame K kernel_ticks N display_ticks M
+/// from_eye_ticks O` lines.
 fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
     let text =
         std::str::from_utf8(bytes).map_err(|_| Error::new("board-results.txt is not text"))?;
@@ -370,16 +439,27 @@ fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
                 results.calibration = Some((int(n)?, int(t)?));
             }
             ["pyramid_ticks", n] => results.pyramid_ticks = int(n)?,
-            ["frame", k, "kernel_ticks", n, "display_ticks", m] => {
+            ["frame", k, "kernel_ticks", n, "display_ticks", m, "from_eye_ticks", o] => {
                 if int(k)? != results.frames.len() as u64 {
                     return Err(bad());
                 }
-                results.frames.push((int(n)?, int(m)?));
+                results.frames.push((int(n)?, int(m)?, int(o)?));
             }
             _ => return Err(bad()),
         }
     }
     Ok(results)
+}
+
+/// The least-squares line `y = a + b·x` through `points`, as `(a, b)`.
+fn least_squares(points: &[(f64, f64)]) -> (f64, f64) {
+    let n = points.len().max(1) as f64;
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |(x, y), p| (x + p.0 / n, y + p.1 / n));
+    let spread: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let slope = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>() / spread.max(1e-12);
+    (my - slope * mx, slope)
 }
 
 fn read(path: &Path) -> Result<Vec<u8>> {
@@ -391,13 +471,21 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_cost_fit_is_the_least_squares_line() {
+        let (a, b) = least_squares(&[(1.0, 3.0), (2.0, 5.0), (4.0, 9.0)]);
+        assert!((a - 1.0).abs() < 1e-9 && (b - 2.0).abs() < 1e-9, "{a} {b}");
+        let (a, b) = least_squares(&[(0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0)]);
+        assert!((a - 0.5).abs() < 1e-9 && b.abs() < 1e-9, "{a} {b}");
+    }
+
+    #[test]
     fn results_are_read_and_bad_lines_named() {
         let ok = parse_results(
-            b"calibration instructions 400 ticks 10\npyramid_ticks 12\nframe 0 kernel_ticks 5 display_ticks 7\nframe 1 kernel_ticks 6 display_ticks 8\n",
+            b"calibration instructions 400 ticks 10\npyramid_ticks 12\nframe 0 kernel_ticks 5 display_ticks 7 from_eye_ticks 9\nframe 1 kernel_ticks 6 display_ticks 8 from_eye_ticks 10\n",
         )
         .unwrap();
         assert_eq!(ok.pyramid_ticks, 12);
-        assert_eq!(ok.frames, vec![(5, 7), (6, 8)]);
+        assert_eq!(ok.frames, vec![(5, 7, 9), (6, 8, 10)]);
         assert_eq!(ok.instructions_per_tick().unwrap(), 40.0);
         let uncalibrated = parse_results(b"pyramid_ticks 12\n").unwrap();
         assert!(uncalibrated.instructions_per_tick().is_err());

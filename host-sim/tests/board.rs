@@ -42,7 +42,12 @@ fn scene_and_board_output(name: &str) -> (PathBuf, PathBuf) {
     for (k, frame) in frames.iter().enumerate() {
         std::fs::write(board.join(format!("frame-{k}.rgb")), &frame.rgb).unwrap();
         std::fs::write(board.join(format!("wire-{k}.bin")), &frame.wire).unwrap();
-        results += &format!("frame {k} kernel_ticks 1000 display_ticks 1100\n");
+        std::fs::write(
+            board.join(format!("frame-{k}-from-eye.rgb")),
+            &frame.from_eye_rgb,
+        )
+        .unwrap();
+        results += &format!("frame {k} kernel_ticks 1000 display_ticks 1100 from_eye_ticks 3000\n");
     }
     std::fs::write(board.join("board-results.txt"), results).unwrap();
     (scene, board)
@@ -94,6 +99,17 @@ fn one_changed_byte_of_a_frame_or_the_wire_fails() {
         out.contains("   0  identical   DIFFERENT  DIFFERS"),
         "{out}"
     );
+
+    // Restore the wire; a flipped byte in a from-eye frame fails too.
+    bytes[last] ^= 0x80;
+    std::fs::write(&wire, &bytes).unwrap();
+    let from_eye = board.join("frame-1-from-eye.rgb");
+    let mut bytes = std::fs::read(&from_eye).unwrap();
+    bytes[99] ^= 4;
+    std::fs::write(&from_eye, &bytes).unwrap();
+    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    assert_eq!(code, 1, "{out}");
+    assert!(err.contains("differ in view(s) 1"), "{err}");
 }
 
 #[test]

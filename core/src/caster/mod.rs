@@ -19,7 +19,7 @@ pub(crate) mod walk;
 use crate::probe::Probe;
 use crate::pyramid::Pyramid;
 use crate::sink::{Sample, Sink};
-use crate::view::ray::{Cursor, Heading, Lod, LodPlan, Ray, RayKey};
+use crate::view::ray::{Cursor, Lod, LodPlan, Plane, Ray, RayKey};
 use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
 use first_hit::first_hit;
@@ -220,8 +220,8 @@ fn line_with<S: Sink, P: Probe>(
     let Some(line) = view.line(line) else {
         return;
     };
-    let heading = Heading::of(&line.reference);
     let terrain = pyramid.base();
+    let plane = Plane::new(view, terrain, &line.reference);
     let mut anchor: Option<Anchor> = None;
     let mut recent = Recent::default();
     let log2 = options.vertical_samples.log2();
@@ -236,7 +236,7 @@ fn line_with<S: Sink, P: Probe>(
             let offset = (((2 * sub + 1 - samples) * 8) >> log2) * step;
             probe.ray();
             let d = view.direction_on(&line, pixel.s, offset);
-            let ray = view.ray(terrain, &frame.lod, d, &heading);
+            let ray = view.ray(terrain, &frame.lod, d, &plane);
             let sample = if ray.start > ray.end {
                 sky(options)
             } else {
@@ -277,7 +277,7 @@ fn line_with<S: Sink, P: Probe>(
 /// The sample a ray may start at instead of the eye: where the anchor (the
 /// ray cast before it on its line) hit, or `None` to cast it from the eye.
 ///
-/// The rays of a line share their heading bit for bit, so at sample `i`
+/// The rays of a line share their plane bit for bit, so at sample `i`
 /// both are at the same major and minor coordinates and read the same
 /// heights there. Their heights are `z0 + i·dz`, with `z0` the eye height
 /// plus `delta0·dz` rounded down (`delta0` the same for both): a ray whose

@@ -133,77 +133,44 @@ pub(crate) struct Cursor {
     pub t: i32,
 }
 
-/// The horizontal direction every ray of an image line shares: which grid
-/// lines it crosses and its minor slope. Sharing it bit for bit puts the
-/// rays of a line in one vertical plane, sample for sample.
+/// What every ray of an image line shares: its vertical plane. The
+/// horizontal direction (which grid lines the rays cross, their minor
+/// slope) and so where their samples lie and which of them are in the map.
+/// Sharing it bit for bit puts the rays of a line in one plane, sample for
+/// sample, and leaves a ray only its slope to set up.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Heading {
+pub(crate) struct Plane {
     pub key: RayKey,
     /// Minor-axis increment per major-axis step, Q16 (within ±1).
     dminor: i64,
+    /// Major-axis grid coordinate of sample 0, the distance to it, and the
+    /// minor coordinate there (see [`Ray`]).
+    major0: i64,
+    delta0: i64,
+    minor0: i64,
+    /// Samples inside the map: `first..=last` (`first` may be −1).
+    first: i64,
+    last: i64,
 }
 
-impl Heading {
-    /// The heading of direction `d` (I32F32 bits).
-    pub fn of(d: &[i64; 3]) -> Self {
+impl Plane {
+    /// The plane of direction `d` (I32F32 bits) from `view`'s eye over
+    /// `terrain`.
+    pub fn new(view: &View, terrain: &Terrain<'_>, d: &[i64; 3]) -> Self {
         let x_major = d[0].abs() >= d[1].abs();
         let (d_major, d_minor) = if x_major { (d[0], d[1]) } else { (d[1], d[0]) };
+        let forward = d_major >= 0;
         let run = d_major.abs();
         // Directions are I32F32 below 2^10 in magnitude (a line's far-edge
         // point lies within a few image sizes), so `<< 16` cannot overflow;
         // |d_minor| <= run keeps the minor slope within ±1.
-        Self {
-            key: RayKey {
-                x_major,
-                forward: d_major >= 0,
-            },
-            dminor: if run == 0 {
-                0
-            } else {
-                (d_minor << COORD_FRAC_BITS) / run
-            },
-        }
-    }
-}
-
-impl View {
-    /// The height change per major-axis step (Q16) of direction `d` under
-    /// `heading`, and the run: `d`'s major component (I32F32 bits).
-    #[inline]
-    pub(crate) fn slope(d: &[i64; 3], heading: &Heading) -> (i64, i64) {
-        let RayKey { x_major, forward } = heading.key;
-        let d_major = if x_major { d[0] } else { d[1] };
-        // Within rounding of the vanishing point the sign may disagree: that
-        // ray is vertical.
-        let run = if forward { d_major } else { -d_major }.max(0);
-        let max_slope = i64::from(MAX_RAY_SLOPE) << COORD_FRAC_BITS;
-        let dz = if run == 0 {
-            if d[2] < 0 {
-                -max_slope
-            } else {
-                max_slope
-            }
+        let dminor = if run == 0 {
+            0
         } else {
-            ((d[2] << COORD_FRAC_BITS) / run).clamp(-max_slope, max_slope)
+            (d_minor << COORD_FRAC_BITS) / run
         };
-        (dz, run)
-    }
 
-    /// Sets up the ray along direction `d` (I32F32 bits) with `heading`'s
-    /// horizontal direction: `d`'s horizontal part only sets how steep the
-    /// ray is (it is parallel to the heading's, up to rounding).
-    pub(crate) fn ray(
-        &self,
-        terrain: &Terrain<'_>,
-        plan: &LodPlan,
-        d: [i64; 3],
-        heading: &Heading,
-    ) -> Ray {
-        let RayKey { x_major, forward } = heading.key;
-        let (dz, run) = Self::slope(&d, heading);
-        let dminor = heading.dminor;
-
-        let [ex, ey, ez] = self.eye.map(|v| v.to_bits());
+        let [ex, ey, _] = view.eye.map(|v| v.to_bits());
         let (e_major, e_minor) = if x_major { (ex, ey) } else { (ey, ex) };
         let (major0, delta0) = if forward {
             let m = (e_major + ONE - 1) >> COORD_FRAC_BITS;
@@ -213,7 +180,6 @@ impl View {
             (m, e_major - (m << COORD_FRAC_BITS))
         };
         let minor0 = e_minor + ((delta0 * dminor) >> COORD_FRAC_BITS);
-        let z0 = ez + ((delta0 * dz) >> COORD_FRAC_BITS);
 
         let (major_len, minor_len) = if x_major {
             (terrain.width(), terrain.depth())
@@ -244,6 +210,62 @@ impl View {
             _ if (0..=minor_max).contains(&minor0) => {}
             _ => last = first - 1,
         }
+        Self {
+            key: RayKey { x_major, forward },
+            dminor,
+            major0,
+            delta0,
+            minor0,
+            first,
+            last,
+        }
+    }
+}
+
+impl View {
+    /// The height change per major-axis step (Q16) of direction `d` in
+    /// `plane`, and the run: `d`'s major component (I32F32 bits).
+    #[inline]
+    pub(crate) fn slope(d: &[i64; 3], plane: &Plane) -> (i64, i64) {
+        let RayKey { x_major, forward } = plane.key;
+        let d_major = if x_major { d[0] } else { d[1] };
+        // Within rounding of the vanishing point the sign may disagree: that
+        // ray is vertical.
+        let run = if forward { d_major } else { -d_major }.max(0);
+        let max_slope = i64::from(MAX_RAY_SLOPE) << COORD_FRAC_BITS;
+        let dz = if run == 0 {
+            if d[2] < 0 {
+                -max_slope
+            } else {
+                max_slope
+            }
+        } else {
+            ((d[2] << COORD_FRAC_BITS) / run).clamp(-max_slope, max_slope)
+        };
+        (dz, run)
+    }
+
+    /// Sets up the ray along direction `d` (I32F32 bits) in `plane`: `d`'s
+    /// horizontal part only sets how steep the ray is (it is parallel to
+    /// the plane, up to rounding).
+    pub(crate) fn ray(
+        &self,
+        terrain: &Terrain<'_>,
+        plan: &LodPlan,
+        d: [i64; 3],
+        plane: &Plane,
+    ) -> Ray {
+        let (dz, run) = Self::slope(&d, plane);
+        let Plane {
+            key,
+            dminor,
+            major0,
+            delta0,
+            minor0,
+            first,
+            last,
+        } = *plane;
+        let z0 = self.eye[2].to_bits() + ((delta0 * dz) >> COORD_FRAC_BITS);
         let start = first.max(0);
         // A hit needs the ray at or below the highest height; a falling ray
         // is certainly below the surface once its height is <= 0.
@@ -257,7 +279,7 @@ impl View {
 
         let narrow = |v: i64| v.clamp(-(1 << 20), 1 << 20) as i32;
         let mut ray = Ray {
-            key: RayKey { x_major, forward },
+            key,
             major0,
             delta0,
             minor0,
@@ -512,7 +534,7 @@ impl Ray {
 impl View {
     /// The ray through the center of pixel column `column`, `row16`
     /// sixteenths of a pixel above the bottom row's center, with its own
-    /// heading (for tests of the ray itself).
+    /// plane (for tests of the ray itself).
     pub(crate) fn pixel_ray(
         &self,
         terrain: &Terrain<'_>,
@@ -525,7 +547,7 @@ impl View {
                 + self.per_column[i].to_bits() * i64::from(column)
                 + ((self.per_row[i].to_bits() * row16) >> 4)
         });
-        self.ray(terrain, plan, d, &Heading::of(&d))
+        self.ray(terrain, plan, d, &Plane::new(self, terrain, &d))
     }
 }
 

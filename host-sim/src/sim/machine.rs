@@ -7,8 +7,8 @@
 //! clock_mhz = 40.0          # i860XR
 //!
 //! [cycles]
-//! per_ray = 2458            # ray set-up, shading and resume included
-//! per_step = 217            # one traversal step or bound test
+//! per_ray = 1728            # ray set-up, shading and resume included
+//! per_step = 256            # one traversal step or bound test
 //! per_color = 0             # (shading is inside per_ray)
 //! per_local_fetch = 2       # a voxel from local memory
 //! pool_lock = 100           # take a column under the pool's semaphore
@@ -39,12 +39,13 @@
 //! ```
 //!
 //! The work costs are our kernel's, not Cohen-Or's: the least-squares line
-//! through the kernel's instructions per pixel against steps per pixel on
-//! the four views of `scripts/board-check` (Cortex-M7: 2808 at 2.05 steps,
-//! 2461 at 1.82, 3486 at 2.37, 5058 at 12.09) is 2458 instructions a ray
-//! plus 217 a step, taken as i860 cycles at one instruction a cycle (both
-//! are 32-bit cores that do 64-bit division in software). Change them to
-//! model another processor or a faster kernel.
+//! through the kernel's instructions per pixel against steps per pixel of
+//! the eight renders of `scripts/board-check` (Cortex-M7; four views, each
+//! with the default coherence and with every ray cast from the eye; the
+//! `cost fit` line it prints) is 1728 instructions a ray plus 256 a step,
+//! taken as i860 cycles at one instruction a cycle (both are 32-bit cores
+//! that do 64-bit division in software). Change them to model another
+//! processor or a faster kernel.
 
 use crate::error::{Error, Result};
 use serde::Deserialize;
@@ -163,8 +164,8 @@ impl Default for Machine {
 impl Default for Cycles {
     fn default() -> Self {
         Self {
-            per_ray: 2458,
-            per_step: 217,
+            per_ray: 1728,
+            per_step: 256,
             per_color: 0,
             per_local_fetch: 2,
             pool_lock: 100,
@@ -357,13 +358,18 @@ mod tests {
 
     #[test]
     fn the_default_work_costs_are_the_fit_of_the_board_figures() {
-        // Steps and instructions a pixel of the four views of
-        // scripts/board-check (README, "The board").
+        // Steps and instructions a pixel of the eight renders of
+        // scripts/board-check (README, "The board"): each view with the
+        // default coherence, then from the eye.
         let board = [
-            (2.05, 2808.0),
-            (1.82, 2461.0),
-            (2.37, 3486.0),
-            (12.09, 5058.0),
+            (1.41, 1936.0),
+            (1.30, 1730.0),
+            (1.60, 2406.0),
+            (1.46, 2408.0),
+            (13.85, 5486.0),
+            (13.00, 4585.0),
+            (18.01, 6493.0),
+            (13.71, 5278.0),
         ];
         let n = board.len() as f64;
         let (mx, my) = board
