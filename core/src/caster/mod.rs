@@ -221,7 +221,7 @@ fn line_with<S: Sink, P: Probe>(
         return;
     };
     let terrain = pyramid.base();
-    let plane = Plane::new(view, terrain, &line.reference);
+    let plane = Plane::new(view, terrain, &line.reference).with_across(&view.across(&line));
     let mut anchor: Option<Anchor> = None;
     let mut recent = Recent::default();
     let log2 = options.vertical_samples.log2();
@@ -236,7 +236,8 @@ fn line_with<S: Sink, P: Probe>(
             let offset = (((2 * sub + 1 - samples) * 8) >> log2) * step;
             probe.ray();
             let d = view.direction_on(&line, pixel.s, offset);
-            let ray = view.ray(terrain, &frame.lod, d, &plane);
+            let mut ray = view.ray(terrain, &frame.lod, d, &plane);
+            ray.color_drift = plane.drift(&d, pixel.offset) as i32;
             let sample = if ray.start > ray.end {
                 sky(options)
             } else {
@@ -401,7 +402,10 @@ fn shade<P: Probe>(
     probe: &mut P,
 ) -> Sample {
     let stage = Stage::new(pyramid, ray, hit.level);
-    let Some(on_hit_line) = stage.color(&hit, probe) else {
+    let Some(on_hit_line) = stage
+        .color(&ray.color_cursor(&hit), probe)
+        .or_else(|| stage.color(&hit, probe))
+    else {
         return sky(options);
     };
     probe.hit(hit.level);
@@ -412,7 +416,7 @@ fn shade<P: Probe>(
             let t = crossing_fraction(above, below);
             let before = ray.cursor(pyramid, before);
             let before_stage = Stage::new(pyramid, ray, before.level);
-            let color = match before_stage.color(&before, probe) {
+            let color = match before_stage.color(&ray.color_cursor(&before), probe) {
                 Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
                 None => on_hit_line,
             };

@@ -252,6 +252,9 @@ pub(crate) struct Owned {
     pub y: u32,
     /// Axis coordinate of the pixel.
     pub s: i32,
+    /// The pixel's center less its line's point there, along the cross
+    /// coordinate, Q16 pixels (within ±1/2).
+    pub offset: i64,
 }
 
 impl View {
@@ -309,6 +312,20 @@ impl View {
                 + scale(self.per_column[i].to_bits(), u)
                 + scale(self.per_row[i].to_bits(), v)
         })
+    }
+}
+
+impl View {
+    /// The direction step from one pixel to the next across `line` (a
+    /// column for the sectors above and below the vanishing point, a row
+    /// for the others), I32F32 bits.
+    pub(crate) fn across(&self, line: &Line) -> [i64; 3] {
+        let step = if line.sector.along_rows {
+            &self.per_column
+        } else {
+            &self.per_row
+        };
+        step.map(|v| v.to_bits())
     }
 }
 
@@ -417,6 +434,7 @@ impl Iterator for OwnedPixels {
                     x: x as u32,
                     y: (self.top_row - row) as u32,
                     s,
+                    offset: (i64::from(t) << COORD_FRAC_BITS) - t_q16,
                 });
             }
         }

@@ -103,6 +103,12 @@ pub(crate) struct Ray {
     pub start: i32,
     /// Last sample where a hit is possible.
     pub end: i32,
+    /// Largest minor coordinate inside the map, Q16.
+    pub minor_max: i32,
+    /// Minor-coordinate drift per major step of the pixel center's own ray
+    /// from this one, Q16 (see [`Plane::drift`]); colors are looked up
+    /// that far aside.
+    pub color_drift: i32,
     pub lod: Lod,
     /// The level schedule, worked out once per ray because the caster asks
     /// for it several times a ray: `begins[l]` is the first sample of level
@@ -151,6 +157,12 @@ pub(crate) struct Plane {
     /// Samples inside the map: `first..=last` (`first` may be −1).
     first: i64,
     last: i64,
+    /// Largest minor coordinate whose neighbour across the grid line is in
+    /// the map, Q16.
+    minor_max: i64,
+    /// `across_minor − dminor·across_major` (see [`Plane::with_across`]);
+    /// 0 until set.
+    across: i64,
 }
 
 impl Plane {
@@ -218,7 +230,43 @@ impl Plane {
             minor0,
             first,
             last,
+            minor_max,
+            across: 0,
         }
+    }
+
+    /// Sets how the plane's rays drift sideways when their direction moves
+    /// by `across` (I32F32 bits, the step to the next pixel across the
+    /// line): see [`Plane::drift`].
+    pub fn with_across(mut self, across: &[i64; 3]) -> Self {
+        let (major, minor) = if self.key.x_major { (0, 1) } else { (1, 0) };
+        let sign = if self.key.forward { 1 } else { -1 };
+        // |across| < 2^40 and |dminor| <= 2^16: no overflow.
+        self.across = (across[minor] << COORD_FRAC_BITS) - self.dminor * across[major] * sign;
+        self
+    }
+
+    /// How much faster (Q16 per major step) the minor coordinate of a ray
+    /// along `d` would grow if `d` moved by `offset` (Q16) steps across the
+    /// line: `(across_minor − dminor·across_major) / run`. A pixel's ray goes
+    /// through its line, up to half a pixel beside the pixel's center; this
+    /// is how far the center's own ray would drift from it, which the color
+    /// lookup makes up for.
+    #[inline]
+    pub fn drift(&self, d: &[i64; 3], offset: i64) -> i64 {
+        let major = if self.key.x_major { d[0] } else { d[1] };
+        let run = if self.key.forward { major } else { -major };
+        if run <= 0 || offset == 0 || self.across == 0 {
+            return 0;
+        }
+        // A color lookup needs no more than 24 bits of this: drop the low
+        // bits of both until they fit the core's 32-bit divide.
+        let shift = (64 - run.leading_zeros()).saturating_sub(24);
+        let per_pixel = div_trunc(
+            (self.across >> shift).clamp(-(1 << 30), 1 << 30),
+            (run >> shift).max(1),
+        );
+        ((per_pixel * offset) >> COORD_FRAC_BITS).clamp(-(1 << 14), 1 << 14)
     }
 }
 
@@ -264,6 +312,8 @@ impl View {
             minor0,
             first,
             last,
+            minor_max,
+            ..
         } = *plane;
         let z0 = self.eye[2].to_bits() + ((delta0 * dz) >> COORD_FRAC_BITS);
         let start = first.max(0);
@@ -289,6 +339,8 @@ impl View {
             first: narrow(first),
             start: narrow(start),
             end: narrow(end),
+            minor_max: minor_max.clamp(0, i64::from(i32::MAX)) as i32,
+            color_drift: 0,
             lod: Lod::new(plan, run, dz),
             begins: [i32::MAX; LEVEL_SLOTS],
             known: 1,
@@ -509,6 +561,21 @@ impl Ray {
             minor: fit(self.minor0 + k64 * i64::from(self.dminor.to_bits())),
             z: fit(self.z0 + k64 * i64::from(self.dz.to_bits())),
             t: self.level_weight(k, level),
+        }
+    }
+
+    /// Where to look up the color of `at`: its minor coordinate moved by the
+    /// color drift over the distance to it, kept inside the map.
+    #[inline]
+    pub fn color_cursor(&self, at: &Cursor) -> Cursor {
+        if self.color_drift == 0 {
+            return *at;
+        }
+        let aside = (i64::from(self.color_drift) * self.distance(at.k)) >> COORD_FRAC_BITS;
+        let minor = (i64::from(at.minor) + aside).clamp(0, i64::from(self.minor_max));
+        Cursor {
+            minor: minor as i32,
+            ..*at
         }
     }
 
