@@ -35,7 +35,7 @@ enum Command {
     Board(BoardCommand),
     /// Fly on the modeled parallel machine (Cohen-Or's PVS by default):
     /// simulated frame times, deadlines, utilization, bank contention;
-    /// --table for Table 1; --threads for the same column pool on real
+    /// --table for Table 1; --threads for the same line pool on real
     /// cores.
     Sim(sim::SimArgs),
     /// Speed against accuracy: every method and setting on a fixed suite

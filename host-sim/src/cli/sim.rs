@@ -1,5 +1,5 @@
 //! `terracast-sim sim`: a flight on the modeled parallel machine, Table 1,
-//! and the column pool on real threads.
+//! and the line pool on real threads.
 
 use super::{default_eye, load_scene, parse_size, CameraArgs, SceneArgs};
 use crate::error::{Error, Result};
@@ -50,7 +50,7 @@ pub(super) struct SimArgs {
     #[arg(long, requires = "table", value_name = "OUT.png")]
     chart: Option<PathBuf>,
     /// Instead of simulating, render the flight on this many real threads
-    /// (a list: 1,2,4) sharing the kernel's column pool, and print Mpx/s.
+    /// (a list: 1,2,4) sharing the kernel's line pool, and print Mpx/s.
     #[arg(long, value_delimiter = ',', value_name = "N,N,...")]
     threads: Vec<usize>,
 }
@@ -237,7 +237,7 @@ fn threads_command(
     let cameras = flight(start, args.frames, args.speed);
     let available = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!(
-        "{} frames of {}x{} on the column pool; this machine has {available} cores",
+        "{} frames of {}x{} on the line pool; this machine has {available} cores",
         cameras.len(),
         args.size.0,
         args.size.1

@@ -39,7 +39,7 @@ impl ThreadedRun {
     }
 }
 
-/// Renders `cameras` with `threads` threads sharing one column pool. The
+/// Renders `cameras` with `threads` threads sharing one line pool. The
 /// views are set up first (the master's work) and published at once.
 pub fn render_threads(
     scene: &KernelScene,
