@@ -52,7 +52,9 @@ mod view;
 /// An 8-bit RGB color.
 pub type Rgb = [u8; 3];
 
-pub use caster::{render, render_line, Coherence, RenderOptions, Resolution, VerticalSamples};
+pub use caster::{
+    render, render_line, Coherence, FrameCost, Governor, RenderOptions, Resolution, VerticalSamples,
+};
 pub use fixed::types::U8F8;
 pub use pool::{LinePool, Task, Wait};
 pub use probe::{CountingProbe, NoProbe, Probe};

@@ -20,12 +20,14 @@ use crate::view::ray::Ray;
 
 /// The first sample in `from..=end` where `ray` may hit any level of
 /// `pyramid` (every sample before it is above every level's surface), or
-/// `None` when it cannot hit there.
+/// `None` when it cannot hit there. After `tests` rounds (each at most two
+/// bound tests) it stops and hands over the sample it has proven up to.
 pub(crate) fn first_hit<P: Probe>(
     pyramid: &Pyramid<'_>,
     ray: &Ray,
     from: i32,
     end: i32,
+    mut tests: u32,
     probe: &mut P,
 ) -> Option<i32> {
     let top = pyramid.top().min(MAX_WALK_LEVEL as u8);
@@ -41,9 +43,10 @@ pub(crate) fn first_hit<P: Probe>(
         if k > end {
             return None;
         }
-        if level == 0 {
+        if level == 0 || tests == 0 {
             return Some(k);
         }
+        tests -= 1;
         // The segment to the next grid line of this level lies in one
         // column (or row) of its cells.
         let next = ray.align_up(k.saturating_add(1), level);

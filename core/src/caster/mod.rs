@@ -13,8 +13,11 @@
 //! the hit is refined between that sample and the first one below by the
 //! ratio of their clearances, and the color blended across both grid lines.
 
+mod budget;
 mod first_hit;
 pub(crate) mod walk;
+
+pub use budget::{FrameCost, Governor};
 
 use crate::probe::Probe;
 use crate::pyramid::Pyramid;
@@ -177,7 +180,34 @@ pub fn render<S: Sink, P: Probe>(
 ) {
     let frame = Frame::new(pyramid, view, options);
     for line in 0..view.lines() {
-        line_with(pyramid, view, options, &frame, line, sink, probe);
+        line_with(
+            pyramid,
+            view,
+            options,
+            &frame,
+            line,
+            sink,
+            probe,
+            &mut Unlimited,
+        );
+    }
+}
+
+/// How many steps each ray of a line may take, asked before each ray:
+/// `u32::MAX` for no limit, `n` for at most `4n + 2` steps (the ray is cut
+/// short past that), 0 for none at all (the pixel repeats the line's
+/// previous one).
+pub(crate) trait Allowances {
+    fn next(&mut self) -> u32;
+}
+
+/// No limit: the plain render.
+struct Unlimited;
+
+impl Allowances for Unlimited {
+    #[inline(always)]
+    fn next(&mut self) -> u32 {
+        u32::MAX
     }
 }
 
@@ -205,10 +235,20 @@ pub fn render_line<S: Sink, P: Probe>(
     probe: &mut P,
 ) {
     let frame = Frame::new(pyramid, view, options);
-    line_with(pyramid, view, options, &frame, line, sink, probe);
+    line_with(
+        pyramid,
+        view,
+        options,
+        &frame,
+        line,
+        sink,
+        probe,
+        &mut Unlimited,
+    );
 }
 
-fn line_with<S: Sink, P: Probe>(
+#[allow(clippy::too_many_arguments)]
+fn line_with<S: Sink, P: Probe, A: Allowances>(
     pyramid: &Pyramid<'_>,
     view: &View,
     options: &RenderOptions,
@@ -216,6 +256,7 @@ fn line_with<S: Sink, P: Probe>(
     line: u32,
     sink: &mut S,
     probe: &mut P,
+    allowances: &mut A,
 ) {
     let Some(line) = view.line(line) else {
         return;
@@ -223,6 +264,7 @@ fn line_with<S: Sink, P: Probe>(
     let terrain = pyramid.base();
     let plane = Plane::new(view, terrain, &line.reference).with_across(&view.across(&line));
     let mut anchor: Option<Anchor> = None;
+    let mut previous: Option<Sample> = None;
     let mut recent = Recent::default();
     let log2 = options.vertical_samples.log2();
     let samples = 1i64 << log2;
@@ -238,8 +280,12 @@ fn line_with<S: Sink, P: Probe>(
             let d = view.direction_on(&line, pixel.s, offset);
             let mut ray = view.ray(terrain, &frame.lod, d, &plane);
             ray.color_drift = plane.drift(&d, pixel.offset) as i32;
+            let allowance = allowances.next();
             let sample = if ray.start > ray.end {
                 sky(options)
+            } else if allowance == 0 {
+                // No step left in the budget: repeat the ray before.
+                previous.unwrap_or_else(|| sky(options))
             } else {
                 let resume = anchor
                     .filter(|_| frame.resume)
@@ -249,6 +295,7 @@ fn line_with<S: Sink, P: Probe>(
                     &ray,
                     resume,
                     frame.first_hit,
+                    allowance,
                     options,
                     &mut recent,
                     probe,
@@ -263,6 +310,7 @@ fn line_with<S: Sink, P: Probe>(
                 });
                 sample
             };
+            previous = Some(sample);
             for (s, v) in sum.iter_mut().zip(sample.color) {
                 *s += u32::from(v);
             }
@@ -302,43 +350,50 @@ fn sky(options: &RenderOptions) -> Sample {
     }
 }
 
-/// Casts one ray: from its start, or (with a plan) through a prefix and
-/// then from the resume sample. With `first_hit_on`, a walk from the start
-/// skips through the pyramid's bounds first. Returns what it saw and the
-/// sample up to which it is known to be above the surface (its hit, or one
-/// past its last).
+/// Casts one ray: from the eye, or from `resume` (see [`resume_at`]). With
+/// `first_hit_on`, a walk from the eye skips through the pyramid's bounds
+/// first. Within `allowance` (see [`Allowance`]) the ray takes at most
+/// `4n + 2` steps; a ray cut short is shaded where it stopped. Returns what
+/// it saw and the sample up to which it is known to be above the surface
+/// (its hit, or one past its last).
+#[allow(clippy::too_many_arguments)]
 fn cast<P: Probe>(
     pyramid: &Pyramid<'_>,
     ray: &Ray,
     resume: Option<i32>,
     first_hit_on: bool,
+    allowance: u32,
     options: &RenderOptions,
     recent: &mut Recent,
     probe: &mut P,
 ) -> (Sample, i32) {
-    // Walks `from..=end`.
-    let walk_at = |from: i32, end: i32, recent: &mut Recent, probe: &mut P| {
+    // Walks `from..=end`, at most `allowance` samples (and the ray's end).
+    let walk_at = |from: i32, recent: &mut Recent, probe: &mut P| {
+        let end = if allowance == u32::MAX {
+            ray.end
+        } else {
+            ray.end.min(from.saturating_add(allowance as i32 - 1))
+        };
         if from > end {
             Walk::Exit { last: end }
         } else {
             walk(pyramid, ray, ray.cursor(pyramid, from), end, recent, probe)
         }
     };
-    // The same from the eye side, through the bounds first when allowed.
-    let walk_from = |from: i32, end: i32, recent: &mut Recent, probe: &mut P| {
-        if !first_hit_on {
-            return walk_at(from, end, recent, probe);
-        }
-        match first_hit(pyramid, ray, from, end, probe) {
-            Some(k) => walk_at(ray.next_visited(k), end, recent, probe),
-            None => Walk::Exit { last: end },
-        }
-    };
     let outcome = match resume {
-        Some(resume) => walk_at(ray.next_visited(resume), ray.end, recent, probe),
-        None => walk_from(ray.start, ray.end, recent, probe),
+        Some(resume) => walk_at(ray.next_visited(resume), recent, probe),
+        None if first_hit_on => match first_hit(pyramid, ray, ray.start, ray.end, allowance, probe)
+        {
+            Some(k) => walk_at(ray.next_visited(k), recent, probe),
+            None => Walk::Exit { last: ray.end },
+        },
+        None => walk_at(ray.start, recent, probe),
     };
     match outcome {
+        Walk::Exit { last } if allowance != u32::MAX && last < ray.end && last >= ray.first => {
+            // Cut short by the allowance: the color under the ray there.
+            (shade_above(pyramid, ray, last, options, probe), last + 1)
+        }
         Walk::Exit { last } => (sky(options), last + 1),
         Walk::Hit {
             at,
@@ -348,13 +403,32 @@ fn cast<P: Probe>(
             // A first sample already below: find the one above it.
             let (at, clearance, above) = match above {
                 Some(_) => (at, clearance, above),
-                None => retrace(pyramid, ray, at, clearance, recent, probe),
+                None => retrace(pyramid, ray, at, clearance, allowance, recent, probe),
             };
             (
                 shade(pyramid, ray, at, clearance, above, options, probe),
                 at.k,
             )
         }
+    }
+}
+
+/// The color of the surface under sample `k` of a ray cut short above it.
+fn shade_above<P: Probe>(
+    pyramid: &Pyramid<'_>,
+    ray: &Ray,
+    k: i32,
+    options: &RenderOptions,
+    probe: &mut P,
+) -> Sample {
+    let at = ray.cursor(pyramid, k);
+    match Stage::new(pyramid, ray, at.level).color(&ray.color_cursor(&at), probe) {
+        Some(color) => Sample {
+            color,
+            distance: ray.distance(k).clamp(0, i64::from(Sample::SKY - 1)) as u32,
+            elevation: at.z,
+        },
+        None => sky(options),
     }
 }
 
@@ -367,10 +441,12 @@ fn retrace<P: Probe>(
     ray: &Ray,
     mut at: Cursor,
     mut below: i32,
+    mut allowance: u32,
     recent: &mut Recent,
     probe: &mut P,
 ) -> (Cursor, i32, Option<(i32, i32)>) {
-    while at.k > ray.first {
+    while at.k > ray.first && allowance > 0 {
+        allowance -= 1;
         let before = ray.cursor(pyramid, ray.previous_visited(at.k));
         let stage = Stage::new(pyramid, ray, before.level);
         let Some((cell, c)) = stage.clearance_recent(&before, recent, probe) else {
