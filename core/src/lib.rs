@@ -48,6 +48,7 @@ mod pyramid;
 mod sink;
 mod terrain;
 mod view;
+mod warp;
 
 /// An 8-bit RGB color.
 pub type Rgb = [u8; 3];
@@ -65,3 +66,4 @@ pub use pyramid::{
 pub use sink::{Framebuffer, FramebufferError, Sample, Sink};
 pub use terrain::{Terrain, TerrainError};
 pub use view::{max_lines, Camera, View, ViewError};
+pub use warp::{control_points, with_margin, ControlPoint, Warp, WarpError};
