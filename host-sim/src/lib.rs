@@ -12,6 +12,7 @@ pub mod camera;
 pub mod chart;
 pub mod cli;
 pub mod error;
+pub mod fly;
 pub mod frame;
 pub mod kernel;
 pub mod metrics;

@@ -1,6 +1,7 @@
 //! The `terracast-sim` command line (spec/view-contract.md).
 
 mod bench;
+mod fly;
 mod sim;
 
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
@@ -27,6 +28,10 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Fly a path at a steady display rate on the modeled machine: frames
+    /// rendered within a step budget, the ones between warped; writes an
+    /// animated GIF and a report. The main job.
+    Fly(fly::FlyArgs),
     /// Render one view to a PNG (with optional depth and stats).
     Render(RenderArgs),
     /// The emulated board: pack its scene, verify what it rendered
@@ -278,6 +283,7 @@ struct RenderArgs {
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Fly(args) => fly::fly_command(args),
         Command::Render(args) => render_command(args),
         Command::Board(BoardCommand::Scene(args)) => board_scene_command(args),
         Command::Board(BoardCommand::Verify(args)) => board_verify_command(args),

@@ -1,0 +1,230 @@
+//! `terracast-sim fly`: the main job. A flight at a steady display rate on
+//! the modeled machine, written as an animation and a report.
+
+use super::{check_writable, load_scene, parse_size, SceneArgs};
+use crate::error::{Error, Result};
+use crate::fly::{fly, FlyOptions, Kind, Path};
+use crate::sim::Machine;
+use image::codecs::gif::{GifEncoder, Repeat};
+use image::{Delay, Frame, RgbaImage};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+
+#[derive(Debug, clap::Args)]
+pub(super) struct FlyArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Camera path: one keyframe a line, `t x y z yaw pitch` (seconds,
+    /// voxels, degrees) [default: a built-in scenic path over the scene].
+    #[arg(long, value_name = "PATH.txt")]
+    path: Option<PathBuf>,
+    /// Display frames [default: the path's length at the display rate].
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
+    /// Display rate, frames a second.
+    #[arg(long, default_value_t = 30.0, value_name = "HZ")]
+    display_hz: f64,
+    /// Rendering rate the step budget is made for; the frames between are
+    /// warped.
+    #[arg(long, default_value_t = 12.0, value_name = "HZ")]
+    render_hz: f64,
+    /// Display size.
+    #[arg(long, default_value = "200x150", value_parser = parse_size, value_name = "WxH")]
+    size: (u32, u32),
+    /// Horizontal field of view, degrees.
+    #[arg(long, default_value_t = 60.0, value_name = "DEG")]
+    hfov: f32,
+    /// How much wider and taller than the display frames are rendered, so
+    /// that warps stay inside them.
+    #[arg(long, default_value_t = 1.2, value_name = "M")]
+    margin: f32,
+    /// Machine description (TOML); fields left out keep the PVS defaults.
+    #[arg(long, value_name = "MACHINE.toml")]
+    machine: Option<PathBuf>,
+    /// Processors, master included (overrides the machine file).
+    #[arg(long, value_name = "N")]
+    processors: Option<u32>,
+    /// Skip rendering each warped frame's true view (faster; no warp PSNR).
+    #[arg(long)]
+    no_measure: bool,
+    /// The animation: an animated GIF (`.gif`), or an existing folder for a
+    /// PNG a frame.
+    #[arg(long, default_value = "fly.gif", value_name = "OUT.gif|DIR")]
+    out: PathBuf,
+    /// The report: a record per display frame, as JSON.
+    #[arg(long, value_name = "REPORT.json")]
+    report: Option<PathBuf>,
+}
+
+pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
+    let mut machine = match &args.machine {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| Error::new(format!("cannot read {}: {e}", path.display())))?;
+            Machine::from_toml(&text).map_err(|e| Error::new(format!("{}: {e}", path.display())))?
+        }
+        None => Machine::default(),
+    };
+    if let Some(p) = args.processors {
+        machine.processors = p;
+    }
+    machine.check()?;
+    let png_dir = args.out.is_dir();
+    let is_gif = args
+        .out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
+    if !png_dir && !is_gif {
+        return Err(Error::new(format!(
+            "--out {}: give a .gif file or an existing folder",
+            args.out.display()
+        )));
+    }
+    if !png_dir {
+        check_writable(&args.out)?;
+    }
+    if let Some(report) = &args.report {
+        check_writable(report)?;
+    }
+    if !(1..=2048).contains(&args.size.0) || !(1..=2048).contains(&args.size.1) {
+        return Err(Error::new("--size must be between 1x1 and 2048x2048"));
+    }
+    if !(args.margin.is_finite() && (1.0..=2.0).contains(&args.margin)) {
+        return Err(Error::new("--margin must be between 1 and 2"));
+    }
+    let scene = load_scene(&args.scene)?;
+    let path = match &args.path {
+        Some(file) => {
+            let text = std::fs::read_to_string(file)
+                .map_err(|e| Error::new(format!("cannot read {}: {e}", file.display())))?;
+            Path::parse(&text).map_err(|e| Error::new(format!("{}: {e}", file.display())))?
+        }
+        None => Path::scenic(&scene),
+    };
+    let frames = match args.frames {
+        Some(0) | Some(100_001..) => {
+            return Err(Error::new("--frames must be between 1 and 100000"));
+        }
+        Some(n) => n,
+        None => ((path.duration() * args.display_hz).floor() as u32 + 1).min(100_000),
+    };
+    let options = FlyOptions {
+        frames,
+        display_hz: args.display_hz,
+        render_hz: args.render_hz,
+        size: args.size,
+        hfov: args.hfov,
+        margin: args.margin,
+        measure_warp: !args.no_measure,
+    };
+    let kernel = scene.to_kernel()?;
+    let bar = ProgressBar::new(u64::from(frames)).with_style(
+        ProgressStyle::with_template("fly: {bar:30} {pos}/{len} display frames, {eta} left")
+            .map_err(|e| Error::new(e.to_string()))?,
+    );
+    let flight = fly(&kernel, &path, &machine, &options, |k| {
+        bar.set_position(u64::from(k))
+    })?;
+    bar.finish_and_clear();
+
+    if png_dir {
+        for (k, image) in flight.images.iter().enumerate() {
+            let file = args.out.join(format!("frame-{k:05}.png"));
+            crate::output::write_png(
+                &file,
+                &crate::frame::Frame {
+                    width: args.size.0,
+                    height: args.size.1,
+                    colors: image.clone(),
+                    depth: vec![f32::INFINITY; image.len()],
+                },
+            )?;
+        }
+    } else {
+        write_gif(&args.out, &flight.images, args.size, args.display_hz)?;
+    }
+    if let Some(report) = &args.report {
+        let text = serde_json::to_string_pretty(&flight.report_json(&options))
+            .map_err(|e| Error::new(e.to_string()))?;
+        std::fs::write(report, text + "\n")
+            .map_err(|e| Error::new(format!("cannot write {}: {e}", report.display())))?;
+    }
+
+    let rendered = flight
+        .frames
+        .iter()
+        .filter(|f| f.kind == Kind::Rendered)
+        .count();
+    let met = flight.frames.iter().filter(|f| f.deadline_met).count();
+    let render_ms: Vec<f64> = {
+        let mut seen = std::collections::BTreeMap::new();
+        for f in &flight.frames {
+            seen.insert(f.render, f.render_ms);
+        }
+        seen.into_values().collect()
+    };
+    let mean_render = render_ms.iter().sum::<f64>() / render_ms.len().max(1) as f64;
+    let mut renders = std::collections::BTreeMap::new();
+    for f in &flight.frames {
+        renders.insert(f.render, (f.coarse_lines, f.filled_rays, f.level_bias));
+    }
+    let coarse = renders.values().filter(|r| r.0 > 0).count();
+    let filled = renders.values().filter(|r| r.1 > 0).count();
+    let biases = renders.values().map(|r| r.2);
+    let (low, high) = biases.fold((f64::INFINITY, 0.0f64), |(l, h), b| (l.min(b), h.max(b)));
+    println!(
+        "{frames} display frames at {} Hz, {}x{}: {rendered} rendered, {} warped; {met}/{frames} on time",
+        args.display_hz,
+        args.size.0,
+        args.size.1,
+        frames as usize - rendered,
+    );
+    println!(
+        "renders: budget {} steps, mean {:.1} ms ({:.1} Hz alone), longest {:.1} ms, on {} processors at {} MHz",
+        flight.budget,
+        mean_render,
+        1e3 / mean_render.max(1e-9),
+        render_ms.iter().copied().fold(0.0, f64::max),
+        machine.processors,
+        machine.clock_mhz,
+    );
+    println!(
+        "governor: level bias {low:.2} to {high:.2}; {coarse} of {} renders finished coarser, {filled} repeated pixels",
+        renders.len()
+    );
+    let psnr: Vec<f64> = flight.frames.iter().filter_map(|f| f.warp_psnr).collect();
+    if !psnr.is_empty() {
+        let finite: Vec<f64> = psnr.iter().copied().filter(|p| p.is_finite()).collect();
+        println!(
+            "warped frames against a true render: mean {:.2} dB, worst {:.2} dB",
+            finite.iter().sum::<f64>() / finite.len().max(1) as f64,
+            psnr.iter().copied().fold(f64::INFINITY, f64::min)
+        );
+    }
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+fn write_gif(
+    path: &std::path::Path,
+    images: &[Vec<[u8; 3]>],
+    size: (u32, u32),
+    hz: f64,
+) -> Result<()> {
+    let file = std::fs::File::create(path)
+        .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))?;
+    let mut encoder = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+    encoder
+        .set_repeat(Repeat::Infinite)
+        .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))?;
+    let delay = Delay::from_numer_denom_ms(1000, hz.round().max(1.0) as u32);
+    for image in images {
+        let rgba: Vec<u8> = image.iter().flat_map(|c| [c[0], c[1], c[2], 255]).collect();
+        let buffer = RgbaImage::from_raw(size.0, size.1, rgba)
+            .ok_or_else(|| Error::new("frame size does not match the display size"))?;
+        encoder
+            .encode_frame(Frame::from_parts(buffer, 0, 0, delay))
+            .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))?;
+    }
+    Ok(())
+}
