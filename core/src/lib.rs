@@ -54,7 +54,8 @@ mod warp;
 pub type Rgb = [u8; 3];
 
 pub use caster::{
-    render, render_line, Coherence, FrameCost, Governor, RenderOptions, Resolution, VerticalSamples,
+    render, render_line, Coherence, FrameCost, Governor, RenderOptions, Resolution, Shading,
+    VerticalSamples,
 };
 pub use fixed::types::U8F8;
 pub use pool::{LinePool, Task, Wait};

@@ -22,7 +22,9 @@ use crate::scene::{KernelScene, Scene};
 use crate::sim::trace::Discard;
 use std::collections::HashSet;
 use std::fmt::Write as _;
-use terracast::{Camera, Coherence, Probe, RenderOptions, Resolution, VerticalSamples, View, U8F8};
+use terracast::{
+    Camera, Coherence, Probe, RenderOptions, Resolution, Shading, VerticalSamples, View, U8F8,
+};
 
 /// One way of rendering.
 #[derive(Debug, Clone)]
@@ -80,6 +82,21 @@ pub fn settings() -> Vec<Setting> {
             "kernel 4 vertical samples",
             RenderOptions {
                 vertical_samples: VerticalSamples::Four,
+                ..default
+            },
+        ),
+        kernel(
+            "kernel nearest color",
+            RenderOptions {
+                shading: Shading::Nearest,
+                ..default
+            },
+        ),
+        kernel(
+            "kernel highest quality",
+            RenderOptions {
+                resolution: Resolution::Single,
+                vertical_samples: VerticalSamples::Eight,
                 ..default
             },
         ),

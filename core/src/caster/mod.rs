@@ -108,6 +108,20 @@ impl VerticalSamples {
     }
 }
 
+/// How a hit is colored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shading {
+    /// The two voxels across the grid line blended by the fraction of the
+    /// minor coordinate (a shift and a mask), on the grid lines before and
+    /// after the crossing, blended by where it lies, and the adjacent
+    /// levels blended by depth (the soft transition).
+    Subvoxel,
+    /// The voxel nearest the hit sample, on its level: no blend. Cheaper
+    /// and blockier: the baseline the subvoxel weights are measured
+    /// against.
+    Nearest,
+}
+
 /// Settings of the caster.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RenderOptions {
@@ -121,6 +135,8 @@ pub struct RenderOptions {
     pub hierarchical_first_hit: bool,
     /// Rays per pixel, spread along the pixel's image line.
     pub vertical_samples: VerticalSamples,
+    /// How hits are colored.
+    pub shading: Shading,
     /// Color of rays that leave the terrain.
     pub sky: Rgb,
 }
@@ -132,6 +148,7 @@ impl Default for RenderOptions {
             resolution: Resolution::DEFAULT,
             hierarchical_first_hit: true,
             vertical_samples: VerticalSamples::One,
+            shading: Shading::Subvoxel,
             sky: DEFAULT_SKY,
         }
     }
@@ -477,36 +494,64 @@ fn shade<P: Probe>(
     options: &RenderOptions,
     probe: &mut P,
 ) -> Sample {
+    let (position, before) = crossing(ray, &hit, below, above);
     let stage = Stage::new(pyramid, ray, hit.level);
-    let Some(on_hit_line) = stage
-        .color(&ray.color_cursor(&hit), probe)
-        .or_else(|| stage.color(&hit, probe))
-    else {
+    let color = if options.shading == Shading::Nearest {
+        stage.nearest_color(&ray.color_cursor(&hit), probe)
+    } else {
+        stage
+            .color(&ray.color_cursor(&hit), probe)
+            .or_else(|| stage.color(&hit, probe))
+            .map(|on_hit_line| match before {
+                Some((k, t)) => {
+                    let before = ray.cursor(pyramid, k);
+                    let before_stage = Stage::new(pyramid, ray, before.level);
+                    match before_stage.color(&ray.color_cursor(&before), probe) {
+                        Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
+                        None => on_hit_line,
+                    }
+                }
+                None => on_hit_line,
+            })
+    };
+    let Some(color) = color else {
         return sky(options);
     };
     probe.hit(hit.level);
-    // How far back (in 1/256 of the last step) the crossing lies, and the
-    // last step's length in samples.
-    let (color, back, step) = match above {
+    Sample { color, ..position }
+}
+
+/// Where a ray crossed the surface: the distance and height of the hit,
+/// moved back from the hit sample toward the visited sample before it (when
+/// known) by the ratio of their clearances; and that sample with the
+/// crossing's weight toward the hit (1/256 of the step). Colorless.
+fn crossing(
+    ray: &Ray,
+    hit: &Cursor,
+    below: i32,
+    above: Option<(i32, i32)>,
+) -> (Sample, Option<(i32, u32)>) {
+    let (back, step, before) = match above {
         Some((before, above)) => {
             let t = crossing_fraction(above, below);
-            let before = ray.cursor(pyramid, before);
-            let before_stage = Stage::new(pyramid, ray, before.level);
-            let color = match before_stage.color(&ray.color_cursor(&before), probe) {
-                Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
-                None => on_hit_line,
-            };
-            (color, i64::from(256 - t), i64::from(hit.k - before.k))
+            (
+                i64::from(256 - t),
+                i64::from(hit.k - before),
+                Some((before, t)),
+            )
         }
-        None => (on_hit_line, 0, 1),
+        None => (0, 1, None),
     };
     let distance = ray.distance(hit.k) - ((back * step) << 8);
     let elevation = i64::from(hit.z) - ((back * step * i64::from(ray.dz.to_bits())) >> 8);
-    Sample {
-        color,
-        distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
-        elevation: elevation.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32,
-    }
+    (
+        Sample {
+            color: [0; 3],
+            distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
+            elevation: elevation.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32,
+        },
+        before,
+    )
 }
 
 /// Where between a sample above the surface (clearance `above` > 0) and the
@@ -530,6 +575,47 @@ mod tests {
         assert_eq!(crossing_fraction(3 << 16, -(1 << 16)), 192);
         assert_eq!(crossing_fraction(i32::MAX, i32::MIN), 127);
         assert!(crossing_fraction(1, i32::MIN) <= 1);
+    }
+
+    #[test]
+    fn nearest_shading_shows_only_voxel_colors_and_subvoxel_blends_them() {
+        use crate::{Camera, Framebuffer, Terrain};
+        // A flat 16 x 16 map of black and white stripes across x.
+        let heights = [0u16; 256];
+        let colors: [Rgb; 256] = core::array::from_fn(|i| [(i % 2 * 255) as u8; 3]);
+        let terrain = Terrain::new(16, 16, &heights, &colors).unwrap();
+        let pyramid = Pyramid::flat(terrain);
+        let camera = Camera {
+            eye: [1.3, 2.1, 6.0],
+            yaw_deg: 70.0,
+            pitch_deg: 40.0,
+            ..Camera::default()
+        };
+        let view = View::new(&camera, 24, 18).unwrap();
+        let shaded = |shading| {
+            let mut pixels = [[0u8; 3]; 24 * 18];
+            let mut frame = Framebuffer::new(&mut pixels, 24, 18).unwrap();
+            let options = RenderOptions {
+                shading,
+                resolution: Resolution::Single,
+                ..RenderOptions::default()
+            };
+            render(&pyramid, &view, &options, &mut frame, &mut crate::NoProbe);
+            pixels
+        };
+        let terrain_pixels = |p: [Rgb; 432]| {
+            p.into_iter()
+                .filter(|c| *c != DEFAULT_SKY)
+                .collect::<std::vec::Vec<_>>()
+        };
+        let nearest = terrain_pixels(shaded(Shading::Nearest));
+        assert!(!nearest.is_empty());
+        assert!(
+            nearest.iter().all(|c| *c == [0; 3] || *c == [255; 3]),
+            "{nearest:?}"
+        );
+        let subvoxel = terrain_pixels(shaded(Shading::Subvoxel));
+        assert!(subvoxel.iter().any(|c| c[0] > 20 && c[0] < 235));
     }
 
     #[test]

@@ -135,6 +135,19 @@ impl<'a> Stage<'a> {
         Some((cell, self.clearance_in(&cell, at.minor, at.z)))
     }
 
+    /// The color of the voxel nearest a sample, on this level alone.
+    pub fn nearest_color<P: Probe>(&self, at: &Cursor, probe: &mut P) -> Option<Rgb> {
+        let i = index(at.base, self.minor_stride, at.minor, self.level);
+        let half = 1 << (COORD_FRAC_BITS - 1 + u32::from(self.level));
+        let nearest = if at.minor & ((half << 1) - 1) < half {
+            i
+        } else {
+            i + self.minor_stride
+        };
+        probe.color(self.level, i as usize);
+        self.colors.get(nearest as usize).copied()
+    }
+
     /// The color where a sample's grid line is crossed: two voxels blended by
     /// the subvoxel weight, on this level and on the one below, blended by
     /// the sample's level weight `t` (the soft transition).

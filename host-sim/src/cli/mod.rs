@@ -14,8 +14,8 @@ use crate::scene::{load_pair, procedural, Scene};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use terracast::{
-    Camera, Coherence, HeightFilter, RenderOptions, Resolution, Rgb, VerticalSamples, View,
-    ViewError, U8F8,
+    Camera, Coherence, HeightFilter, RenderOptions, Resolution, Rgb, Shading, VerticalSamples,
+    View, ViewError, U8F8,
 };
 
 /// Real-time terrain flythrough: the terracast kernel on the host.
@@ -118,6 +118,15 @@ pub enum HeightFilterArg {
     Mean,
     /// Largest of the nine finer points.
     Max,
+}
+
+/// How the kernel colors a hit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ShadingArg {
+    /// Subvoxel weights across and along grid lines, levels blended.
+    Subvoxel,
+    /// The nearest voxel, no blend.
+    Nearest,
 }
 
 /// How rays cast from the eye find their first hit.
@@ -250,6 +259,10 @@ struct RenderArgs {
     /// Kernel: rays per pixel, spread over its height (1, 2, 4 or 8).
     #[arg(long, default_value_t = 1, value_name = "N")]
     vertical_samples: u32,
+    /// Kernel: how a hit is colored: subvoxel weights (the default) or the
+    /// nearest voxel.
+    #[arg(long, value_enum, default_value_t = ShadingArg::Subvoxel)]
+    shading: ShadingArg,
     /// Voxel Space: growth of the slice spacing each slice.
     #[arg(
         long,
@@ -487,6 +500,10 @@ fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
         resolution,
         hierarchical_first_hit: args.first_hit == FirstHitArg::Hierarchical,
         vertical_samples,
+        shading: match args.shading {
+            ShadingArg::Subvoxel => Shading::Subvoxel,
+            ShadingArg::Nearest => Shading::Nearest,
+        },
         sky,
     })
 }
