@@ -4,7 +4,6 @@
 use super::{check_writable, load_scene, parse_size, SceneArgs};
 use crate::error::{Error, Result};
 use crate::fly::{fly, FlyOptions, Kind, Path};
-use crate::sim::Machine;
 use image::codecs::gif::{GifEncoder, Repeat};
 use image::{Delay, Frame, RgbaImage};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -57,17 +56,7 @@ pub(super) struct FlyArgs {
 }
 
 pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
-    let mut machine = match &args.machine {
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| Error::new(format!("cannot read {}: {e}", path.display())))?;
-            Machine::from_toml(&text).map_err(|e| Error::new(format!("{}: {e}", path.display())))?
-        }
-        None => Machine::default(),
-    };
-    if let Some(p) = args.processors {
-        machine.processors = p;
-    }
+    let machine = super::sim::load_machine(args.machine.as_deref(), args.processors)?;
     machine.check()?;
     let png_dir = args.out.is_dir();
     let is_gif = args

@@ -55,8 +55,13 @@ pub(super) struct SimArgs {
     threads: Vec<usize>,
 }
 
-pub(super) fn sim_command(args: SimArgs) -> Result<()> {
-    let mut machine = match &args.machine {
+/// The machine file at `path` (the PVS without one), with `processors`
+/// overriding its count.
+pub(super) fn load_machine(
+    path: Option<&std::path::Path>,
+    processors: Option<u32>,
+) -> Result<Machine> {
+    let mut machine = match path {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .map_err(|e| Error::new(format!("cannot read {}: {e}", path.display())))?;
@@ -64,9 +69,14 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
         }
         None => Machine::default(),
     };
-    if let Some(p) = args.processors {
+    if let Some(p) = processors {
         machine.processors = p;
     }
+    Ok(machine)
+}
+
+pub(super) fn sim_command(args: SimArgs) -> Result<()> {
+    let mut machine = load_machine(args.machine.as_deref(), args.processors)?;
     if let Some(d) = args.deadline_ms {
         machine.frame.deadline_ms = d;
     }
