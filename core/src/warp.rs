@@ -93,19 +93,12 @@ struct Basis {
 
 impl Basis {
     fn new(camera: &Camera, size: (u32, u32)) -> Self {
-        let (yaw, pitch) = (
-            f64::from(camera.yaw_deg).to_radians(),
-            f64::from(camera.pitch_deg).to_radians(),
-        );
-        let (sy, cy) = (libm::sin(yaw), libm::cos(yaw));
-        let (sp, cp) = (libm::sin(pitch), libm::cos(pitch));
-        let forward = DVec3::new(cp * cy, cp * sy, -sp);
-        let right = DVec3::new(-sy, cy, 0.0);
+        let [forward, right, up] = camera.axes();
         Self {
             eye: DVec3::from(camera.eye.map(f64::from)),
             forward,
             right,
-            up: forward.cross(right),
+            up,
             tangent: libm::tan(f64::from(camera.hfov_deg).to_radians() * 0.5),
             size: (f64::from(size.0), f64::from(size.1)),
         }

@@ -31,6 +31,22 @@ pub struct Camera {
     pub hfov_deg: f32,
 }
 
+impl Camera {
+    /// Forward, right and up, the contract's camera axes (float, once a
+    /// frame; the warp uses them too).
+    pub(crate) fn axes(&self) -> [DVec3; 3] {
+        let (yaw, pitch) = (
+            f64::from(self.yaw_deg).to_radians(),
+            f64::from(self.pitch_deg).to_radians(),
+        );
+        let (sy, cy) = (libm::sin(yaw), libm::cos(yaw));
+        let (sp, cp) = (libm::sin(pitch), libm::cos(pitch));
+        let forward = DVec3::new(cp * cy, cp * sy, -sp);
+        let right = DVec3::new(-sy, cy, 0.0);
+        [forward, right, forward.cross(right)]
+    }
+}
+
 impl Default for Camera {
     fn default() -> Self {
         Self {
@@ -138,15 +154,8 @@ impl View {
             return Err(ViewError::AspectOutOfRange);
         }
 
-        let (yaw, pitch) = (
-            f64::from(camera.yaw_deg).to_radians(),
-            f64::from(camera.pitch_deg).to_radians(),
-        );
-        let (sy, cy) = (libm::sin(yaw), libm::cos(yaw));
-        let (sp, cp) = (libm::sin(pitch), libm::cos(pitch));
-        let forward = DVec3::new(cp * cy, cp * sy, -sp);
-        let right = DVec3::new(-sy, cy, 0.0);
-        let up = forward.cross(right);
+        let [forward, right, up] = camera.axes();
+        let pitch = f64::from(camera.pitch_deg).to_radians();
 
         // Pixel (c, row j from the bottom) has a = (2c+1)/W − 1 and
         // b = (2j+1)/H − 1, so both advance by 2/W · t per pixel.
