@@ -46,7 +46,9 @@ mod pool;
 mod probe;
 mod pyramid;
 mod sink;
+mod surface;
 mod terrain;
+pub mod tiles;
 mod view;
 mod warp;
 
@@ -65,6 +67,7 @@ pub use pyramid::{
     PyramidError, MAX_LEVELS,
 };
 pub use sink::{Framebuffer, FramebufferError, Sample, Sink};
+pub use surface::{Extent, Grid, Surface};
 pub use terrain::{Terrain, TerrainError};
 pub use view::{max_lines, Camera, View, ViewError};
 pub use warp::{control_points, with_margin, ControlPoint, Warp, WarpError};

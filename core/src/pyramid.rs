@@ -34,6 +34,7 @@
 //! a pyramid built on the host in flash and wrap it with [`Pyramid::new`]).
 
 use crate::config::{MAX_LEVEL, MAX_MAP_SIDE};
+use crate::surface::{Extent, Surface};
 use crate::terrain::Terrain;
 use crate::Rgb;
 use core::fmt;
@@ -284,6 +285,40 @@ impl<'a> Pyramid<'a> {
                 .iter()
                 .map(|b| core::mem::size_of_val(*b))
                 .sum::<usize>()
+    }
+}
+
+impl<'a> Surface for Pyramid<'a> {
+    type Grid<'s>
+        = Terrain<'s>
+    where
+        Self: 's;
+
+    #[inline(always)]
+    fn grid(&self, level: u8) -> Option<Terrain<'_>> {
+        self.levels.get(usize::from(level)).copied()
+    }
+    #[inline(always)]
+    fn top(&self) -> u8 {
+        Pyramid::top(self)
+    }
+    fn extent(&self) -> Extent {
+        self.base().extent()
+    }
+    fn has_bounds(&self) -> bool {
+        Pyramid::has_bounds(self)
+    }
+    #[inline]
+    fn bound(&self, level: u8, x: i64, y: i64) -> Option<(u16, usize)> {
+        let base = self.base();
+        let cells_x = i64::from(level_side(base.width(), u32::from(level))) - 1;
+        let cells_y = i64::from(level_side(base.depth(), u32::from(level))) - 1;
+        if !(0..cells_x).contains(&x) || !(0..cells_y).contains(&y) {
+            return None;
+        }
+        let cell = (y * cells_x + x) as usize;
+        let bound = self.bounds(usize::from(level))?.get(cell).copied()?;
+        Some((bound, cell))
     }
 }
 

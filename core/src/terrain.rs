@@ -1,6 +1,7 @@
 //! The terrain: borrowed height and color slices of one grid.
 
 use crate::config::{HEIGHT_FRAC_BITS, MAX_MAP_SIDE};
+use crate::surface::{Extent, Grid};
 use crate::Rgb;
 use core::fmt;
 
@@ -122,9 +123,32 @@ impl<'a> Terrain<'a> {
     pub fn max_height(&self) -> u16 {
         self.max_height
     }
+    /// The size and highest height, for clipping rays.
+    pub fn extent(&self) -> Extent {
+        Extent {
+            width: self.width,
+            depth: self.depth,
+            max_height: self.max_height,
+        }
+    }
     /// Bytes of terrain this view of the data covers (heights and colors).
     pub fn bytes(&self) -> usize {
         core::mem::size_of_val(self.heights) + core::mem::size_of_val(self.colors)
+    }
+}
+
+impl Grid for Terrain<'_> {
+    #[inline(always)]
+    fn stride(&self) -> isize {
+        self.width as isize
+    }
+    #[inline(always)]
+    fn height(&self, index: isize) -> Option<u16> {
+        self.heights.get(index as usize).copied()
+    }
+    #[inline(always)]
+    fn color(&self, index: isize) -> Option<Rgb> {
+        self.colors.get(index as usize).copied()
     }
 }
 

@@ -5,7 +5,9 @@ use crate::error::{Error, Result};
 use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
-use terracast::{render, Camera, Coherence, CountingProbe, RenderOptions, Sample, Sink, View};
+use terracast::{
+    render, Camera, Coherence, CountingProbe, RenderOptions, Sample, Sink, Surface, View,
+};
 
 /// A sink that keeps every sample of the frame.
 #[derive(Debug)]
@@ -52,12 +54,29 @@ pub fn render_kernel(
     options: &RenderOptions,
 ) -> Result<(Frame, RenderStats)> {
     let pyramid = scene.pyramid_for(options)?;
+    let (frame, mut stats) = render_surface(&pyramid, camera, width, height, options)?;
+    stats.resident_bytes = pyramid.bytes() as u64;
+    if let Some(levels) = &mut stats.levels {
+        levels.levels = pyramid.levels();
+    }
+    Ok((frame, stats))
+}
+
+/// Renders `surface` with the kernel (the camera in the surface's
+/// coordinates). The stats' resident bytes are left 0 for the caller.
+pub fn render_surface<T: Surface + ?Sized>(
+    surface: &T,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    options: &RenderOptions,
+) -> Result<(Frame, RenderStats)> {
     let view =
         View::new(camera, width, height).map_err(|e| Error::new(format!("bad view: {e}")))?;
     let mut buffer = SampleBuffer::new(width, height);
     let mut probe = CountingProbe::default();
     let started = Instant::now();
-    render(&pyramid, &view, options, &mut buffer, &mut probe);
+    render(surface, &view, options, &mut buffer, &mut probe);
     let render_ns = started.elapsed().as_nanos() as u64;
 
     let rays = ContractCamera::new(camera, width, height);
@@ -88,10 +107,10 @@ pub fn render_kernel(
         pixels,
         rays: probe.rays,
         steps: probe.steps,
-        resident_bytes: pyramid.bytes() as u64,
+        resident_bytes: 0,
         render_ns,
         levels: Some(LevelStats {
-            levels: pyramid.levels(),
+            levels: usize::from(surface.top()) + 1,
             steps: probe.steps_by_level,
             hits: probe.hits_by_level,
             bound_tests: probe.bound_tests,

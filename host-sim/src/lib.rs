@@ -21,5 +21,6 @@ pub mod reference;
 pub mod scene;
 pub mod sim;
 pub mod stability;
+pub mod tiles;
 
 pub use error::{Error, Result};

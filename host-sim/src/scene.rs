@@ -8,6 +8,7 @@ mod procedural;
 
 pub use load::{load_colors, load_heights};
 pub use procedural::{color_by_height_and_slope, procedural};
+pub(crate) use procedural::{terrain_color, value_noise, WATER_LEVEL};
 
 use crate::error::{Error, Result};
 use terracast::{

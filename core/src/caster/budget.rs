@@ -40,8 +40,8 @@
 
 use super::{line_with, Allowances, Frame, RenderOptions, Resolution};
 use crate::probe::Probe;
-use crate::pyramid::Pyramid;
 use crate::sink::Sink;
+use crate::surface::Surface;
 use crate::view::View;
 use core::cell::Cell;
 use fixed::types::U8F8;
@@ -98,9 +98,9 @@ impl Governor {
     /// Renders `view` within the budget (with `options`, its resolution
     /// replaced by the pyramid's levels at the governor's bias), then
     /// chooses the next frame's bias from this frame's steps.
-    pub fn render<S: Sink, P: Probe>(
+    pub fn render<T: Surface + ?Sized, S: Sink, P: Probe>(
         &mut self,
-        pyramid: &Pyramid<'_>,
+        surface: &T,
         view: &View,
         options: &RenderOptions,
         sink: &mut S,
@@ -116,8 +116,8 @@ impl Governor {
         };
         let (fine, coarse) = (at(bias), at(coarse_bias));
         let (fine_frame, coarse_frame) = (
-            Frame::new(pyramid, view, &fine),
-            Frame::new(pyramid, view, &coarse),
+            Frame::new(surface, view, &fine),
+            Frame::new(surface, view, &coarse),
         );
         let rays_total = u64::from(view.width())
             * u64::from(view.height())
@@ -147,7 +147,7 @@ impl Governor {
                 (&fine, &fine_frame)
             };
             line_with(
-                pyramid,
+                surface,
                 view,
                 options,
                 frame,
@@ -254,7 +254,7 @@ impl Allowances for Budget<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{pyramid_cells, pyramid_points, Camera, HeightFilter, Terrain};
+    use crate::{pyramid_cells, pyramid_points, Camera, HeightFilter, Pyramid, Terrain};
     use std::vec;
 
     /// The same allowance for every ray.

@@ -15,28 +15,22 @@
 
 use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_WALK_LEVEL};
 use crate::probe::Probe;
-use crate::pyramid::{level_side, Pyramid};
+use crate::surface::Surface;
 use crate::view::ray::Ray;
 
 /// The first sample in `from..=end` where `ray` may hit any level of
 /// `pyramid` (every sample before it is above every level's surface), or
 /// `None` when it cannot hit there. After `tests` rounds (each at most two
 /// bound tests) it stops and hands over the sample it has proven up to.
-pub(crate) fn first_hit<P: Probe>(
-    pyramid: &Pyramid<'_>,
+pub(crate) fn first_hit<T: Surface + ?Sized, P: Probe>(
+    surface: &T,
     ray: &Ray,
     from: i32,
     end: i32,
     mut tests: u32,
     probe: &mut P,
 ) -> Option<i32> {
-    let top = pyramid.top().min(MAX_WALK_LEVEL as u8);
-    let base = pyramid.base();
-    let (major_cells_side, minor_cells_side) = if ray.key.x_major {
-        (base.width(), base.depth())
-    } else {
-        (base.depth(), base.width())
-    };
+    let top = surface.top().min(MAX_WALK_LEVEL as u8);
     let mut level = top;
     let mut k = from;
     loop {
@@ -59,9 +53,6 @@ pub(crate) fn first_hit<P: Probe>(
             // bounds do not cover: hand over.
             return Some(k);
         }
-        let Some(bounds) = pyramid.bounds(usize::from(level)) else {
-            return Some(k);
-        };
         let major = ray.major_at(k);
         let major_cell = if ray.key.forward {
             major >> level
@@ -72,29 +63,20 @@ pub(crate) fn first_hit<P: Probe>(
         let (minor_b, z_b) = ray.position(next);
         let shift = COORD_FRAC_BITS + u32::from(level);
         let (lo, hi) = (minor_a.min(minor_b) >> shift, minor_a.max(minor_b) >> shift);
-        let cells_major = i64::from(level_side(major_cells_side, u32::from(level))) - 1;
-        let cells_minor = i64::from(level_side(minor_cells_side, u32::from(level))) - 1;
-        let row_width = if ray.key.x_major {
-            cells_major
-        } else {
-            cells_minor
-        };
         let mut bound = 0u16;
         for minor_cell in lo..=hi.min(lo + 1) {
-            let inside =
-                (0..cells_major).contains(&major_cell) && (0..cells_minor).contains(&minor_cell);
             let (x, y) = if ray.key.x_major {
                 (major_cell, minor_cell)
             } else {
                 (minor_cell, major_cell)
             };
-            let cell = (y * row_width + x) as usize;
-            let b = inside.then(|| bounds.get(cell).copied()).flatten();
-            if b.is_some() {
+            let b = surface.bound(level, x, y);
+            if let Some((_, cell)) = b {
                 probe.bound(level, cell);
             }
-            // A cell outside the storage proves nothing: assume the worst.
-            bound = bound.max(b.unwrap_or(u16::MAX));
+            // A cell outside the map or not known proves nothing: assume
+            // the worst.
+            bound = bound.max(b.map_or(u16::MAX, |(b, _)| b));
         }
         if hi > lo + 1 {
             // Cannot happen with a minor slope of at most one; never skip.

@@ -20,8 +20,8 @@ pub(crate) mod walk;
 pub use budget::{FrameCost, Governor};
 
 use crate::probe::Probe;
-use crate::pyramid::Pyramid;
 use crate::sink::{Sample, Sink};
+use crate::surface::Surface;
 use crate::view::ray::{Cursor, Lod, LodPlan, Plane, Ray, RayKey};
 use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
@@ -166,11 +166,11 @@ struct Frame {
 }
 
 impl Frame {
-    fn new(pyramid: &Pyramid<'_>, view: &View, options: &RenderOptions) -> Self {
+    fn new<T: Surface + ?Sized>(surface: &T, view: &View, options: &RenderOptions) -> Self {
         let lod = match options.resolution {
             Resolution::Single => LodPlan::SINGLE,
             Resolution::Multi { pixel_to_voxel } => {
-                LodPlan::new(view, pixel_to_voxel.to_bits(), pyramid.top())
+                LodPlan::new(view, pixel_to_voxel.to_bits(), surface.top())
             }
         };
         let (resume, same_schedule) = match options.coherence {
@@ -182,23 +182,23 @@ impl Frame {
             lod,
             resume,
             same_schedule,
-            first_hit: options.hierarchical_first_hit && pyramid.has_bounds(),
+            first_hit: options.hierarchical_first_hit && surface.has_bounds(),
         }
     }
 }
 
 /// Renders every column of the view into `sink`.
-pub fn render<S: Sink, P: Probe>(
-    pyramid: &Pyramid<'_>,
+pub fn render<T: Surface + ?Sized, S: Sink, P: Probe>(
+    surface: &T,
     view: &View,
     options: &RenderOptions,
     sink: &mut S,
     probe: &mut P,
 ) {
-    let frame = Frame::new(pyramid, view, options);
+    let frame = Frame::new(surface, view, options);
     for line in 0..view.lines() {
         line_with(
-            pyramid,
+            surface,
             view,
             options,
             &frame,
@@ -243,17 +243,17 @@ struct Anchor {
 /// Renders image line `line` (`0..view.lines()`; a line past the last
 /// renders nothing). Lines are independent and together cover every pixel
 /// once: a pool may hand them to any number of workers.
-pub fn render_line<S: Sink, P: Probe>(
-    pyramid: &Pyramid<'_>,
+pub fn render_line<T: Surface + ?Sized, S: Sink, P: Probe>(
+    surface: &T,
     view: &View,
     options: &RenderOptions,
     line: u32,
     sink: &mut S,
     probe: &mut P,
 ) {
-    let frame = Frame::new(pyramid, view, options);
+    let frame = Frame::new(surface, view, options);
     line_with(
-        pyramid,
+        surface,
         view,
         options,
         &frame,
@@ -265,8 +265,8 @@ pub fn render_line<S: Sink, P: Probe>(
 }
 
 #[allow(clippy::too_many_arguments)]
-fn line_with<S: Sink, P: Probe, A: Allowances>(
-    pyramid: &Pyramid<'_>,
+fn line_with<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances>(
+    surface: &T,
     view: &View,
     options: &RenderOptions,
     frame: &Frame,
@@ -278,8 +278,8 @@ fn line_with<S: Sink, P: Probe, A: Allowances>(
     let Some(line) = view.line(line) else {
         return;
     };
-    let terrain = pyramid.base();
-    let plane = Plane::new(view, terrain, &line.reference).with_across(&view.across(&line));
+    let extent = surface.extent();
+    let plane = Plane::new(view, &extent, &line.reference).with_across(&view.across(&line));
     let mut anchor: Option<Anchor> = None;
     let mut previous: Option<Sample> = None;
     let mut recent = Recent::default();
@@ -295,7 +295,7 @@ fn line_with<S: Sink, P: Probe, A: Allowances>(
             let offset = (((2 * sub + 1 - samples) * 8) >> log2) * step;
             probe.ray();
             let d = view.direction_on(&line, pixel.s, offset);
-            let mut ray = view.ray(terrain, &frame.lod, d, &plane);
+            let mut ray = view.ray(&extent, &frame.lod, d, &plane);
             ray.color_drift = plane.drift(&d, pixel.offset) as i32;
             let allowance = allowances.next();
             let sample = if ray.start > ray.end {
@@ -308,7 +308,7 @@ fn line_with<S: Sink, P: Probe, A: Allowances>(
                     .filter(|_| frame.resume)
                     .and_then(|a| resume_at(&a, &ray, frame.same_schedule));
                 let (sample, clear_until) = cast(
-                    pyramid,
+                    surface,
                     &ray,
                     resume,
                     frame.first_hit,
@@ -374,8 +374,8 @@ fn sky(options: &RenderOptions) -> Sample {
 /// it saw and the sample up to which it is known to be above the surface
 /// (its hit, or one past its last).
 #[allow(clippy::too_many_arguments)]
-fn cast<P: Probe>(
-    pyramid: &Pyramid<'_>,
+fn cast<T: Surface + ?Sized, P: Probe>(
+    surface: &T,
     ray: &Ray,
     resume: Option<i32>,
     first_hit_on: bool,
@@ -394,12 +394,12 @@ fn cast<P: Probe>(
         if from > end {
             Walk::Exit { last: end }
         } else {
-            walk(pyramid, ray, ray.cursor(pyramid, from), end, recent, probe)
+            walk(surface, ray, ray.cursor(surface, from), end, recent, probe)
         }
     };
     let outcome = match resume {
         Some(resume) => walk_at(ray.next_visited(resume), recent, probe),
-        None if first_hit_on => match first_hit(pyramid, ray, ray.start, ray.end, allowance, probe)
+        None if first_hit_on => match first_hit(surface, ray, ray.start, ray.end, allowance, probe)
         {
             Some(k) => walk_at(ray.next_visited(k), recent, probe),
             None => Walk::Exit { last: ray.end },
@@ -409,7 +409,7 @@ fn cast<P: Probe>(
     match outcome {
         Walk::Exit { last } if allowance != u32::MAX && last < ray.end && last >= ray.first => {
             // Cut short by the allowance: the color under the ray there.
-            (shade_above(pyramid, ray, last, options, probe), last + 1)
+            (shade_above(surface, ray, last, options, probe), last + 1)
         }
         Walk::Exit { last } => (sky(options), last + 1),
         Walk::Hit {
@@ -420,10 +420,10 @@ fn cast<P: Probe>(
             // A first sample already below: find the one above it.
             let (at, clearance, above) = match above {
                 Some(_) => (at, clearance, above),
-                None => retrace(pyramid, ray, at, clearance, allowance, recent, probe),
+                None => retrace(surface, ray, at, clearance, allowance, recent, probe),
             };
             (
-                shade(pyramid, ray, at, clearance, above, options, probe),
+                shade(surface, ray, at, clearance, above, options, probe),
                 at.k,
             )
         }
@@ -431,15 +431,17 @@ fn cast<P: Probe>(
 }
 
 /// The color of the surface under sample `k` of a ray cut short above it.
-fn shade_above<P: Probe>(
-    pyramid: &Pyramid<'_>,
+fn shade_above<T: Surface + ?Sized, P: Probe>(
+    surface: &T,
     ray: &Ray,
     k: i32,
     options: &RenderOptions,
     probe: &mut P,
 ) -> Sample {
-    let at = ray.cursor(pyramid, k);
-    match Stage::new(pyramid, ray, at.level).color(&ray.color_cursor(&at), probe) {
+    let at = ray.cursor(surface, k);
+    let color = Stage::new(surface, ray, at.level)
+        .and_then(|stage| stage.color(&ray.color_cursor(&at), probe));
+    match color {
         Some(color) => Sample {
             color,
             distance: ray.distance(k).clamp(0, i64::from(Sample::SKY - 1)) as u32,
@@ -453,8 +455,8 @@ fn shade_above<P: Probe>(
 /// the samples a walk from the eye visits while the one before is below
 /// too (never before the ray's start), and report the sample above and its
 /// clearance, if there is one in the map.
-fn retrace<P: Probe>(
-    pyramid: &Pyramid<'_>,
+fn retrace<T: Surface + ?Sized, P: Probe>(
+    surface: &T,
     ray: &Ray,
     mut at: Cursor,
     mut below: i32,
@@ -464,9 +466,10 @@ fn retrace<P: Probe>(
 ) -> (Cursor, i32, Option<(i32, i32)>) {
     while at.k > ray.first && allowance > 0 {
         allowance -= 1;
-        let before = ray.cursor(pyramid, ray.previous_visited(at.k));
-        let stage = Stage::new(pyramid, ray, before.level);
-        let Some((cell, c)) = stage.clearance_recent(&before, recent, probe) else {
+        let before = ray.cursor(surface, ray.previous_visited(at.k));
+        let Some((cell, c)) = Stage::new(surface, ray, before.level)
+            .and_then(|stage| stage.clearance_recent(&before, recent, probe))
+        else {
             break;
         };
         recent.add(cell);
@@ -485,8 +488,8 @@ fn retrace<P: Probe>(
 /// Colors a hit: the color where the hit sample's grid line is crossed and
 /// (when known) where the previous visited sample's is, blended by where
 /// between them the ray crossed the surface.
-fn shade<P: Probe>(
-    pyramid: &Pyramid<'_>,
+fn shade<T: Surface + ?Sized, P: Probe>(
+    surface: &T,
     ray: &Ray,
     hit: Cursor,
     below: i32,
@@ -495,7 +498,9 @@ fn shade<P: Probe>(
     probe: &mut P,
 ) -> Sample {
     let (position, before) = crossing(ray, &hit, below, above);
-    let stage = Stage::new(pyramid, ray, hit.level);
+    let Some(stage) = Stage::new(surface, ray, hit.level) else {
+        return sky(options);
+    };
     let color = if options.shading == Shading::Nearest {
         stage.nearest_color(&ray.color_cursor(&hit), probe)
     } else {
@@ -504,9 +509,10 @@ fn shade<P: Probe>(
             .or_else(|| stage.color(&hit, probe))
             .map(|on_hit_line| match before {
                 Some((k, t)) => {
-                    let before = ray.cursor(pyramid, k);
-                    let before_stage = Stage::new(pyramid, ray, before.level);
-                    match before_stage.color(&ray.color_cursor(&before), probe) {
+                    let before = ray.cursor(surface, k);
+                    let before_color = Stage::new(surface, ray, before.level)
+                        .and_then(|stage| stage.color(&ray.color_cursor(&before), probe));
+                    match before_color {
                         Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
                         None => on_hit_line,
                     }
@@ -579,7 +585,7 @@ mod tests {
 
     #[test]
     fn nearest_shading_shows_only_voxel_colors_and_subvoxel_blends_them() {
-        use crate::{Camera, Framebuffer, Terrain};
+        use crate::{Camera, Framebuffer, Pyramid, Terrain};
         // A flat 16 x 16 map of black and white stripes across x.
         let heights = [0u16; 256];
         let colors: [Rgb; 256] = core::array::from_fn(|i| [(i % 2 * 255) as u8; 3]);

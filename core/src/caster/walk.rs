@@ -17,18 +17,17 @@ use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS, WEIGHT_BITS};
 #[cfg(test)]
 use crate::probe::NoProbe;
 use crate::probe::Probe;
-use crate::pyramid::Pyramid;
+use crate::surface::{Grid, Surface};
 use crate::view::ray::{Cursor, Ray, T_ONE};
 use crate::Rgb;
 
 /// Everything a step on one level needs, fixed while the ray stays there.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Stage<'a> {
+pub(crate) struct Stage<G> {
     level: u8,
-    heights: &'a [u16],
-    colors: &'a [Rgb],
-    /// The colors of the level below, for the blend (empty at level 0).
-    colors_below: &'a [Rgb],
+    here: G,
+    /// The level below, for the color blend (`here` again at level 0).
+    below: G,
     /// Index change across a minor grid line, here and on the level below.
     minor_stride: isize,
     minor_stride_below: isize,
@@ -42,38 +41,52 @@ pub(crate) struct Stage<'a> {
 
 /// Index strides of a level's grid for a ray: (per major grid line, across
 /// a minor grid line).
-fn strides(width: u32, x_major: bool) -> (isize, isize) {
+fn strides(row: isize, x_major: bool) -> (isize, isize) {
     if x_major {
-        (1, width as isize)
+        (1, row)
     } else {
-        (width as isize, 1)
+        (row, 1)
     }
 }
 
-impl<'a> Stage<'a> {
-    /// The stage of `level` for `ray` (level 0 if the pyramid lacks it).
+/// The grid of `level`, or level 0's if the surface lacks it.
+#[inline]
+pub(crate) fn grid_or_base<T: Surface + ?Sized>(surface: &T, level: u8) -> Option<T::Grid<'_>> {
+    surface.grid(level).or_else(|| surface.grid(0))
+}
+
+impl<G: Grid> Stage<G> {
+    /// The stage of `level` for `ray` (level 0 if the surface lacks it);
+    /// `None` for a surface with no grid at all.
     #[inline]
-    pub fn new(pyramid: &Pyramid<'a>, ray: &Ray, level: u8) -> Self {
-        let level = level.min(pyramid.top());
-        let here = pyramid.level(usize::from(level)).unwrap_or(pyramid.base());
+    pub fn new<'s, T>(surface: &'s T, ray: &Ray, level: u8) -> Option<Self>
+    where
+        T: Surface<Grid<'s> = G> + ?Sized,
+    {
+        let level = level.min(surface.top());
+        let here = grid_or_base(surface, level)?;
         let below = level
             .checked_sub(1)
-            .and_then(|l| pyramid.level(usize::from(l)));
+            .and_then(|l| surface.grid(l))
+            .unwrap_or(here);
         let x_major = ray.key.x_major;
         let sign = if ray.key.forward { 1 } else { -1 };
-        let (major_stride, minor_stride) = strides(here.width(), x_major);
-        let minor_below = below.map_or(0, |b| strides(b.width(), x_major).1);
-        Self {
+        let (major_stride, minor_stride) = strides(here.stride(), x_major);
+        let minor_below = if level > 0 {
+            strides(below.stride(), x_major).1
+        } else {
+            0
+        };
+        Some(Self {
             level,
-            heights: here.heights(),
-            colors: here.colors(),
-            colors_below: below.map_or(&[], |b| b.colors()),
+            here,
+            below,
             minor_stride,
             minor_stride_below: minor_below,
             step: sign * major_stride,
             dminor: ray.dminor.to_bits() << level,
             dz: ray.dz.to_bits() << level,
-        }
+        })
     }
 
     /// Samples per step.
@@ -100,8 +113,8 @@ impl<'a> Stage<'a> {
         if let Some(cell) = recent.and_then(|r| r.find(self.level, index, self.minor_stride)) {
             return Some(cell);
         }
-        let h0 = *self.heights.get(index as usize)?;
-        let h1 = *self.heights.get((index + self.minor_stride) as usize)?;
+        let h0 = self.here.height(index)?;
+        let h1 = self.here.height(index + self.minor_stride)?;
         probe.visit(self.level, index as usize);
         Some(Cell {
             level: self.level,
@@ -145,20 +158,14 @@ impl<'a> Stage<'a> {
             i + self.minor_stride
         };
         probe.color(self.level, i as usize);
-        self.colors.get(nearest as usize).copied()
+        self.here.color(nearest)
     }
 
     /// The color where a sample's grid line is crossed: two voxels blended by
     /// the subvoxel weight, on this level and on the one below, blended by
     /// the sample's level weight `t` (the soft transition).
     pub fn color<P: Probe>(&self, at: &Cursor, probe: &mut P) -> Option<Rgb> {
-        let here = line_color(
-            self.colors,
-            at.base,
-            self.minor_stride,
-            at.minor,
-            self.level,
-        )?;
+        let here = line_color(&self.here, at.base, self.minor_stride, at.minor, self.level)?;
         probe.color(
             self.level,
             index(at.base, self.minor_stride, at.minor, self.level) as usize,
@@ -167,7 +174,7 @@ impl<'a> Stage<'a> {
             return Some(here);
         }
         let below = line_color(
-            self.colors_below,
+            &self.below,
             at.base_below,
             self.minor_stride_below,
             at.minor,
@@ -219,8 +226,8 @@ impl Recent {
 
 /// Two colors across a grid line blended by the subvoxel weight.
 #[inline]
-fn line_color(
-    colors: &[Rgb],
+fn line_color<G: Grid>(
+    grid: &G,
     base: isize,
     minor_stride: isize,
     minor: i32,
@@ -229,8 +236,8 @@ fn line_color(
     let i = index(base, minor_stride, minor, level);
     let weight =
         (minor >> (COORD_FRAC_BITS - WEIGHT_BITS + u32::from(level))) & ((1 << WEIGHT_BITS) - 1);
-    let c0 = *colors.get(i as usize)?;
-    let c1 = *colors.get((i + minor_stride) as usize)?;
+    let c0 = grid.color(i)?;
+    let c1 = grid.color(i + minor_stride)?;
     Some(lerp(c0, c1, weight as u32))
 }
 
@@ -260,8 +267,8 @@ pub(crate) enum Walk {
 /// or the last visited sample not past `end`. The first sample is tested
 /// against the `recent` cells; a hit's cell is left there for the next ray.
 #[inline]
-pub(crate) fn walk<P: Probe>(
-    pyramid: &Pyramid<'_>,
+pub(crate) fn walk<T: Surface + ?Sized, P: Probe>(
+    surface: &T,
     ray: &Ray,
     mut at: Cursor,
     end: i32,
@@ -271,7 +278,9 @@ pub(crate) fn walk<P: Probe>(
     let mut last: Option<(i32, i32)> = None;
     let mut first = Some(&*recent);
     loop {
-        let stage = Stage::new(pyramid, ray, at.level);
+        let Some(stage) = Stage::new(surface, ray, at.level) else {
+            return Walk::Exit { last: at.k - 1 };
+        };
         let switch = ray.next_switch(at.level, at.k);
         match stage.steps(at, end, switch, first.take(), &mut last, probe) {
             Run::Hit {
@@ -296,7 +305,7 @@ pub(crate) fn walk<P: Probe>(
                         t: 0,
                     }
                 } else {
-                    ray.cursor(pyramid, k)
+                    ray.cursor(surface, k)
                 };
                 return Walk::Hit {
                     at,
@@ -324,7 +333,7 @@ pub(crate) fn walk<P: Probe>(
         } else {
             return Walk::Exit { last: k };
         };
-        at = ray.cursor(pyramid, next);
+        at = ray.cursor(surface, next);
     }
 }
 
@@ -346,7 +355,7 @@ enum Run {
     Missing,
 }
 
-impl Stage<'_> {
+impl<G: Grid> Stage<G> {
     /// The per-step loop on this level, from `at` (not yet tested) up to
     /// the last sample before `switch` and not past `end`; `last` follows
     /// the last sample found above the surface. The first sample is read
@@ -401,7 +410,7 @@ impl Stage<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pyramid::{pyramid_cells, pyramid_points};
+    use crate::pyramid::{pyramid_cells, pyramid_points, Pyramid};
     use crate::terrain::Terrain;
     use crate::view::ray::LodPlan;
     use crate::view::{Camera, View};
@@ -427,12 +436,12 @@ mod tests {
             // Level 1 begins 14 voxels out (pixel-to-voxel ratio 4).
             let plan = LodPlan::new(&view, 4 << 8, pyramid.top());
             for column in [0, 20, 63] {
-                let ray = view.pixel_ray(&terrain, &plan, column, 48);
+                let ray = view.pixel_ray(&terrain.extent(), &plan, column, 48);
                 let mut levels_seen = 0u8;
                 let mut k = ray.start;
                 loop {
                     let at = ray.cursor(&pyramid, k);
-                    let stage = Stage::new(&pyramid, &ray, at.level);
+                    let stage = Stage::new(&pyramid, &ray, at.level).unwrap();
                     levels_seen |= 1 << at.level;
                     if k + stage.stride() > ray.end {
                         break;

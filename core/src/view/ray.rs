@@ -25,8 +25,7 @@
 
 use super::View;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, MAX_WALK_LEVEL};
-use crate::pyramid::Pyramid;
-use crate::terrain::Terrain;
+use crate::surface::{Extent, Grid, Surface};
 use fixed::types::I16F16;
 
 const ONE: i64 = 1 << COORD_FRAC_BITS;
@@ -167,8 +166,8 @@ pub(crate) struct Plane {
 
 impl Plane {
     /// The plane of direction `d` (I32F32 bits) from `view`'s eye over
-    /// `terrain`.
-    pub fn new(view: &View, terrain: &Terrain<'_>, d: &[i64; 3]) -> Self {
+    /// a map of `extent`.
+    pub fn new(view: &View, extent: &Extent, d: &[i64; 3]) -> Self {
         let x_major = d[0].abs() >= d[1].abs();
         let (d_major, d_minor) = if x_major { (d[0], d[1]) } else { (d[1], d[0]) };
         let forward = d_major >= 0;
@@ -194,9 +193,9 @@ impl Plane {
         let minor0 = e_minor + ((delta0 * dminor) >> COORD_FRAC_BITS);
 
         let (major_len, minor_len) = if x_major {
-            (terrain.width(), terrain.depth())
+            (extent.width, extent.depth)
         } else {
-            (terrain.depth(), terrain.width())
+            (extent.depth, extent.width)
         };
         // Samples inside the map: 0 <= major <= len-1 and 0 <= minor < len-1,
         // so that the neighbour across the minor grid line exists too.
@@ -296,13 +295,7 @@ impl View {
     /// Sets up the ray along direction `d` (I32F32 bits) in `plane`: `d`'s
     /// horizontal part only sets how steep the ray is (it is parallel to
     /// the plane, up to rounding).
-    pub(crate) fn ray(
-        &self,
-        terrain: &Terrain<'_>,
-        plan: &LodPlan,
-        d: [i64; 3],
-        plane: &Plane,
-    ) -> Ray {
+    pub(crate) fn ray(&self, extent: &Extent, plan: &LodPlan, d: [i64; 3], plane: &Plane) -> Ray {
         let (dz, run) = Self::slope(&d, plane);
         let Plane {
             key,
@@ -319,7 +312,7 @@ impl View {
         let start = first.max(0);
         // A hit needs the ray at or below the highest height; a falling ray
         // is certainly below the surface once its height is <= 0.
-        let top = i64::from(terrain.max_height()) << (COORD_FRAC_BITS - HEIGHT_FRAC_BITS);
+        let top = i64::from(extent.max_height) << (COORD_FRAC_BITS - HEIGHT_FRAC_BITS);
         let end = match dz.signum() {
             1 => last.min(div_floor(top - z0, dz)),
             0 if z0 > top => start - 1,
@@ -478,9 +471,11 @@ impl Ray {
     }
 
     /// Whether `k` is the ray's end sample and lies between the grid lines
-    /// of its level: a walk tests it anyway, on level 0, so that a ray
-    /// that ends inside the map (below the ground, or at its edge) cannot
-    /// step over its last hit.
+    /// of its level: a walk tests it anyway (against the level's grid line
+    /// at or before it), so that a ray that ends inside the map (below the
+    /// ground, or at its edge) cannot step over its last hit. It stays on
+    /// its level so that a frame reads each level only out to that level's
+    /// distance, which is what a tile footprint holds.
     #[inline]
     fn is_extra_end(&self, k: i32) -> bool {
         k == self.end && !self.on_level_grid(k, self.level_at(k))
@@ -528,22 +523,17 @@ impl Ray {
     /// stepping), so a resumed ray sees exactly the values it would have
     /// reached by walking.
     #[inline]
-    pub fn cursor(&self, pyramid: &Pyramid<'_>, k: i32) -> Cursor {
-        let level = if self.is_extra_end(k) {
-            0
-        } else {
-            self.level_at(k)
-        };
-        self.cursor_on(pyramid, k, level)
+    pub fn cursor<T: Surface + ?Sized>(&self, surface: &T, k: i32) -> Cursor {
+        self.cursor_on(surface, k, self.level_at(k))
     }
 
     /// The position of sample `k` on `level`, whatever the schedule says.
     #[inline]
-    fn cursor_on(&self, pyramid: &Pyramid<'_>, k: i32, level: u8) -> Cursor {
+    fn cursor_on<T: Surface + ?Sized>(&self, surface: &T, k: i32, level: u8) -> Cursor {
         let major = self.major_at(k);
         let base_on = |level: u8| -> isize {
-            let stride = match pyramid.level(usize::from(level)) {
-                Some(t) if !self.key.x_major => t.width() as isize,
+            let stride = match surface.grid(level) {
+                Some(g) if !self.key.x_major => g.stride(),
                 _ => 1,
             };
             (major >> level) as isize * stride
@@ -604,7 +594,7 @@ impl View {
     /// plane (for tests of the ray itself).
     pub(crate) fn pixel_ray(
         &self,
-        terrain: &Terrain<'_>,
+        extent: &Extent,
         plan: &LodPlan,
         column: u32,
         row16: i64,
@@ -614,7 +604,7 @@ impl View {
                 + self.per_column[i].to_bits() * i64::from(column)
                 + ((self.per_row[i].to_bits() * row16) >> 4)
         });
-        self.ray(terrain, plan, d, &Plane::new(self, terrain, &d))
+        self.ray(extent, plan, d, &Plane::new(self, extent, &d))
     }
 }
 
@@ -647,6 +637,7 @@ mod tests {
     use super::*;
     use crate::caster::walk::Stage;
     use crate::view::Camera;
+    use crate::{Pyramid, Terrain};
 
     #[test]
     fn narrow_division_equals_wide_division() {
@@ -699,8 +690,8 @@ mod tests {
             let view = View::new(&cam, 32, 8).unwrap();
             for col in 0..32 {
                 for row in 0..8 {
-                    let ray = view.pixel_ray(&terrain, &LodPlan::SINGLE, col, row * 16);
-                    let stage = Stage::new(&pyramid, &ray, 0);
+                    let ray = view.pixel_ray(&terrain.extent(), &LodPlan::SINGLE, col, row * 16);
+                    let stage = Stage::new(&pyramid, &ray, 0).unwrap();
                     for k in ray.first..=ray.end {
                         let cur = ray.cursor(&pyramid, k);
                         assert!(stage.clearance(&cur).is_some(), "yaw {yaw} k {k}");
@@ -724,7 +715,7 @@ mod tests {
             level1_depth: 3 << 16,
             top: 4,
         };
-        view.pixel_ray(&terrain, &plan, 32, 0)
+        view.pixel_ray(&terrain.extent(), &plan, 32, 0)
     }
 
     #[test]

@@ -2,6 +2,7 @@
 
 mod bench;
 mod fly;
+mod paging;
 mod sim;
 
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
@@ -46,6 +47,13 @@ enum Command {
     /// Speed against accuracy: every method and setting on a fixed suite
     /// of views, against the reference; writes a CSV and a chart.
     Bench(bench::BenchArgs),
+    /// Convert a height map (PNG or SRTM .hgt) and a color map into a tiled
+    /// terrain file, streaming: inputs larger than memory can be packed.
+    Pack(paging::PackArgs),
+    /// Fly over a tiled terrain (a .tiles file, or procedural:SIZE) through
+    /// a fixed tile cache, paging tiles as Cohen-Or's master did; reports
+    /// each frame's missing tiles, loads and resident bytes.
+    Page(paging::PageArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -216,6 +224,11 @@ struct CameraArgs {
 struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    /// Render from a tiled terrain through the kernel's tile cache instead:
+    /// a file from `pack`, or `procedural:SIZE` (SIZE voxels a side,
+    /// e.g. procedural:131072). Kernel method only.
+    #[arg(long, value_name = "T.tiles|procedural:SIZE", conflicts_with_all = ["height", "color"])]
+    terrain: Option<String>,
     #[command(flatten)]
     camera: CameraArgs,
     /// Bank in degrees, positive = right wing down.
@@ -302,6 +315,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Board(BoardCommand::Verify(args)) => board_verify_command(args),
         Command::Sim(args) => sim::sim_command(args),
         Command::Bench(args) => bench::bench_command(args),
+        Command::Pack(args) => paging::pack_command(args),
+        Command::Page(args) => paging::page_command(args),
     }
 }
 
@@ -366,6 +381,9 @@ fn render_command(args: RenderArgs) -> Result<()> {
         .flatten()
     {
         check_writable(path)?;
+    }
+    if let Some(spec) = &args.terrain {
+        return paging::render_tiled_command(&args, spec);
     }
     let scene = load_scene(&args.scene)?;
     let camera = Camera {

@@ -25,7 +25,7 @@ pub fn procedural(side: u32, seed: u64) -> Scene {
     Scene::new(side, side, heights, colors).expect("procedural scene is well-formed")
 }
 
-const WATER_LEVEL: f64 = 22.0;
+pub(crate) const WATER_LEVEL: f64 = 22.0;
 
 /// Colors a height field like an aerial photograph: water, sand, grass,
 /// forest, rock and snow by relative height and slope, with per-voxel
@@ -34,42 +34,61 @@ pub fn color_by_height_and_slope(width: u32, depth: u32, heights: &[f32], seed: 
     let (w, d) = (width as usize, depth as usize);
     let lo = heights.iter().copied().fold(f32::MAX, f32::min) as f64;
     let hi = heights.iter().copied().fold(f32::MIN, f32::max) as f64;
-    let span = (hi - lo).max(1e-6);
     let at = |x: usize, y: usize| f64::from(heights[y.min(d - 1) * w + x.min(w - 1)]);
-    let sun = normalize([-0.5, -0.35, 0.8]);
     let mut colors = Vec::with_capacity(w * d);
     for y in 0..d {
         for x in 0..w {
-            let h = at(x, y);
             let gx = (at(x + 1, y) - at(x.saturating_sub(1), y)) * 0.5;
             let gy = (at(x, y + 1) - at(x, y.saturating_sub(1))) * 0.5;
-            let slope = (gx * gx + gy * gy).sqrt();
-            let normal = normalize([-gx, -gy, 1.0]);
-            let light = 0.5 + 0.6 * dot(normal, sun).max(0.0);
-            let rel = (h - lo) / span;
             let grain = value_noise(x as f64 * 0.5, y as f64 * 0.5, seed ^ 0xabc) - 0.5;
-            let patch = fbm(x as f64 / 40.0, y as f64 / 40.0, seed ^ 0xf00d, 4, 0.55);
-            let base: [f64; 3] = if h <= WATER_LEVEL + 0.01 && lo < WATER_LEVEL + 0.01 {
-                let depth_tint = 0.8 + 0.4 * patch;
-                [40.0 * depth_tint, 80.0 * depth_tint, 110.0 * depth_tint]
-            } else if h < WATER_LEVEL + 2.5 {
-                [196.0, 180.0, 130.0]
-            } else if slope > 1.3 || (rel > 0.62 && slope > 0.6) {
-                [120.0 + 30.0 * patch, 108.0 + 20.0 * patch, 96.0]
-            } else if rel > 0.8 {
-                [235.0, 238.0, 242.0]
-            } else if patch > 0.55 {
-                [44.0, 78.0 + 20.0 * patch, 36.0]
-            } else {
-                [92.0 + 40.0 * patch, 128.0 + 30.0 * patch, 58.0]
-            };
-            let shade = if h <= WATER_LEVEL + 0.01 { 1.0 } else { light };
-            colors.push(
-                base.map(|c| (c * shade * (1.0 + 0.18 * grain)).round().clamp(0.0, 255.0) as u8),
-            );
+            colors.push(terrain_color(
+                [x as f64, y as f64],
+                at(x, y),
+                [gx, gy],
+                [lo, hi],
+                grain,
+                seed,
+            ));
         }
     }
     colors
+}
+
+/// The color of one grid point at `at` (voxels) of height `h`, with height
+/// gradient `[gx, gy]` (per voxel), on terrain spanning heights `[lo, hi]`,
+/// with per-voxel texture `grain` (−0.5 to 0.5; 0 for a coarse level, where
+/// it averages out).
+pub(crate) fn terrain_color(
+    at: [f64; 2],
+    h: f64,
+    [gx, gy]: [f64; 2],
+    [lo, hi]: [f64; 2],
+    grain: f64,
+    seed: u64,
+) -> Rgb {
+    let span = (hi - lo).max(1e-6);
+    let sun = normalize([-0.5, -0.35, 0.8]);
+    let slope = (gx * gx + gy * gy).sqrt();
+    let normal = normalize([-gx, -gy, 1.0]);
+    let light = 0.5 + 0.6 * dot(normal, sun).max(0.0);
+    let rel = (h - lo) / span;
+    let patch = fbm(at[0] / 40.0, at[1] / 40.0, seed ^ 0xf00d, 4, 0.55);
+    let base: [f64; 3] = if h <= WATER_LEVEL + 0.01 && lo < WATER_LEVEL + 0.01 {
+        let depth_tint = 0.8 + 0.4 * patch;
+        [40.0 * depth_tint, 80.0 * depth_tint, 110.0 * depth_tint]
+    } else if h < WATER_LEVEL + 2.5 {
+        [196.0, 180.0, 130.0]
+    } else if slope > 1.3 || (rel > 0.62 && slope > 0.6) {
+        [120.0 + 30.0 * patch, 108.0 + 20.0 * patch, 96.0]
+    } else if rel > 0.8 {
+        [235.0, 238.0, 242.0]
+    } else if patch > 0.55 {
+        [44.0, 78.0 + 20.0 * patch, 36.0]
+    } else {
+        [92.0 + 40.0 * patch, 128.0 + 30.0 * patch, 58.0]
+    };
+    let shade = if h <= WATER_LEVEL + 0.01 { 1.0 } else { light };
+    base.map(|c| (c * shade * (1.0 + 0.18 * grain)).round().clamp(0.0, 255.0) as u8)
 }
 
 fn hash(x: i64, y: i64, seed: u64) -> f64 {
@@ -82,7 +101,7 @@ fn hash(x: i64, y: i64, seed: u64) -> f64 {
     (h >> 11) as f64 / (1u64 << 53) as f64
 }
 
-fn value_noise(x: f64, y: f64, seed: u64) -> f64 {
+pub(crate) fn value_noise(x: f64, y: f64, seed: u64) -> f64 {
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
     let (ix, iy) = (x0 as i64, y0 as i64);
@@ -94,7 +113,7 @@ fn value_noise(x: f64, y: f64, seed: u64) -> f64 {
     (a * (1.0 - u) + b * u) * (1.0 - v) + (c * (1.0 - u) + d * u) * v
 }
 
-fn fbm(x: f64, y: f64, seed: u64, octaves: u32, gain: f64) -> f64 {
+pub(crate) fn fbm(x: f64, y: f64, seed: u64, octaves: u32, gain: f64) -> f64 {
     let (mut sum, mut amp, mut freq, mut norm) = (0.0, 1.0, 1.0, 0.0);
     for o in 0..octaves {
         sum += amp * value_noise(x * freq, y * freq, seed.wrapping_add(u64::from(o) * 7919));

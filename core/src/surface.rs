@@ -1,0 +1,58 @@
+//! What the caster reads: a stack of grids (the pyramid's levels) and their
+//! height bounds, whether borrowed whole ([`crate::Pyramid`]) or paged in
+//! tiles ([`crate::TiledSurface`]).
+//!
+//! The caster addresses a grid point of level `l` by a linear index
+//! `y·stride + x`, with `stride` the grid's own (a borrowed level's width,
+//! or a power of two for tiles, so a tile lookup is a shift and a mask). It
+//! is monomorphized for each surface: rendering from a [`crate::Pyramid`]
+//! compiles to the same slice indexing as before the trait existed.
+
+use crate::Rgb;
+
+/// The size of level 0 and its highest height: what clipping a ray to the
+/// map needs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Extent {
+    /// Grid points along x.
+    pub width: u32,
+    /// Grid points along y.
+    pub depth: u32,
+    /// The highest height (U12.4) anywhere on any level: rays above it can
+    /// no longer hit.
+    pub max_height: u16,
+}
+
+/// One level's grid points, addressed by linear index.
+pub trait Grid: Copy {
+    /// Index change from one row (y) to the next.
+    fn stride(&self) -> isize;
+    /// The height (U12.4) at `index`; `None` outside the grid.
+    fn height(&self, index: isize) -> Option<u16>;
+    /// The color at `index`; `None` outside the grid.
+    fn color(&self, index: isize) -> Option<Rgb>;
+}
+
+/// A terrain and its coarser levels, as the caster reads them.
+pub trait Surface {
+    /// A level's grid, cheap to make (the caster makes one per level a ray
+    /// steps on).
+    type Grid<'s>: Grid
+    where
+        Self: 's;
+    /// Level `level`, if the surface has it. Level 0 always exists.
+    fn grid(&self, level: u8) -> Option<Self::Grid<'_>>;
+    /// The highest level (0 for a single resolution).
+    fn top(&self) -> u8;
+    /// Level 0's size and the highest height.
+    fn extent(&self) -> Extent;
+    /// Whether [`Surface::bound`] answers (the hierarchical first hit needs
+    /// it).
+    fn has_bounds(&self) -> bool;
+    /// The height bound (U12.4) of cell `(x, y)` of level `level ≥ 1` (the
+    /// square between grid points `(x, y)` and `(x + 1, y + 1)`): no point
+    /// of levels `0..=level` in the cell is higher. With it, an index of
+    /// the cell for the probe. `None` when unknown: the caller must assume
+    /// the worst.
+    fn bound(&self, level: u8, x: i64, y: i64) -> Option<(u16, usize)>;
+}

@@ -1,0 +1,367 @@
+//! The tile cache: `N` slots of `T × T` tiles in the caller's storage, a
+//! directory from tile key to slot, and least-recently-used eviction that
+//! never evicts a tile pinned by the frame being rendered.
+
+use super::{Tile, TileError, TileKey, TileSource, World};
+use heapless::index_map::FnvIndexMap;
+
+/// What the cache has done since it was made.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CacheStats {
+    /// Tiles loaded into a slot.
+    pub loads: u64,
+    /// Loads that failed (missing or I/O), the slot left empty.
+    pub failures: u64,
+    /// Tiles rejected for a bad checksum.
+    pub rejected: u64,
+    /// Tiles evicted to make room.
+    pub evictions: u64,
+    /// Bytes the source read.
+    pub bytes_read: u64,
+}
+
+/// `N` tile slots with `O(1)` lookup by key.
+///
+/// # Eviction
+/// Each slot is stamped with the last frame that used it: pinned by
+/// [`TileCache::require`] or [`TileCache::pin`] (stamped with the current
+/// frame), or prefetched by [`TileCache::prefetch`] (stamped with the frame
+/// before, so it is used but not pinned). A load takes an empty slot if there
+/// is one, else the slot with the oldest stamp among those not pinned by the
+/// current frame (ties: the lowest slot). A pinned tile is never evicted
+/// while its frame is being drawn; when every slot is pinned a load fails
+/// with [`TileError::CacheFull`] and the frame falls back on coarser tiles.
+///
+/// `N` must be a power of two (the directory's hash table) and below 65536.
+#[derive(Debug)]
+pub struct TileCache<'a, const T: usize, const N: usize> {
+    slots: &'a mut [Tile<T>; N],
+    keys: [Option<TileKey>; N],
+    stamps: [u32; N],
+    directory: FnvIndexMap<TileKey, u16, N>,
+    frame: u32,
+    world: World,
+    stats: CacheStats,
+}
+
+impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
+    const VALID: () = assert!(
+        T.is_power_of_two() && T >= 2 && N < 65_536,
+        "tile side must be a power of two of at least 2, and the slots fewer than 65536"
+    );
+
+    /// An empty cache for `world`, its tiles kept in `slots` (a `static`
+    /// on a board, a boxed array on a host).
+    pub fn new(world: World, slots: &'a mut [Tile<T>; N]) -> Self {
+        #[allow(clippy::let_unit_value)]
+        let () = Self::VALID;
+        Self {
+            slots,
+            keys: [None; N],
+            stamps: [0; N],
+            directory: FnvIndexMap::new(),
+            frame: 1,
+            world,
+            stats: CacheStats::default(),
+        }
+    }
+
+    /// The terrain the tiles belong to.
+    pub fn world(&self) -> World {
+        self.world
+    }
+
+    /// Starts a new frame: every pin of the frame before is released.
+    pub fn begin_frame(&mut self) {
+        self.frame = self.frame.wrapping_add(1).max(2);
+    }
+
+    /// The slot holding `key`, if resident.
+    #[inline]
+    fn slot(&self, key: &TileKey) -> Option<usize> {
+        self.directory.get(key).map(|&s| usize::from(s))
+    }
+
+    /// The tile `key`, if resident.
+    #[inline]
+    pub fn get(&self, key: &TileKey) -> Option<&Tile<T>> {
+        self.slot(key).and_then(|s| self.slots.get(s))
+    }
+
+    /// Whether `key` is resident.
+    pub fn contains(&self, key: &TileKey) -> bool {
+        self.directory.contains_key(key)
+    }
+
+    /// Pins `key` for the current frame if it is resident; false if not.
+    pub fn pin(&mut self, key: TileKey) -> bool {
+        match self.slot(&key) {
+            Some(s) => {
+                self.stamps[s] = self.frame;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Makes `key` resident and pins it for the current frame, loading it
+    /// from `source` if needed.
+    pub fn require<S: TileSource<T> + ?Sized>(
+        &mut self,
+        key: TileKey,
+        source: &mut S,
+    ) -> Result<(), TileError> {
+        self.fetch(key, source, self.frame)
+    }
+
+    /// Makes `key` resident for a later frame without pinning it: it may be
+    /// evicted by this frame's own needs, before older tiles are not. A
+    /// resident tile is left as it is.
+    pub fn prefetch<S: TileSource<T> + ?Sized>(
+        &mut self,
+        key: TileKey,
+        source: &mut S,
+    ) -> Result<(), TileError> {
+        if self.contains(&key) {
+            return Ok(());
+        }
+        self.fetch(key, source, self.frame - 1)
+    }
+
+    fn fetch<S: TileSource<T> + ?Sized>(
+        &mut self,
+        key: TileKey,
+        source: &mut S,
+        stamp: u32,
+    ) -> Result<(), TileError> {
+        if let Some(s) = self.slot(&key) {
+            self.stamps[s] = self.stamps[s].max(stamp);
+            return Ok(());
+        }
+        if !self.world.contains(key, T as u32) {
+            return Err(TileError::Missing);
+        }
+        let slot = self.victim().ok_or(TileError::CacheFull)?;
+        if let Some(old) = self.keys[slot].take() {
+            self.directory.remove(&old);
+            self.stats.evictions += 1;
+        }
+        match source.load(key, &mut self.slots[slot]) {
+            Ok(bytes) => {
+                self.stats.loads += 1;
+                self.stats.bytes_read += bytes as u64;
+                // The directory has N entries of room and holds only the
+                // keys of the N slots, one of which was just freed.
+                let _ = self.directory.insert(key, slot as u16);
+                self.keys[slot] = Some(key);
+                self.stamps[slot] = stamp;
+                Ok(())
+            }
+            Err(error) => {
+                if error == TileError::Checksum {
+                    self.stats.rejected += 1;
+                } else {
+                    self.stats.failures += 1;
+                }
+                self.stamps[slot] = 0;
+                Err(error)
+            }
+        }
+    }
+
+    /// An empty slot, else the least recently used one not pinned now.
+    fn victim(&self) -> Option<usize> {
+        if let Some(empty) = self.keys.iter().position(Option::is_none) {
+            return Some(empty);
+        }
+        (0..N)
+            .filter(|&s| self.stamps[s] != self.frame)
+            .min_by_key(|&s| self.stamps[s])
+    }
+
+    /// Drops every tile neither pinned by the current frame nor kept by
+    /// `keep`: what a cache does to hold no more than the view needs
+    /// (its footprint and prefetch).
+    pub fn retain(&mut self, mut keep: impl FnMut(&TileKey) -> bool) {
+        for slot in 0..N {
+            let Some(key) = self.keys[slot] else {
+                continue;
+            };
+            if self.stamps[slot] != self.frame && !keep(&key) {
+                self.directory.remove(&key);
+                self.keys[slot] = None;
+                self.stats.evictions += 1;
+            }
+        }
+    }
+
+    /// Tiles resident now.
+    pub fn resident(&self) -> usize {
+        self.directory.len()
+    }
+
+    /// Bytes of terrain resident now.
+    pub fn resident_bytes(&self) -> usize {
+        self.resident() * Tile::<T>::BYTES
+    }
+
+    /// Tiles pinned by the current frame.
+    pub fn pinned(&self) -> usize {
+        self.keys
+            .iter()
+            .zip(&self.stamps)
+            .filter(|(k, &s)| k.is_some() && s == self.frame)
+            .count()
+    }
+
+    /// What the cache has done so far.
+    pub fn stats(&self) -> CacheStats {
+        self.stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Tiles whose first height is a code of their key; fails on request.
+    struct Coded {
+        fail: Option<TileError>,
+        loads: u32,
+    }
+
+    fn code(key: TileKey) -> u16 {
+        (key.level as u16) << 12 | (key.y as u16) << 6 | key.x as u16
+    }
+
+    impl TileSource<4> for Coded {
+        fn world(&self) -> World {
+            World::new(64, 64, 100).unwrap()
+        }
+        fn load(&mut self, key: TileKey, tile: &mut Tile<4>) -> Result<usize, TileError> {
+            self.loads += 1;
+            if let Some(e) = self.fail {
+                return Err(e);
+            }
+            tile.heights[0][0] = code(key);
+            Ok(Tile::<4>::BYTES)
+        }
+    }
+
+    fn key(x: u32, y: u32) -> TileKey {
+        TileKey { level: 0, x, y }
+    }
+
+    #[test]
+    fn loads_once_and_finds_by_key() {
+        let mut slots = [Tile::<4>::EMPTY; 4];
+        let mut source = Coded {
+            fail: None,
+            loads: 0,
+        };
+        let mut cache = TileCache::<4, 4>::new(source.world(), &mut slots);
+        cache.begin_frame();
+        for (x, y) in [(1, 2), (3, 0), (1, 2)] {
+            cache.require(key(x, y), &mut source).unwrap();
+        }
+        assert_eq!(source.loads, 2);
+        assert_eq!(
+            cache.get(&key(1, 2)).unwrap().heights[0][0],
+            code(key(1, 2))
+        );
+        assert_eq!(
+            cache.get(&key(3, 0)).unwrap().heights[0][0],
+            code(key(3, 0))
+        );
+        assert!(cache.get(&key(0, 0)).is_none());
+        assert_eq!(cache.resident_bytes(), 2 * Tile::<4>::BYTES);
+        assert_eq!(cache.stats().loads, 2);
+    }
+
+    #[test]
+    fn evicts_the_least_recently_used_and_never_a_pinned_tile() {
+        let mut slots = [Tile::<4>::EMPTY; 4];
+        let mut source = Coded {
+            fail: None,
+            loads: 0,
+        };
+        let mut cache = TileCache::<4, 4>::new(source.world(), &mut slots);
+        // Frame 1 uses four tiles; frame 2 uses two of them again.
+        cache.begin_frame();
+        for x in 0..4 {
+            cache.require(key(x, 0), &mut source).unwrap();
+        }
+        cache.begin_frame();
+        assert!(cache.pin(key(2, 0)) && cache.pin(key(0, 0)));
+        // Two new tiles take the slots of the two not pinned.
+        cache.require(key(0, 1), &mut source).unwrap();
+        cache.require(key(1, 1), &mut source).unwrap();
+        assert!(cache.contains(&key(0, 0)) && cache.contains(&key(2, 0)));
+        assert!(!cache.contains(&key(1, 0)) && !cache.contains(&key(3, 0)));
+        assert_eq!(cache.pinned(), 4);
+        // Everything is pinned now: a fifth tile cannot come in.
+        assert_eq!(
+            cache.require(key(2, 2), &mut source),
+            Err(TileError::CacheFull)
+        );
+        assert_eq!(
+            cache.prefetch(key(2, 2), &mut source),
+            Err(TileError::CacheFull)
+        );
+        assert_eq!(cache.resident(), 4);
+        // Next frame, the oldest (frame 2's pins are all equal: lowest slot).
+        cache.begin_frame();
+        cache.require(key(3, 3), &mut source).unwrap();
+        assert_eq!(cache.stats().evictions, 3);
+        // Keeping only one tile (and the pinned one) frees the rest.
+        cache.retain(|k| *k == key(0, 1));
+        assert_eq!(cache.resident(), 2);
+        assert!(cache.contains(&key(0, 1)) && cache.contains(&key(3, 3)));
+    }
+
+    #[test]
+    fn a_prefetched_tile_goes_before_the_current_frame_and_after_older_ones() {
+        let mut slots = [Tile::<4>::EMPTY; 2];
+        let mut source = Coded {
+            fail: None,
+            loads: 0,
+        };
+        let mut cache = TileCache::<4, 2>::new(source.world(), &mut slots);
+        cache.begin_frame();
+        cache.require(key(0, 0), &mut source).unwrap();
+        cache.begin_frame();
+        cache.prefetch(key(1, 0), &mut source).unwrap();
+        // Not pinned: the frame's own need evicts the prefetch before
+        // giving up.
+        cache.require(key(2, 0), &mut source).unwrap();
+        cache.require(key(3, 0), &mut source).unwrap();
+        assert!(cache.contains(&key(2, 0)) && cache.contains(&key(3, 0)));
+    }
+
+    #[test]
+    fn failed_and_corrupt_loads_leave_the_slot_empty_and_are_counted() {
+        let mut slots = [Tile::<4>::EMPTY; 2];
+        let mut source = Coded {
+            fail: Some(TileError::Io),
+            loads: 0,
+        };
+        let mut cache = TileCache::<4, 2>::new(source.world(), &mut slots);
+        cache.begin_frame();
+        assert_eq!(cache.require(key(0, 0), &mut source), Err(TileError::Io));
+        source.fail = Some(TileError::Checksum);
+        assert_eq!(
+            cache.require(key(0, 0), &mut source),
+            Err(TileError::Checksum)
+        );
+        assert!(!cache.contains(&key(0, 0)));
+        let stats = cache.stats();
+        assert_eq!((stats.failures, stats.rejected, stats.loads), (1, 1, 0));
+        // Outside the world: refused without asking the source.
+        let loads = source.loads;
+        assert_eq!(
+            cache.require(key(16, 0), &mut source),
+            Err(TileError::Missing)
+        );
+        assert_eq!(source.loads, loads);
+    }
+}

@@ -1,0 +1,377 @@
+//! Out-of-core terrain: the terrain and each pyramid level cut into square
+//! tiles, a cache of a fixed number of tile slots, the tiles a view needs,
+//! and a surface the caster renders from the cache (Cohen-Or §3.2).
+//!
+//! ```
+//! use terracast::tiles::{Tile, TileCache, TileError, TileKey, TileSource, TiledSurface, World};
+//! use terracast::{render, Camera, CountingProbe, Framebuffer, RenderOptions, View};
+//!
+//! /// A flat green world, 256 voxels a side, made on demand.
+//! struct Flat;
+//! impl TileSource<16> for Flat {
+//!     fn world(&self) -> World {
+//!         World::new(256, 256, 0).unwrap()
+//!     }
+//!     fn load(&mut self, _key: TileKey, tile: &mut Tile<16>) -> Result<usize, TileError> {
+//!         *tile = Tile { colors: [[[40, 160, 40]; 16]; 16], ..Tile::EMPTY };
+//!         Ok(Tile::<16>::BYTES)
+//!     }
+//! }
+//!
+//! let mut slots = [Tile::<16>::EMPTY; 256];
+//! let mut cache = TileCache::<16, 256>::new(Flat.world(), &mut slots);
+//! let camera = Camera { eye: [128.0, 20.0, 30.0], yaw_deg: 90.0, pitch_deg: 20.0, ..Camera::default() };
+//! // The tiles the frame needs, loaded before it is drawn (a flight loads
+//! // the next frame's during this one: see `prefetch`).
+//! let mut needed = heapless::Vec::<TileKey, 256>::new();
+//! let surface_top = terracast::tiles::footprint::<16, 256>(&Flat.world(), &camera, 32, 24, 1.0, 0.0, &mut needed);
+//! assert!(surface_top.is_ok());
+//! cache.begin_frame();
+//! for key in &needed {
+//!     cache.require(*key, &mut Flat)?;
+//! }
+//! let surface = TiledSurface::around(&cache, camera.eye);
+//! let view = View::new(&surface.local(&camera), 32, 24)?;
+//! let mut pixels = [[0u8; 3]; 32 * 24];
+//! render(&surface, &view, &RenderOptions::default(), &mut Framebuffer::new(&mut pixels, 32, 24)?, &mut CountingProbe::default());
+//! assert_eq!(pixels[32 * 23 + 16], [40, 160, 40]);
+//! assert_eq!(surface.degraded_samples(), 0);
+//! # Ok::<(), Box<dyn core::error::Error>>(())
+//! ```
+
+mod cache;
+mod footprint;
+mod surface;
+
+pub use cache::{CacheStats, TileCache};
+pub use footprint::{footprint, window_origin, FootprintFull, WINDOW_SIDE, WINDOW_TOP};
+pub use surface::{TiledGrid, TiledSurface};
+
+use crate::pyramid::level_side;
+use crate::Rgb;
+use core::fmt;
+
+/// The size of a whole tiled terrain, which may be far larger than any map
+/// the caster addresses at once (a [`TiledSurface`] shows a window of it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct World {
+    /// Grid points along x of level 0.
+    pub width: u32,
+    /// Grid points along y of level 0.
+    pub depth: u32,
+    /// The highest height (U12.4) on any level.
+    pub max_height: u16,
+}
+
+impl World {
+    /// Largest world side: 2^30 grid points.
+    pub const MAX_SIDE: u32 = 1 << 30;
+
+    /// A world of `width × depth` points; `None` for a side below 2 or
+    /// above [`World::MAX_SIDE`].
+    pub const fn new(width: u32, depth: u32, max_height: u16) -> Option<Self> {
+        if width < 2 || depth < 2 || width > Self::MAX_SIDE || depth > Self::MAX_SIDE {
+            return None;
+        }
+        Some(Self {
+            width,
+            depth,
+            max_height,
+        })
+    }
+
+    /// Number of levels, level 0 included: up to both sides being 2, as a
+    /// [`crate::Pyramid`] of the same map.
+    pub const fn levels(&self) -> u8 {
+        let mut levels = 1u32;
+        while level_side(self.width, levels - 1) > 2 || level_side(self.depth, levels - 1) > 2 {
+            levels += 1;
+        }
+        levels as u8
+    }
+
+    /// Points per side of level `level`: `(along x, along y)`.
+    pub const fn level_size(&self, level: u8) -> (u32, u32) {
+        (
+            level_side(self.width, level as u32),
+            level_side(self.depth, level as u32),
+        )
+    }
+
+    /// Tiles of side `tile` per side of level `level`.
+    pub const fn tiles(&self, level: u8, tile: u32) -> (u32, u32) {
+        let (w, d) = self.level_size(level);
+        (w.div_ceil(tile), d.div_ceil(tile))
+    }
+
+    /// Whether `key` names a tile of this world.
+    pub fn contains(&self, key: TileKey, tile: u32) -> bool {
+        let (tx, ty) = self.tiles(key.level, tile);
+        key.level < self.levels() && key.x < tx && key.y < ty
+    }
+}
+
+/// A tile: level, and column and row among that level's tiles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct TileKey {
+    /// Pyramid level (0 is the terrain itself).
+    pub level: u8,
+    /// Tile column: the tile holds level points `x·T .. x·T + T`.
+    pub x: u32,
+    /// Tile row.
+    pub y: u32,
+}
+
+/// One tile of `T × T` grid points of a level: heights, colors and, on
+/// levels 1 and up, the height bound of the cell to the +x, +y of each point
+/// (see [`crate::Pyramid`]'s notes). Points past the level's far edge hold
+/// the edge's values.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Tile<const T: usize> {
+    /// Heights, U12.4, `[row][column]`.
+    pub heights: [[u16; T]; T],
+    /// Colors, `[row][column]`.
+    pub colors: [[Rgb; T]; T],
+    /// Cell bounds, U12.4, `[row][column]` (zero on level 0).
+    pub bounds: [[u16; T]; T],
+}
+
+impl<const T: usize> Tile<T> {
+    /// A tile of zeros.
+    pub const EMPTY: Self = Self {
+        heights: [[0; T]; T],
+        colors: [[[0; 3]; T]; T],
+        bounds: [[0; T]; T],
+    };
+    /// Bytes of terrain a tile holds (heights, colors and bounds).
+    pub const BYTES: usize = T * T * (2 + 3 + 2);
+}
+
+/// Why a tile did not arrive.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TileError {
+    /// The source has no such tile.
+    Missing,
+    /// Reading it failed.
+    Io,
+    /// It arrived, but its checksum does not match: rejected.
+    Checksum,
+    /// Every slot holds a tile pinned by the frame being rendered.
+    CacheFull,
+}
+
+impl fmt::Display for TileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Missing => "no such tile in the source",
+            Self::Io => "tile read failed",
+            Self::Checksum => "tile checksum mismatch: tile rejected",
+            Self::CacheFull => "every cache slot is pinned by the current frame",
+        })
+    }
+}
+
+impl core::error::Error for TileError {}
+
+/// Where tiles come from: a file, a generator, a network. A load may be
+/// slow and may fail; the cache never lets either stop a frame.
+pub trait TileSource<const T: usize> {
+    /// The whole terrain's size.
+    fn world(&self) -> World;
+    /// Fills `tile` with tile `key`; returns the bytes read to do it.
+    /// On an error `tile`'s contents are unspecified (the cache drops it).
+    fn load(&mut self, key: TileKey, tile: &mut Tile<T>) -> Result<usize, TileError>;
+}
+
+/// Fills `tile` with tile `key` of `pyramid`: a source for a map already in
+/// memory, and the definition of what a packed file's tiles must hold.
+/// False (and `tile` untouched) when the pyramid has no such tile.
+pub fn cut_tile<const T: usize>(
+    pyramid: &crate::Pyramid<'_>,
+    key: TileKey,
+    tile: &mut Tile<T>,
+) -> bool {
+    let Some(grid) = pyramid.level(usize::from(key.level)) else {
+        return false;
+    };
+    let (w, d) = (grid.width(), grid.depth());
+    let (x0, y0) = (key.x as usize * T, key.y as usize * T);
+    if x0 >= w as usize || y0 >= d as usize {
+        return false;
+    }
+    let bounds = pyramid.bounds(usize::from(key.level));
+    for (j, ((heights, colors), cell_bounds)) in tile
+        .heights
+        .iter_mut()
+        .zip(tile.colors.iter_mut())
+        .zip(tile.bounds.iter_mut())
+        .enumerate()
+    {
+        let y = (y0 + j).min(d as usize - 1);
+        for i in 0..T {
+            let x = (x0 + i).min(w as usize - 1);
+            let at = y * w as usize + x;
+            heights[i] = grid.heights().get(at).copied().unwrap_or(0);
+            colors[i] = grid.colors().get(at).copied().unwrap_or([0; 3]);
+            let (cx, cy) = ((x0 + i).min(w as usize - 2), (y0 + j).min(d as usize - 2));
+            cell_bounds[i] = bounds
+                .and_then(|b| b.get(cy * (w as usize - 1) + cx).copied())
+                .unwrap_or(0);
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surface::Grid;
+    use crate::{
+        pyramid_cells, pyramid_points, render, Camera, CountingProbe, Framebuffer, HeightFilter,
+        Pyramid, RenderOptions, Terrain, View,
+    };
+    use std::vec;
+
+    /// Tiles cut from a pyramid in memory.
+    struct Cut<'p>(&'p Pyramid<'p>);
+
+    impl TileSource<16> for Cut<'_> {
+        fn world(&self) -> World {
+            let e = crate::Surface::extent(self.0);
+            World::new(e.width, e.depth, e.max_height).unwrap()
+        }
+        fn load(&mut self, key: TileKey, tile: &mut Tile<16>) -> Result<usize, TileError> {
+            cut_tile(self.0, key, tile)
+                .then_some(Tile::<16>::BYTES)
+                .ok_or(TileError::Missing)
+        }
+    }
+
+    fn hills(w: u32, d: u32) -> (vec::Vec<u16>, vec::Vec<Rgb>) {
+        let mut heights = vec![0u16; (w * d) as usize];
+        let mut colors = vec![[0u8; 3]; (w * d) as usize];
+        for y in 0..d {
+            for x in 0..w {
+                let (fx, fy) = (x as f32 * 0.09, y as f32 * 0.13);
+                let h = 40.0
+                    + 30.0 * libm::sinf(fx) * libm::cosf(fy)
+                    + 12.0 * libm::sinf(fx * 3.1 + fy);
+                heights[(y * w + x) as usize] = Terrain::quantize_height(h).unwrap();
+                colors[(y * w + x) as usize] = [(x * 3) as u8, (y * 5) as u8, (x ^ y) as u8];
+            }
+        }
+        (heights, colors)
+    }
+
+    #[test]
+    fn rendering_from_tiles_equals_rendering_from_the_pyramid() {
+        let (w, d) = (203u32, 150u32);
+        let (heights, colors) = hills(w, d);
+        let terrain = Terrain::new(w, d, &heights, &colors).unwrap();
+        let n = pyramid_points(w, d);
+        let (mut ph, mut pc) = (vec![0u16; n], vec![[0u8; 3]; n]);
+        let mut pb = vec![0u16; pyramid_cells(w, d)];
+        Pyramid::build(&terrain, HeightFilter::Mean, &mut ph, &mut pc, &mut pb).unwrap();
+        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
+        let mut source = Cut(&pyramid);
+        let mut slots = vec![Tile::<16>::EMPTY; 256].into_boxed_slice();
+        let slots: &mut [Tile<16>; 256] = (&mut slots[..]).try_into().unwrap();
+        let mut cache = TileCache::<16, 256>::new(source.world(), slots);
+        for (eye, yaw, pitch) in [
+            ([-20.0, 75.0, 90.0], 0.0, 15.0),
+            ([100.0, 75.0, 60.0], 200.0, 40.0),
+            ([10.0, 10.0, 70.0], 45.0, 3.0),
+            ([100.0, 70.0, 300.0], 10.0, 90.0),
+        ] {
+            let camera = Camera {
+                eye,
+                yaw_deg: yaw,
+                pitch_deg: pitch,
+                ..Camera::default()
+            };
+            let mut needed = heapless::Vec::<TileKey, 512>::new();
+            footprint::<16, 512>(&source.world(), &camera, 64, 48, 1.0, 0.0, &mut needed).unwrap();
+            cache.begin_frame();
+            for key in &needed {
+                cache.require(*key, &mut source).unwrap();
+            }
+            let surface = TiledSurface::around(&cache, camera.eye);
+            assert_eq!(surface.origin(), [0, 0]);
+            let view = View::new(&surface.local(&camera), 64, 48).unwrap();
+            let draw = |s: &dyn Fn(&mut Framebuffer<'_>, &mut CountingProbe)| {
+                let mut pixels = vec![[0u8; 3]; 64 * 48];
+                let mut probe = CountingProbe::default();
+                s(
+                    &mut Framebuffer::new(&mut pixels, 64, 48).unwrap(),
+                    &mut probe,
+                );
+                (pixels, probe.steps)
+            };
+            let options = RenderOptions::default();
+            let from_tiles = draw(&|f, p| render(&surface, &view, &options, f, p));
+            let from_pyramid = draw(&|f, p| render(&pyramid, &view, &options, f, p));
+            let differ = from_tiles
+                .0
+                .iter()
+                .zip(&from_pyramid.0)
+                .filter(|(a, b)| a != b)
+                .count();
+            assert!(
+                from_tiles == from_pyramid,
+                "{camera:?}: {differ} pixels differ, steps {} and {}, degraded {}",
+                from_tiles.1,
+                from_pyramid.1,
+                surface.degraded_samples()
+            );
+            // The footprint held every tile the frame read.
+            assert_eq!(surface.degraded_samples(), 0, "{camera:?}");
+        }
+    }
+
+    #[test]
+    fn a_missing_tile_reads_the_coarser_level_and_is_counted() {
+        let (w, d) = (64u32, 64u32);
+        let (heights, colors) = hills(w, d);
+        let terrain = Terrain::new(w, d, &heights, &colors).unwrap();
+        let n = pyramid_points(w, d);
+        let (mut ph, mut pc) = (vec![0u16; n], vec![[0u8; 3]; n]);
+        let mut pb = vec![0u16; pyramid_cells(w, d)];
+        Pyramid::build(&terrain, HeightFilter::Mean, &mut ph, &mut pc, &mut pb).unwrap();
+        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
+        let mut source = Cut(&pyramid);
+        let mut slots = vec![Tile::<16>::EMPTY; 64].into_boxed_slice();
+        let slots: &mut [Tile<16>; 64] = (&mut slots[..]).try_into().unwrap();
+        let mut cache = TileCache::<16, 64>::new(source.world(), slots);
+        cache.begin_frame();
+        // Level 1 whole (33 x 33 points: tiles 0..=2), level 0 without tile (1, 1).
+        for y in 0..3 {
+            for x in 0..3 {
+                cache
+                    .require(TileKey { level: 1, x, y }, &mut source)
+                    .unwrap();
+            }
+        }
+        for y in 0..4 {
+            for x in 0..4 {
+                if (x, y) != (1, 1) {
+                    cache
+                        .require(TileKey { level: 0, x, y }, &mut source)
+                        .unwrap();
+                }
+            }
+        }
+        let surface = TiledSurface::around(&cache, [0.0; 3]);
+        let level0 = crate::Surface::grid(&surface, 0).unwrap();
+        let stride = level0.stride();
+        // Point (20, 24) is in the missing tile: it reads level 1's (10, 12).
+        let at = 24 * stride + 20;
+        assert_eq!(level0.height(at), Some(ph[12 * 33 + 10]));
+        assert_eq!(surface.degraded_samples(), 1);
+        // Point (40, 24) is resident.
+        assert_eq!(level0.height(24 * stride + 40), Some(heights[24 * 64 + 40]));
+        assert_eq!(surface.degraded_samples(), 1);
+        // Outside the world: nothing.
+        assert_eq!(level0.height(24 * stride + 64), None);
+        assert_eq!(level0.height(-1), None);
+    }
+}

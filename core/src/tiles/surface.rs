@@ -1,0 +1,209 @@
+//! The caster's view of a tile cache: a window of the world around the eye,
+//! read through the cache, with coarser tiles standing in for missing ones.
+
+use super::footprint::{window_origin, WINDOW_SIDE};
+use super::{TileCache, TileKey, World};
+use crate::surface::{Extent, Grid, Surface};
+use crate::{Camera, Rgb};
+use core::sync::atomic::{AtomicU32, Ordering};
+
+/// log2 of the row stride of level 0 in a window: every level's grid fits
+/// its stride (`2^(15 − l)` ≥ the window's `2^(14 − l) + 1` points), and
+/// indices stay below 2^30.
+const STRIDE_LOG2: u32 = 15;
+
+/// A window of [`WINDOW_SIDE`] points a side of a tiled world, placed
+/// around the eye, that the caster renders from a [`TileCache`].
+///
+/// The caster works in window coordinates: render with the camera from
+/// [`TiledSurface::local`]. A sample whose tile is not resident reads the
+/// best resident coarser level there (and is counted in
+/// [`TiledSurface::degraded_samples`]); with none, the ray ends there.
+/// Renders from a world that fits the window are the same, bit for bit, as
+/// from a [`crate::Pyramid`] of the same levels.
+#[derive(Debug)]
+pub struct TiledSurface<'c, 'a, const T: usize, const N: usize> {
+    cache: &'c TileCache<'a, T, N>,
+    origin: [u32; 2],
+    extent: Extent,
+    top: u8,
+    world_levels: u8,
+    degraded: AtomicU32,
+}
+
+impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
+    /// The window around `eye` (world coordinates; only x and y are used).
+    pub fn around(cache: &'c TileCache<'a, T, N>, eye: [f32; 3]) -> Self {
+        let world = cache.world();
+        let (origin, top) = window_origin(&world, eye);
+        Self {
+            cache,
+            origin,
+            extent: Extent {
+                width: (world.width - origin[0]).min(WINDOW_SIDE),
+                depth: (world.depth - origin[1]).min(WINDOW_SIDE),
+                max_height: world.max_height,
+            },
+            top,
+            world_levels: world.levels(),
+            degraded: AtomicU32::new(0),
+        }
+    }
+
+    /// The world point at window point (0, 0).
+    pub fn origin(&self) -> [u32; 2] {
+        self.origin
+    }
+
+    /// `camera` moved into window coordinates.
+    pub fn local(&self, camera: &Camera) -> Camera {
+        let [x, y, z] = camera.eye;
+        Camera {
+            eye: [x - self.origin[0] as f32, y - self.origin[1] as f32, z],
+            ..*camera
+        }
+    }
+
+    /// Samples read from a coarser level than asked for since the surface
+    /// was made.
+    pub fn degraded_samples(&self) -> u32 {
+        self.degraded.load(Ordering::Relaxed)
+    }
+
+    /// The world of the cache.
+    fn world(&self) -> World {
+        self.cache.world()
+    }
+
+    /// The resident tile holding world point `(x, y)` of `level`, or the
+    /// best resident coarser one, with the point's place in it.
+    #[inline]
+    fn point(&self, level: u8, x: u32, y: u32) -> Option<(&super::Tile<T>, usize, usize)> {
+        let shift = T.trailing_zeros();
+        let mask = T as u32 - 1;
+        let (mut level_at, mut x, mut y) = (level, x, y);
+        loop {
+            let key = TileKey {
+                level: level_at,
+                x: x >> shift,
+                y: y >> shift,
+            };
+            if let Some(tile) = self.cache.get(&key) {
+                if level_at != level {
+                    self.degraded.fetch_add(1, Ordering::Relaxed);
+                }
+                return Some((tile, (y & mask) as usize, (x & mask) as usize));
+            }
+            if level_at + 1 >= self.world_levels {
+                return None;
+            }
+            level_at += 1;
+            x >>= 1;
+            y >>= 1;
+        }
+    }
+}
+
+/// One level of a [`TiledSurface`].
+#[derive(Debug, Clone, Copy)]
+pub struct TiledGrid<'s, 'c, 'a, const T: usize, const N: usize> {
+    surface: &'s TiledSurface<'c, 'a, T, N>,
+    level: u8,
+    /// log2 of the row stride.
+    shift: u32,
+    /// The window's origin on this level.
+    origin: [u32; 2],
+    /// Points of the world's level.
+    size: (u32, u32),
+}
+
+impl<const T: usize, const N: usize> TiledGrid<'_, '_, '_, T, N> {
+    /// World point of window index `index`, if inside the world.
+    #[inline(always)]
+    fn at(&self, index: isize) -> Option<(u32, u32)> {
+        if index < 0 {
+            return None;
+        }
+        let index = index as usize;
+        let x = (index & ((1 << self.shift) - 1)) as u32 + self.origin[0];
+        let y = (index >> self.shift) as u32 + self.origin[1];
+        (x < self.size.0 && y < self.size.1).then_some((x, y))
+    }
+}
+
+impl<const T: usize, const N: usize> Grid for TiledGrid<'_, '_, '_, T, N> {
+    #[inline(always)]
+    fn stride(&self) -> isize {
+        1 << self.shift
+    }
+    #[inline]
+    fn height(&self, index: isize) -> Option<u16> {
+        let (x, y) = self.at(index)?;
+        let (tile, row, column) = self.surface.point(self.level, x, y)?;
+        Some(tile.heights[row][column])
+    }
+    #[inline]
+    fn color(&self, index: isize) -> Option<Rgb> {
+        let (x, y) = self.at(index)?;
+        let (tile, row, column) = self.surface.point(self.level, x, y)?;
+        Some(tile.colors[row][column])
+    }
+}
+
+impl<'c, 'a, const T: usize, const N: usize> Surface for TiledSurface<'c, 'a, T, N> {
+    type Grid<'s>
+        = TiledGrid<'s, 'c, 'a, T, N>
+    where
+        Self: 's;
+
+    #[inline]
+    fn grid(&self, level: u8) -> Option<Self::Grid<'_>> {
+        if level > self.top {
+            return None;
+        }
+        Some(TiledGrid {
+            surface: self,
+            level,
+            shift: STRIDE_LOG2 - u32::from(level),
+            origin: self.origin.map(|o| o >> level),
+            size: self.world().level_size(level),
+        })
+    }
+    fn top(&self) -> u8 {
+        self.top
+    }
+    fn extent(&self) -> Extent {
+        self.extent
+    }
+    fn has_bounds(&self) -> bool {
+        self.top > 0
+    }
+    #[inline]
+    fn bound(&self, level: u8, x: i64, y: i64) -> Option<(u16, usize)> {
+        if level == 0 || level > self.top || x < 0 || y < 0 {
+            return None;
+        }
+        let (w, d) = self.world().level_size(level);
+        let wx = u32::try_from(x)
+            .ok()?
+            .checked_add(self.origin[0] >> level)?;
+        let wy = u32::try_from(y)
+            .ok()?
+            .checked_add(self.origin[1] >> level)?;
+        if wx + 1 >= w || wy + 1 >= d {
+            return None;
+        }
+        let shift = T.trailing_zeros();
+        let mask = T as u32 - 1;
+        let key = TileKey {
+            level,
+            x: wx >> shift,
+            y: wy >> shift,
+        };
+        // A missing bound proves nothing: the caller assumes the worst.
+        let tile = self.cache.get(&key)?;
+        let bound = tile.bounds[(wy & mask) as usize][(wx & mask) as usize];
+        let stride_log2 = STRIDE_LOG2 - u32::from(level);
+        Some((bound, ((y as usize) << stride_log2) + x as usize))
+    }
+}

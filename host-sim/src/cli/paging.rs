@@ -1,0 +1,300 @@
+//! `terracast-sim pack`, `terracast-sim page`, and `render --terrain`:
+//! tiled terrain on the command line.
+
+use super::{check_writable, kernel_options, parse_size, view_error, Method, RenderArgs};
+use crate::error::{Error, Result};
+use crate::output::{stats_json, write_png, write_stats};
+use crate::tiles::{
+    pack, page_flight, render_tiled, PackInput, PageOptions, PagedFrame, Terrain, SLOTS, TILE,
+};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+use terracast::tiles::{Tile, TileSource, World, WINDOW_SIDE};
+use terracast::{Camera, HeightFilter, RenderOptions, View};
+
+#[derive(Debug, clap::Args)]
+pub(super) struct PackArgs {
+    /// Height map: 8/16-bit grayscale PNG or SRTM .hgt.
+    #[arg(long, value_name = "H.png|H.hgt")]
+    height: PathBuf,
+    /// Color map of the same size (8-bit PNG) [default: colored by height
+    /// and slope, as `render` colors a height map alone].
+    #[arg(long, value_name = "C.png")]
+    color: Option<PathBuf>,
+    /// World height of one height-map unit, in voxels.
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        allow_negative_numbers = true,
+        value_name = "S"
+    )]
+    height_scale: f32,
+    /// How the pyramid's coarse heights are made.
+    #[arg(long, value_enum, default_value_t = super::HeightFilterArg::Mean)]
+    height_filter: super::HeightFilterArg,
+    /// Seed of the coloring's texture (without --color).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    seed: u64,
+    /// The tiled terrain file to write.
+    #[arg(long, value_name = "T.tiles")]
+    out: PathBuf,
+}
+
+pub(super) fn pack_command(args: PackArgs) -> Result<()> {
+    check_writable(&args.out)?;
+    let input = PackInput {
+        height: args.height,
+        color: args.color,
+        height_scale: args.height_scale,
+        filter: match args.height_filter {
+            super::HeightFilterArg::Mean => HeightFilter::Mean,
+            super::HeightFilterArg::Max => HeightFilter::Max,
+        },
+        seed: args.seed,
+    };
+    let bar = ProgressBar::new(0).with_style(
+        ProgressStyle::with_template("pack {bar:40} {pos}/{len} rows {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let summary = pack(&input, &args.out, &mut |done, rows| {
+        bar.set_length(u64::from(rows));
+        bar.set_position(u64::from(done));
+    })?;
+    bar.finish_and_clear();
+    println!(
+        "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}, {} bytes -> {}",
+        summary.width,
+        summary.depth,
+        summary.levels,
+        summary.tiles,
+        summary.bytes,
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// A view over the middle of a world: the south edge, as `render` places
+/// it on a map, when the world fits one window; its center otherwise.
+fn default_eye(world: &World) -> [f32; 3] {
+    let (w, d) = (world.width as f32, world.depth as f32);
+    let top = f32::from(world.max_height) / 16.0;
+    if world.width <= WINDOW_SIDE && world.depth <= WINDOW_SIDE {
+        [w * 0.5, d * 0.12, top + 0.04 * w.min(d)]
+    } else {
+        [w * 0.5, d * 0.5, top + 100.0]
+    }
+}
+
+pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> {
+    if args.method != Method::Kernel {
+        return Err(Error::new("--terrain renders with --method kernel only"));
+    }
+    let mut terrain = Terrain::open(spec, args.scene.seed)?;
+    let world = terrain.world();
+    let camera = Camera {
+        eye: args.camera.eye.unwrap_or_else(|| default_eye(&world)),
+        yaw_deg: args.camera.yaw,
+        pitch_deg: args.camera.pitch,
+        roll_deg: args.roll,
+        hfov_deg: args.camera.hfov,
+    };
+    let (width, height) = args.size;
+    let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
+    let options = kernel_options(args, sky)?;
+    if let Terrain::File(file) = &terrain {
+        let wanted = match args.height_filter {
+            super::HeightFilterArg::Mean => HeightFilter::Mean,
+            super::HeightFilterArg::Max => HeightFilter::Max,
+        };
+        if file.filter() != wanted {
+            return Err(Error::new(format!(
+                "{} was packed with --height-filter {:?}; pack it again to render with another",
+                file.path().display(),
+                file.filter()
+            )));
+        }
+    }
+    View::new(
+        &Camera {
+            eye: [0.0, 0.0, camera.eye[2]],
+            ..camera
+        },
+        width,
+        height,
+    )
+    .map_err(view_error)?;
+    let (frame, stats, tiled) = render_tiled(&mut terrain, &camera, width, height, &options)?;
+    write_png(&args.out, &frame)?;
+    if let Some(path) = &args.depth {
+        crate::output::write_pfm(path, &frame)?;
+    }
+    if let Some(path) = &args.stats {
+        let sky_pixels = frame.depth.iter().filter(|d| d.is_infinite()).count();
+        let mut json = stats_json(&stats, width, height, sky_pixels);
+        json["tiles"] = serde_json::to_value(tiled).map_err(|e| Error::new(e.to_string()))?;
+        write_stats(path, &json)?;
+    }
+    if tiled.misses > 0 {
+        eprintln!(
+            "warning: {} of {} footprint tiles could not be loaded ({} rejected for bad checksums); drawn from coarser levels",
+            tiled.misses, tiled.footprint_tiles, tiled.rejected
+        );
+    }
+    Ok(())
+}
+
+#[derive(Debug, clap::Args)]
+pub(super) struct PageArgs {
+    /// The terrain: a file from `pack`, or procedural:SIZE.
+    #[arg(
+        long,
+        default_value = "procedural:131072",
+        value_name = "T.tiles|procedural:SIZE"
+    )]
+    terrain: String,
+    /// Seed of a procedural terrain.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    seed: u64,
+    /// Frames to fly.
+    #[arg(long, default_value_t = 90, value_name = "N")]
+    frames: u32,
+    /// Frame rate.
+    #[arg(long, default_value_t = 30.0, value_name = "HZ")]
+    fps: f32,
+    /// Image size.
+    #[arg(long, default_value = "320x240", value_parser = parse_size, value_name = "WxH")]
+    size: (u32, u32),
+    /// Horizontal field of view, degrees.
+    #[arg(long, default_value_t = 60.0, value_name = "DEG")]
+    hfov: f32,
+    /// Heading change, degrees a second [default: one field of view a
+    /// second].
+    #[arg(long, allow_negative_numbers = true, value_name = "DEG")]
+    turn: Option<f32>,
+    /// Ground speed, voxels a second.
+    #[arg(long, default_value_t = 300.0, value_name = "V")]
+    speed: f32,
+    /// Start eye position [default: over the middle, above the highest
+    /// terrain].
+    #[arg(long, value_parser = super::parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    eye: Option<[f32; 3]>,
+    /// Degrees below the horizon.
+    #[arg(
+        long,
+        default_value_t = 20.0,
+        allow_negative_numbers = true,
+        value_name = "DEG"
+    )]
+    pitch: f32,
+    /// Tiles the loader may fetch during one frame [default: the PVS
+    /// disk's 70 MB/s over a frame].
+    #[arg(long, value_name = "N")]
+    load_budget: Option<u32>,
+    /// Only fetch what a frame lacked (no next-frame or extended
+    /// footprint): shows what prefetch is for.
+    #[arg(long)]
+    no_prefetch: bool,
+    /// How far ahead the extended footprint looks, seconds.
+    #[arg(long, default_value_t = 0.25, value_name = "S")]
+    lead: f32,
+    /// Folder to write each frame to as a PNG.
+    #[arg(long, value_name = "DIR")]
+    frames_dir: Option<PathBuf>,
+    /// The report: a record per frame, as JSON.
+    #[arg(long, value_name = "REPORT.json")]
+    report: Option<PathBuf>,
+}
+
+pub(super) fn page_command(args: PageArgs) -> Result<()> {
+    if let Some(dir) = &args.frames_dir {
+        if !dir.is_dir() {
+            return Err(Error::new(format!(
+                "--frames-dir {}: no such folder",
+                dir.display()
+            )));
+        }
+    }
+    if let Some(path) = &args.report {
+        check_writable(path)?;
+    }
+    if !(args.fps > 0.0 && args.fps <= 1000.0) {
+        return Err(Error::new("--fps must be between 0 and 1000"));
+    }
+    let mut terrain = Terrain::open(&args.terrain, args.seed)?;
+    let world = terrain.world();
+    let start = Camera {
+        eye: args.eye.unwrap_or_else(|| default_eye(&world)),
+        yaw_deg: 0.0,
+        pitch_deg: args.pitch,
+        roll_deg: 0.0,
+        hfov_deg: args.hfov,
+    };
+    View::new(
+        &Camera {
+            eye: [0.0, 0.0, start.eye[2]],
+            ..start
+        },
+        args.size.0,
+        args.size.1,
+    )
+    .map_err(view_error)?;
+    const DISK_BYTES_PER_S: f32 = 70e6;
+    let load_budget = args
+        .load_budget
+        .unwrap_or((DISK_BYTES_PER_S / args.fps / Tile::<TILE>::BYTES as f32).max(1.0) as u32);
+    let options = PageOptions {
+        size: args.size,
+        frames: args.frames,
+        fps: args.fps,
+        turn_deg_per_s: args.turn.unwrap_or(args.hfov),
+        speed: args.speed,
+        start,
+        load_budget,
+        prefetch: !args.no_prefetch,
+        lead_s: args.lead,
+        options: RenderOptions::default(),
+    };
+    let bar = ProgressBar::new(u64::from(args.frames)).with_style(
+        ProgressStyle::with_template("page {bar:40} {pos}/{len} frames {elapsed} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let frames_dir = args.frames_dir.clone();
+    let report = page_flight(&mut terrain, &options, &mut |image, record: &PagedFrame| {
+        bar.inc(1);
+        bar.set_message(format!(
+            "{} loads, {} missing",
+            record.loads, record.missing_tiles
+        ));
+        if let Some(dir) = &frames_dir {
+            write_png(&dir.join(format!("frame-{:04}.png", record.frame)), image)?;
+        }
+        Ok(())
+    })?;
+    bar.finish_and_clear();
+    let virtual_gib = u64::from(world.width) * u64::from(world.depth) * 4 / (1 << 30);
+    let (mean_ratio, max_ratio) = report.resident_ratio();
+    let (mean_loads, max_loads) = report.loads_per_frame();
+    println!(
+        "{}x{} terrain ({virtual_gib} GiB at 4 bytes a voxel), cache {SLOTS} tiles of {TILE}x{TILE} ({:.1} MiB), {} frames at {} Hz turning {:.0} deg/s, load budget {load_budget} tiles a frame{}",
+        world.width,
+        world.depth,
+        report.cache_bytes as f64 / (1 << 20) as f64,
+        args.frames,
+        args.fps,
+        options.turn_deg_per_s,
+        if options.prefetch { "" } else { ", no prefetch" }
+    );
+    println!(
+        "frames after the first drawn with a tile missing: {} of {}",
+        report.frames_missing_after_first(),
+        report.frames.len().saturating_sub(1)
+    );
+    println!("loads a frame after the first: mean {mean_loads:.1}, most {max_loads}");
+    println!("resident bytes / frame footprint: mean {mean_ratio:.2}, most {max_ratio:.2}");
+    if let Some(path) = &args.report {
+        let json = serde_json::to_string_pretty(&report).map_err(|e| Error::new(e.to_string()))?;
+        std::fs::write(path, format!("{json}\n"))
+            .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,303 @@
+//! The tiled terrain file (`.tiles`): every pyramid level cut into tiles of
+//! [`TILE`]² points, each with a CRC-32, so a reader fetches any tile with
+//! one seek and checks it.
+//!
+//! Layout, little-endian:
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 8 | magic `TCTILES\0` |
+//! | 4 | format version ([`FORMAT_VERSION`]) |
+//! | 4 | tile side in points |
+//! | 4, 4 | width, depth of level 0 in points |
+//! | 4 | levels |
+//! | 2 | highest height, U12.4 |
+//! | 1 | height filter: 0 mean, 1 max |
+//! | 1 | reserved, 0 |
+//! | 8 | tile count |
+//! | 4 | CRC-32 of the 40 bytes before it |
+//! | 4 × count | CRC-32 of each tile record |
+//! | record × count | tile records |
+//!
+//! Tiles are ordered by level, then row, then column. A record is the
+//! tile's heights (`u16`, row by row), colors (RGB), and cell bounds
+//! (`u16`): see [`terracast::tiles::Tile`].
+
+use super::TILE;
+use crate::error::{Error, Result};
+use std::fs::File;
+use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+use terracast::tiles::{Tile, TileError, TileKey, TileSource, World};
+use terracast::HeightFilter;
+
+/// The format version this build reads and writes.
+pub const FORMAT_VERSION: u32 = 1;
+
+const MAGIC: &[u8; 8] = b"TCTILES\0";
+const HEADER_BYTES: u64 = 44;
+/// Bytes of one tile record.
+pub(crate) const RECORD_BYTES: usize = TILE * TILE * 7;
+
+/// What the header says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Header {
+    pub world: World,
+    pub levels: u8,
+    pub filter: HeightFilter,
+    pub tiles: u64,
+}
+
+impl Header {
+    pub fn new(world: World, filter: HeightFilter) -> Self {
+        let levels = world.levels();
+        let tiles = (0..levels)
+            .map(|l| {
+                let (x, y) = world.tiles(l, TILE as u32);
+                u64::from(x) * u64::from(y)
+            })
+            .sum();
+        Self {
+            world,
+            levels,
+            filter,
+            tiles,
+        }
+    }
+
+    fn bytes(&self) -> [u8; HEADER_BYTES as usize] {
+        let mut b = [0u8; HEADER_BYTES as usize];
+        b[0..8].copy_from_slice(MAGIC);
+        b[8..12].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
+        b[12..16].copy_from_slice(&(TILE as u32).to_le_bytes());
+        b[16..20].copy_from_slice(&self.world.width.to_le_bytes());
+        b[20..24].copy_from_slice(&self.world.depth.to_le_bytes());
+        b[24..28].copy_from_slice(&u32::from(self.levels).to_le_bytes());
+        b[28..30].copy_from_slice(&self.world.max_height.to_le_bytes());
+        b[30] = u8::from(self.filter == HeightFilter::Max);
+        b[32..40].copy_from_slice(&self.tiles.to_le_bytes());
+        let crc = crc32fast::hash(&b[..40]);
+        b[40..44].copy_from_slice(&crc.to_le_bytes());
+        b
+    }
+
+    /// Index of a tile among all the file's tiles.
+    pub fn index(&self, key: TileKey) -> Option<u64> {
+        if key.level >= self.levels {
+            return None;
+        }
+        let before: u64 = (0..key.level)
+            .map(|l| {
+                let (x, y) = self.world.tiles(l, TILE as u32);
+                u64::from(x) * u64::from(y)
+            })
+            .sum();
+        let (tx, ty) = self.world.tiles(key.level, TILE as u32);
+        (key.x < tx && key.y < ty)
+            .then(|| before + u64::from(key.y) * u64::from(tx) + u64::from(key.x))
+    }
+
+    fn record_offset(&self, index: u64) -> u64 {
+        HEADER_BYTES + 4 * self.tiles + index * RECORD_BYTES as u64
+    }
+
+    fn file_bytes(&self) -> u64 {
+        self.record_offset(self.tiles)
+    }
+}
+
+/// A packed terrain file opened for reading: a [`TileSource`].
+#[derive(Debug)]
+pub struct TilesFile {
+    path: PathBuf,
+    file: File,
+    header: Header,
+    checksums: Vec<u32>,
+    record: Vec<u8>,
+}
+
+impl TilesFile {
+    /// Opens and checks a `.tiles` file: refuses a foreign file, another
+    /// version or tile size, a damaged header, and a truncated file.
+    pub fn open(path: &Path) -> Result<Self> {
+        let fail = |what: &str| Error::new(format!("{}: {what}", path.display()));
+        let mut file = File::open(path).map_err(|e| {
+            Error::new(format!("cannot open tiled terrain {}: {e}", path.display()))
+        })?;
+        let mut b = [0u8; HEADER_BYTES as usize];
+        let length = file.metadata().map(|m| m.len()).unwrap_or(0);
+        if length < HEADER_BYTES {
+            return Err(fail(
+                "not a terracast tiled terrain file (too short for a header)",
+            ));
+        }
+        file.read_exact(&mut b)
+            .map_err(|e| fail(&format!("cannot read header: {e}")))?;
+        if &b[0..8] != MAGIC {
+            return Err(fail("not a terracast tiled terrain file (bad magic)"));
+        }
+        let u32_at = |i: usize| u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
+        let version = u32_at(8);
+        if version != FORMAT_VERSION {
+            return Err(fail(&format!(
+                "format version {version}, this build reads version {FORMAT_VERSION}"
+            )));
+        }
+        if crc32fast::hash(&b[..40]) != u32_at(40) {
+            return Err(fail("header checksum mismatch: the file is damaged"));
+        }
+        if u32_at(12) != TILE as u32 {
+            return Err(fail(&format!(
+                "tiles of {} points a side, this build uses {TILE}",
+                u32_at(12)
+            )));
+        }
+        let max_height = u16::from_le_bytes([b[28], b[29]]);
+        let world = World::new(u32_at(16), u32_at(20), max_height)
+            .ok_or_else(|| fail("impossible map size in the header"))?;
+        let filter = if b[30] == 1 {
+            HeightFilter::Max
+        } else {
+            HeightFilter::Mean
+        };
+        let header = Header::new(world, filter);
+        let tiles = u64::from_le_bytes(b[32..40].try_into().unwrap_or_default());
+        if tiles != header.tiles || u32_at(24) != u32::from(header.levels) {
+            return Err(fail("header's tile count does not match its map size"));
+        }
+        if length < header.file_bytes() {
+            return Err(fail(&format!(
+                "truncated: {length} bytes, the header promises {}",
+                header.file_bytes()
+            )));
+        }
+        let mut table = vec![0u8; 4 * header.tiles as usize];
+        file.read_exact(&mut table)
+            .map_err(|e| fail(&format!("cannot read the checksum table: {e}")))?;
+        let checksums = table
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        Ok(Self {
+            path: path.to_path_buf(),
+            file,
+            header,
+            checksums,
+            record: vec![0; RECORD_BYTES],
+        })
+    }
+
+    /// The height filter the file's levels were built with.
+    pub fn filter(&self) -> HeightFilter {
+        self.header.filter
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl TileSource<TILE> for TilesFile {
+    fn world(&self) -> World {
+        self.header.world
+    }
+
+    fn load(
+        &mut self,
+        key: TileKey,
+        tile: &mut Tile<TILE>,
+    ) -> std::result::Result<usize, TileError> {
+        let index = self.header.index(key).ok_or(TileError::Missing)?;
+        let offset = self.header.record_offset(index);
+        self.file
+            .seek(SeekFrom::Start(offset))
+            .and_then(|_| self.file.read_exact(&mut self.record))
+            .map_err(|_| TileError::Io)?;
+        if crc32fast::hash(&self.record) != self.checksums[index as usize] {
+            return Err(TileError::Checksum);
+        }
+        decode(&self.record, tile);
+        Ok(RECORD_BYTES)
+    }
+}
+
+pub(crate) fn encode(tile: &Tile<TILE>, out: &mut Vec<u8>) {
+    out.clear();
+    for row in &tile.heights {
+        row.iter()
+            .for_each(|h| out.extend_from_slice(&h.to_le_bytes()));
+    }
+    for row in &tile.colors {
+        row.iter().for_each(|c| out.extend_from_slice(c));
+    }
+    for row in &tile.bounds {
+        row.iter()
+            .for_each(|h| out.extend_from_slice(&h.to_le_bytes()));
+    }
+}
+
+fn decode(record: &[u8], tile: &mut Tile<TILE>) {
+    let (heights, rest) = record.split_at(TILE * TILE * 2);
+    let (colors, bounds) = rest.split_at(TILE * TILE * 3);
+    let points = heights.chunks_exact(2).zip(bounds.chunks_exact(2));
+    for (i, ((h, b), c)) in points.zip(colors.chunks_exact(3)).enumerate() {
+        let (row, column) = (i / TILE, i % TILE);
+        tile.heights[row][column] = u16::from_le_bytes([h[0], h[1]]);
+        tile.bounds[row][column] = u16::from_le_bytes([b[0], b[1]]);
+        tile.colors[row][column] = [c[0], c[1], c[2]];
+    }
+}
+
+/// Writes a `.tiles` file tile by tile, in any order.
+pub(crate) struct TilesWriter {
+    file: BufWriter<File>,
+    header: Header,
+    checksums: Vec<u32>,
+    record: Vec<u8>,
+    position: u64,
+}
+
+impl TilesWriter {
+    pub fn create(path: &Path, header: Header) -> Result<Self> {
+        let fail = |e: std::io::Error| Error::new(format!("cannot write {}: {e}", path.display()));
+        let file = File::create(path).map_err(fail)?;
+        file.set_len(header.file_bytes()).map_err(fail)?;
+        Ok(Self {
+            file: BufWriter::with_capacity(1 << 20, file),
+            header,
+            checksums: vec![0; header.tiles as usize],
+            record: Vec::with_capacity(RECORD_BYTES),
+            position: u64::MAX,
+        })
+    }
+
+    pub fn write(&mut self, key: TileKey, tile: &Tile<TILE>) -> Result<()> {
+        let index = self
+            .header
+            .index(key)
+            .ok_or_else(|| Error::new(format!("tile {key:?} is outside the packed map")))?;
+        encode(tile, &mut self.record);
+        self.checksums[index as usize] = crc32fast::hash(&self.record);
+        let offset = self.header.record_offset(index);
+        let io = |e: std::io::Error| Error::new(format!("cannot write tile: {e}"));
+        if offset != self.position {
+            self.file.seek(SeekFrom::Start(offset)).map_err(io)?;
+        }
+        self.file.write_all(&self.record).map_err(io)?;
+        self.position = offset + RECORD_BYTES as u64;
+        Ok(())
+    }
+
+    /// Writes the header (with the final highest height) and the checksums.
+    pub fn finish(mut self, max_height: u16) -> Result<()> {
+        let io = |e: std::io::Error| Error::new(format!("cannot finish the tiled file: {e}"));
+        self.header.world.max_height = max_height;
+        self.file.seek(SeekFrom::Start(0)).map_err(io)?;
+        self.file.write_all(&self.header.bytes()).map_err(io)?;
+        for c in &self.checksums {
+            self.file.write_all(&c.to_le_bytes()).map_err(io)?;
+        }
+        self.file.flush().map_err(io)
+    }
+}

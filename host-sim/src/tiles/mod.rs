@@ -1,0 +1,77 @@
+//! Out-of-core terrain on the host: the tiled terrain file and `pack`, the
+//! procedural source for huge terrains, and rendering and flying through
+//! the kernel's tile cache.
+//!
+//! The host uses one cache shape: tiles of [`TILE`]² points (28 KiB each)
+//! in [`SLOTS`] slots, 28 MiB of terrain at most.
+
+mod file;
+mod pack;
+mod paging;
+mod procedural;
+
+pub use file::{TilesFile, FORMAT_VERSION};
+pub use pack::{pack, PackInput, PackSummary};
+pub use paging::{page_flight, render_tiled, PageOptions, PageReport, PagedFrame, TiledRender};
+pub use procedural::ProceduralSource;
+
+use crate::error::{Error, Result};
+use std::path::Path;
+use terracast::tiles::{Tile, TileError, TileKey, TileSource, World};
+
+/// Points per tile side on the host.
+pub const TILE: usize = 64;
+/// Tile slots of the host's cache.
+pub const SLOTS: usize = 1024;
+
+/// A tile source chosen on the command line: `procedural:SIZE` or a
+/// `.tiles` file.
+#[derive(Debug)]
+pub enum Terrain {
+    /// Generated from coordinates.
+    Procedural(ProceduralSource),
+    /// Read from a packed file.
+    File(TilesFile),
+}
+
+impl Terrain {
+    /// Parses `procedural:SIZE` (SIZE the side in voxels, 2 to 2^30), or
+    /// opens a `.tiles` file.
+    pub fn open(spec: &str, seed: u64) -> Result<Self> {
+        if let Some(size) = spec.strip_prefix("procedural:") {
+            let side: u32 = size.parse().map_err(|_| {
+                Error::new(format!(
+                    "--terrain {spec}: SIZE must be a whole number of voxels, as in procedural:131072"
+                ))
+            })?;
+            return ProceduralSource::new(side, seed).map(Self::Procedural);
+        }
+        TilesFile::open(Path::new(spec)).map(Self::File)
+    }
+}
+
+impl TileSource<TILE> for Terrain {
+    fn world(&self) -> World {
+        match self {
+            Self::Procedural(s) => s.world(),
+            Self::File(s) => s.world(),
+        }
+    }
+    fn load(
+        &mut self,
+        key: TileKey,
+        tile: &mut Tile<TILE>,
+    ) -> std::result::Result<usize, TileError> {
+        match self {
+            Self::Procedural(s) => s.load(key, tile),
+            Self::File(s) => s.load(key, tile),
+        }
+    }
+}
+
+/// The host cache's slots, on the heap.
+pub fn new_slots() -> Box<[Tile<TILE>; SLOTS]> {
+    let slots = vec![Tile::<TILE>::EMPTY; SLOTS].into_boxed_slice();
+    // The length is SLOTS by construction.
+    slots.try_into().unwrap_or_else(|_| unreachable!())
+}

@@ -1,0 +1,665 @@
+//! `terracast-sim pack`: height and color maps to a `.tiles` file, one row
+//! at a time, so an input larger than memory can be packed.
+//!
+//! The pyramid is built as the rows stream in, with the kernel's filter
+//! and bounds ([`terracast::Pyramid::build`]) to the bit: a coarse row is
+//! made as soon as the three finer rows under it have arrived, a bound row
+//! as soon as the coarse row after it has, and a strip of tiles is written
+//! as soon as its rows and bounds are complete. Memory is a few strips of
+//! [`TILE`] rows a level, whatever the map's size.
+
+use super::file::{Header, TilesWriter};
+use super::TILE;
+use crate::error::{Error, Result};
+use crate::scene::{terrain_color, value_noise};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufReader, Read};
+use std::path::{Path, PathBuf};
+use terracast::tiles::{Tile, TileKey, World};
+use terracast::{HeightFilter, Rgb, Terrain};
+
+/// What to pack.
+#[derive(Debug, Clone)]
+pub struct PackInput {
+    /// Height map: 8/16-bit grayscale PNG or SRTM `.hgt`.
+    pub height: PathBuf,
+    /// Color map of the same size (8-bit RGB, RGBA, gray or palette PNG);
+    /// without it, heights are colored by height and slope as `render`
+    /// colors them.
+    pub color: Option<PathBuf>,
+    /// World height of one height-map unit, in voxels.
+    pub height_scale: f32,
+    /// How coarse heights are made.
+    pub filter: HeightFilter,
+    /// Seed of the coloring's texture (when there is no color map).
+    pub seed: u64,
+}
+
+/// What `pack` wrote.
+#[derive(Debug, Clone, Copy)]
+pub struct PackSummary {
+    /// Level-0 size.
+    pub width: u32,
+    /// Level-0 size.
+    pub depth: u32,
+    /// Levels written.
+    pub levels: u8,
+    /// Tiles written.
+    pub tiles: u64,
+    /// File size in bytes.
+    pub bytes: u64,
+}
+
+/// Packs `input` into `out`, calling `progress(rows done, rows)` now and
+/// then.
+pub fn pack(
+    input: &PackInput,
+    out: &Path,
+    progress: &mut dyn FnMut(u32, u32),
+) -> Result<PackSummary> {
+    if !input.height_scale.is_finite() || input.height_scale <= 0.0 {
+        return Err(Error::new(format!(
+            "--height-scale must be a positive number, got {}",
+            input.height_scale
+        )));
+    }
+    let mut heights = HeightRows::open(&input.height, input.height_scale)?;
+    let (width, depth) = heights.size();
+    let world = World::new(width, depth, 0).ok_or_else(|| {
+        Error::new(format!(
+            "height map is {width}x{depth}: it needs at least 2x2 points"
+        ))
+    })?;
+    let mut colors = match &input.color {
+        Some(path) => {
+            let rows = ColorRows::open(path)?;
+            if rows.size() != (width, depth) {
+                return Err(Error::new(format!(
+                    "color map {} is {}x{}, the height map {width}x{depth}: pack needs them the same size",
+                    path.display(),
+                    rows.size().0,
+                    rows.size().1
+                )));
+            }
+            Colors::Map(Box::new(rows))
+        }
+        None => {
+            // The coloring needs the height range first: one pass more.
+            let (mut lo, mut hi) = (f32::MAX, f32::MIN);
+            let mut first = HeightRows::open(&input.height, input.height_scale)?;
+            for _ in 0..depth {
+                for &h in first.next()? {
+                    lo = lo.min(h);
+                    hi = hi.max(h);
+                }
+            }
+            Colors::ByHeight {
+                range: [f64::from(lo), f64::from(hi)],
+                window: Vec::new(),
+                seed: input.seed,
+            }
+        }
+    };
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        if !parent.is_dir() {
+            return Err(Error::new(format!(
+                "cannot write {}: folder {} does not exist",
+                out.display(),
+                parent.display()
+            )));
+        }
+    }
+    let header = Header::new(world, input.filter);
+    let mut builder = Builder::new(world, input.filter, TilesWriter::create(out, header)?);
+    let mut max_height = 0u16;
+    let mut held: Option<Vec<u16>> = None;
+    for y in 0..depth {
+        let row = heights.next()?;
+        let quantized = row
+            .iter()
+            .enumerate()
+            .map(|(x, &h)| {
+                Terrain::quantize_height(h).ok_or_else(|| {
+                    Error::new(format!(
+                        "height {h} at grid point ({x}, {y}) is outside the kernel's range 0..={} voxels (adjust --height-scale)",
+                        Terrain::MAX_HEIGHT
+                    ))
+                })
+            })
+            .collect::<Result<Vec<u16>>>()?;
+        max_height = max_height.max(quantized.iter().copied().max().unwrap_or(0));
+        // Colors by height lag a row (they need the row after): the row
+        // they color now is the one held back.
+        match (colors.row(y, row)?, held.take()) {
+            (Some(row_colors), Some(previous)) => {
+                builder.push(0, y - 1, previous, row_colors)?;
+                held = Some(quantized);
+            }
+            (Some(row_colors), None) => builder.push(0, y, quantized, row_colors)?,
+            (None, _) => held = Some(quantized),
+        }
+        if y % 64 == 0 || y + 1 == depth {
+            progress(y + 1, depth);
+        }
+    }
+    if let (Some(last), Some(row_colors)) = (held.take(), colors.finish(depth)) {
+        builder.push(0, depth - 1, last, row_colors)?;
+    }
+    builder.finish(max_height)?;
+    let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
+    Ok(PackSummary {
+        width,
+        depth,
+        levels: header.levels,
+        tiles: header.tiles,
+        bytes,
+    })
+}
+
+/// Height rows from a PNG or an `.hgt`, scaled, top row first.
+enum HeightRows {
+    Png {
+        reader: Box<png::Reader<BufReader<File>>>,
+        size: (u32, u32),
+        wide: bool,
+        channels: usize,
+        row: Vec<f32>,
+        scale: f32,
+    },
+    Hgt {
+        file: BufReader<File>,
+        side: u32,
+        bytes: Vec<u8>,
+        row: Vec<f32>,
+        scale: f32,
+    },
+}
+
+impl HeightRows {
+    fn open(path: &Path, scale: f32) -> Result<Self> {
+        let fail = |e: &dyn std::fmt::Display| {
+            Error::new(format!("cannot read height map {}: {e}", path.display()))
+        };
+        let file = File::open(path).map_err(|e| fail(&e))?;
+        let is_hgt = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("hgt"));
+        if is_hgt {
+            let length = file.metadata().map_err(|e| fail(&e))?.len();
+            let samples = length / 2;
+            let side = (samples as f64).sqrt() as u64;
+            if length % 2 != 0 || side * side != samples || side < 2 {
+                return Err(Error::new(format!(
+                    "{} is not an SRTM .hgt tile: {length} bytes is not a square grid of 16-bit samples",
+                    path.display()
+                )));
+            }
+            return Ok(Self::Hgt {
+                file: BufReader::new(file),
+                side: side as u32,
+                bytes: vec![0; side as usize * 2],
+                row: vec![0.0; side as usize],
+                scale,
+            });
+        }
+        let mut decoder = png::Decoder::new(BufReader::new(file));
+        decoder.set_transformations(png::Transformations::IDENTITY);
+        let reader = decoder.read_info().map_err(|e| fail(&e))?;
+        let info = reader.info();
+        let channels = match info.color_type {
+            png::ColorType::Grayscale => 1,
+            png::ColorType::GrayscaleAlpha => 2,
+            _ => {
+                return Err(Error::new(format!(
+                    "{}: pack reads grayscale height PNGs (8 or 16 bits); this one is {:?}",
+                    path.display(),
+                    info.color_type
+                )))
+            }
+        };
+        let wide = match info.bit_depth {
+            png::BitDepth::Eight => false,
+            png::BitDepth::Sixteen => true,
+            other => {
+                return Err(Error::new(format!(
+                    "{}: pack reads 8- or 16-bit height PNGs; this one has {other:?} bits",
+                    path.display()
+                )))
+            }
+        };
+        let size = (info.width, info.height);
+        Ok(Self::Png {
+            reader: Box::new(reader),
+            size,
+            wide,
+            channels,
+            row: vec![0.0; size.0 as usize],
+            scale,
+        })
+    }
+
+    fn size(&self) -> (u32, u32) {
+        match self {
+            Self::Png { size, .. } => *size,
+            Self::Hgt { side, .. } => (*side, *side),
+        }
+    }
+
+    fn next(&mut self) -> Result<&[f32]> {
+        match self {
+            Self::Png {
+                reader,
+                wide,
+                channels,
+                row,
+                scale,
+                ..
+            } => {
+                let data = reader
+                    .next_row()
+                    .map_err(|e| Error::new(format!("height map: {e}")))?
+                    .ok_or_else(|| Error::new("height map ends early"))?;
+                let data = data.data();
+                let step = *channels * if *wide { 2 } else { 1 };
+                for (v, px) in row.iter_mut().zip(data.chunks_exact(step)) {
+                    let raw = if *wide {
+                        f32::from(u16::from_be_bytes([px[0], px[1]]))
+                    } else {
+                        f32::from(px[0])
+                    };
+                    *v = raw * *scale;
+                }
+                Ok(row)
+            }
+            Self::Hgt {
+                file,
+                bytes,
+                row,
+                scale,
+                ..
+            } => {
+                file.read_exact(bytes)
+                    .map_err(|e| Error::new(format!("height map ends early: {e}")))?;
+                for (v, b) in row.iter_mut().zip(bytes.chunks_exact(2)) {
+                    *v = match i16::from_be_bytes([b[0], b[1]]) {
+                        i16::MIN => 0.0,
+                        h => f32::from(h) * *scale,
+                    };
+                }
+                Ok(row)
+            }
+        }
+    }
+}
+
+/// Color rows of a PNG, expanded to RGB.
+struct ColorRows {
+    reader: png::Reader<BufReader<File>>,
+    size: (u32, u32),
+    channels: usize,
+}
+
+impl ColorRows {
+    fn open(path: &Path) -> Result<Self> {
+        let fail = |e: &dyn std::fmt::Display| {
+            Error::new(format!("cannot read color map {}: {e}", path.display()))
+        };
+        let file = File::open(path).map_err(|e| fail(&e))?;
+        let mut decoder = png::Decoder::new(BufReader::new(file));
+        decoder.set_transformations(png::Transformations::EXPAND);
+        let reader = decoder.read_info().map_err(|e| fail(&e))?;
+        let (color, depth) = reader.output_color_type();
+        if depth != png::BitDepth::Eight {
+            return Err(Error::new(format!(
+                "{}: pack reads 8-bit color PNGs",
+                path.display()
+            )));
+        }
+        let size = (reader.info().width, reader.info().height);
+        Ok(Self {
+            reader,
+            size,
+            channels: color.samples(),
+        })
+    }
+
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    fn next(&mut self) -> Result<Vec<Rgb>> {
+        let channels = self.channels;
+        let row = self
+            .reader
+            .next_row()
+            .map_err(|e| Error::new(format!("color map: {e}")))?
+            .ok_or_else(|| Error::new("color map ends early"))?;
+        Ok(row
+            .data()
+            .chunks_exact(channels)
+            .map(|p| {
+                if channels >= 3 {
+                    [p[0], p[1], p[2]]
+                } else {
+                    [p[0]; 3]
+                }
+            })
+            .collect())
+    }
+}
+
+/// Where each row's colors come from.
+enum Colors {
+    Map(Box<ColorRows>),
+    /// Colored by height and slope, as `render` colors a height map alone:
+    /// a row is colored when the row after it has arrived.
+    ByHeight {
+        range: [f64; 2],
+        /// The last two height rows (row y − 1 and row y).
+        window: Vec<Vec<f32>>,
+        seed: u64,
+    },
+}
+
+impl Colors {
+    /// The colors of a row ready now: row `y`'s from a map, or row
+    /// `y − 1`'s by height (`None` for the first row).
+    fn row(&mut self, y: u32, heights: &[f32]) -> Result<Option<Vec<Rgb>>> {
+        match self {
+            Self::Map(rows) => rows.next().map(Some),
+            Self::ByHeight {
+                window,
+                range,
+                seed,
+            } => {
+                window.push(heights.to_vec());
+                if window.len() > 3 {
+                    window.remove(0);
+                }
+                if y == 0 {
+                    return Ok(None);
+                }
+                // Rows y − 2 (if any), y − 1 and y: color row y − 1.
+                let n = window.len();
+                let (here, below) = (&window[n - 2], &window[n - 1]);
+                let above = if n >= 3 { &window[n - 3] } else { here };
+                Ok(Some(color_row(y - 1, [above, here, below], *range, *seed)))
+            }
+        }
+    }
+
+    /// The last row's colors (by height), once every row has arrived.
+    fn finish(&mut self, depth: u32) -> Option<Vec<Rgb>> {
+        match self {
+            Self::Map(_) => None,
+            Self::ByHeight {
+                window,
+                range,
+                seed,
+            } => {
+                let n = window.len();
+                let here = window.last()?;
+                let above = if n >= 2 { &window[n - 2] } else { here };
+                Some(color_row(depth - 1, [above, here, here], *range, *seed))
+            }
+        }
+    }
+}
+
+/// Colors of row `y` from rows `y − 1`, `y`, `y + 1` (edges repeated), as
+/// [`crate::scene::color_by_height_and_slope`] colors them.
+fn color_row(y: u32, [above, here, below]: [&Vec<f32>; 3], range: [f64; 2], seed: u64) -> Vec<Rgb> {
+    let w = here.len();
+    (0..w)
+        .map(|x| {
+            let at = |row: &Vec<f32>, x: usize| f64::from(row[x.min(w - 1)]);
+            let gx = (at(here, x + 1) - at(here, x.saturating_sub(1))) * 0.5;
+            let gy = (at(below, x) - at(above, x)) * 0.5;
+            let grain = value_noise(x as f64 * 0.5, f64::from(y) * 0.5, seed ^ 0xabc) - 0.5;
+            terrain_color(
+                [x as f64, f64::from(y)],
+                at(here, x),
+                [gx, gy],
+                range,
+                grain,
+                seed,
+            )
+        })
+        .collect()
+}
+
+/// Tent weights of the 3 × 3 finer points around a coarse point (sum 16),
+/// as the kernel's pyramid.
+const TENT: [[u32; 3]; 3] = [[1, 2, 1], [2, 4, 2], [1, 2, 1]];
+
+/// One level as it streams: its recent rows and bound rows.
+struct Level {
+    level: u8,
+    width: u32,
+    depth: u32,
+    points: BTreeMap<u32, (Vec<u16>, Vec<Rgb>)>,
+    bounds: BTreeMap<u32, Vec<u16>>,
+    /// Point rows received, bound rows made, coarse rows made from this
+    /// level, tile strips written.
+    received: u32,
+    bounded: u32,
+    coarsened: u32,
+    strips: u32,
+}
+
+struct Builder {
+    levels: Vec<Level>,
+    filter: HeightFilter,
+    writer: TilesWriter,
+    tile: Box<Tile<TILE>>,
+}
+
+impl Builder {
+    fn new(world: World, filter: HeightFilter, writer: TilesWriter) -> Self {
+        let levels = (0..world.levels())
+            .map(|level| {
+                let (width, depth) = world.level_size(level);
+                Level {
+                    level,
+                    width,
+                    depth,
+                    points: BTreeMap::new(),
+                    bounds: BTreeMap::new(),
+                    received: 0,
+                    bounded: 0,
+                    coarsened: 0,
+                    strips: 0,
+                }
+            })
+            .collect();
+        Self {
+            levels,
+            filter,
+            writer,
+            tile: Box::new(Tile::EMPTY),
+        }
+    }
+
+    /// Row `y` of `level` has arrived.
+    fn push(&mut self, level: usize, y: u32, heights: Vec<u16>, colors: Vec<Rgb>) -> Result<()> {
+        {
+            let l = &mut self.levels[level];
+            l.points.insert(y, (heights, colors));
+            l.received = y + 1;
+        }
+        if level >= 1 {
+            while self.levels[level].bounded + 1 < self.levels[level].received {
+                let j = self.levels[level].bounded;
+                let row = self.bound_row(level, j);
+                let l = &mut self.levels[level];
+                l.bounds.insert(j, row);
+                l.bounded += 1;
+            }
+        }
+        self.write_ready_strips(level)?;
+        if level + 1 < self.levels.len() {
+            loop {
+                let (fine, coarse) = (&self.levels[level], &self.levels[level + 1]);
+                let y = fine.coarsened;
+                if y >= coarse.depth {
+                    break;
+                }
+                let needs = (2 * y + 1).min(fine.depth - 1);
+                if needs >= fine.received {
+                    break;
+                }
+                let (h, c) = self.coarse_row(level, y);
+                self.levels[level].coarsened += 1;
+                self.push(level + 1, y, h, c)?;
+            }
+        }
+        self.forget(level);
+        Ok(())
+    }
+
+    /// Coarse row `y` of level `level + 1`, from level `level`.
+    fn coarse_row(&self, level: usize, y: u32) -> (Vec<u16>, Vec<Rgb>) {
+        let fine = &self.levels[level];
+        let width = self.levels[level + 1].width;
+        let rows: [&(Vec<u16>, Vec<Rgb>); 3] = core::array::from_fn(|dy| {
+            let r = (2 * i64::from(y) + dy as i64 - 1).clamp(0, i64::from(fine.depth) - 1);
+            &fine.points[&(r as u32)]
+        });
+        let mut heights = Vec::with_capacity(width as usize);
+        let mut colors = Vec::with_capacity(width as usize);
+        for x in 0..width {
+            let (mut h_sum, mut h_max) = (0u32, 0u16);
+            let mut c_sum = [0u32; 3];
+            for (row, weights) in rows.iter().zip(TENT) {
+                for (dx, w) in weights.into_iter().enumerate() {
+                    let fx = (2 * i64::from(x) + dx as i64 - 1).clamp(0, i64::from(fine.width) - 1);
+                    let (h, c) = (row.0[fx as usize], row.1[fx as usize]);
+                    h_sum += w * u32::from(h);
+                    h_max = h_max.max(h);
+                    for (s, v) in c_sum.iter_mut().zip(c) {
+                        *s += w * u32::from(v);
+                    }
+                }
+            }
+            heights.push(match self.filter {
+                HeightFilter::Mean => ((h_sum + 8) >> 4) as u16,
+                HeightFilter::Max => h_max,
+            });
+            colors.push(c_sum.map(|s| ((s + 8) >> 4) as u8));
+        }
+        (heights, colors)
+    }
+
+    /// Bound row `j` of `level` (≥ 1): as the kernel's `build_bounds`.
+    fn bound_row(&self, level: usize, j: u32) -> Vec<u16> {
+        let here = &self.levels[level];
+        let child = &self.levels[level - 1];
+        let cells = here.width - 1;
+        let (row0, row1) = (&here.points[&j].0, &here.points[&(j + 1)].0);
+        (0..cells)
+            .map(|i| {
+                let (i0, i1) = (i as usize, i as usize + 1);
+                let mut b = row0[i0].max(row0[i1]).max(row1[i0]).max(row1[i1]);
+                if level == 1 {
+                    for y in 2 * j..=(2 * j + 2).min(child.depth - 1) {
+                        let row = &child.points[&y].0;
+                        for x in 2 * i..=(2 * i + 2).min(child.width - 1) {
+                            b = b.max(row[x as usize]);
+                        }
+                    }
+                } else {
+                    let (ccw, ccd) = (child.width - 1, child.depth - 1);
+                    for y in 2 * j..(2 * j + 2).min(ccd) {
+                        let row = &child.bounds[&y];
+                        for x in 2 * i..(2 * i + 2).min(ccw) {
+                            b = b.max(row[x as usize]);
+                        }
+                    }
+                }
+                b
+            })
+            .collect()
+    }
+
+    /// Writes every strip of tiles of `level` whose rows (and bounds) are
+    /// all known.
+    fn write_ready_strips(&mut self, level: usize) -> Result<()> {
+        loop {
+            let l = &self.levels[level];
+            let first = l.strips * TILE as u32;
+            if first >= l.depth {
+                return Ok(());
+            }
+            let last_point = (first + TILE as u32 - 1).min(l.depth - 1);
+            let last_bound = (first + TILE as u32 - 1).min(l.depth - 2);
+            let points_ready = last_point < l.received;
+            let bounds_ready = level == 0 || last_bound < l.bounded;
+            if !(points_ready && bounds_ready) {
+                return Ok(());
+            }
+            let strip = l.strips;
+            let tiles_x = l.width.div_ceil(TILE as u32);
+            for tx in 0..tiles_x {
+                self.fill_tile(level, tx, strip);
+                let key = TileKey {
+                    level: level as u8,
+                    x: tx,
+                    y: strip,
+                };
+                self.writer.write(key, &self.tile)?;
+            }
+            self.levels[level].strips += 1;
+        }
+    }
+
+    fn fill_tile(&mut self, level: usize, tx: u32, ty: u32) {
+        let l = &self.levels[level];
+        let tile = &mut self.tile;
+        for j in 0..TILE {
+            let y = (ty as usize * TILE + j).min(l.depth as usize - 1) as u32;
+            let by = (ty as usize * TILE + j).min(l.depth as usize - 2) as u32;
+            let (heights, colors) = &l.points[&y];
+            let bounds = l.bounds.get(&by);
+            for i in 0..TILE {
+                let x = (tx as usize * TILE + i).min(l.width as usize - 1);
+                let bx = (tx as usize * TILE + i).min(l.width as usize - 2);
+                tile.heights[j][i] = heights[x];
+                tile.colors[j][i] = colors[x];
+                tile.bounds[j][i] = if level == 0 {
+                    0
+                } else {
+                    bounds.map_or(0, |b| b[bx])
+                };
+            }
+        }
+    }
+
+    /// Drops the rows of `level` nothing will read again.
+    fn forget(&mut self, level: usize) {
+        let child_bounded = self.levels.get(level + 1).map_or(u32::MAX, |c| c.bounded);
+        let l = &mut self.levels[level];
+        // Rows still read: the strip being gathered, the coarse filter
+        // (2y − 1 up), this level's next bound row, and the next level's
+        // bounds (level 0's points, other levels' bounds: 2j up).
+        let keep = (l.strips * TILE as u32)
+            .min((2 * l.coarsened).saturating_sub(1))
+            .min(l.bounded)
+            .min(child_bounded.saturating_mul(2))
+            .saturating_sub(2);
+        l.points = l.points.split_off(&keep);
+        l.bounds = l.bounds.split_off(&keep);
+    }
+
+    fn finish(self, max_height: u16) -> Result<()> {
+        for level in &self.levels {
+            if level.strips * (TILE as u32) < level.depth {
+                return Err(Error::new(format!(
+                    "pack: level {} incomplete ({} of {} rows)",
+                    level.level, level.received, level.depth
+                )));
+            }
+        }
+        self.writer.finish(max_height)
+    }
+}

@@ -1,0 +1,346 @@
+//! Rendering through the kernel's tile cache: one view (`render
+//! --terrain`), and a flight that pages tiles the way Cohen-Or's master
+//! did (§3.2): each frame is drawn from what is resident when it starts,
+//! and while it is drawn the loader fetches, within a budget of tiles a
+//! frame, first the tiles it lacked, then the next frame's, then an
+//! extended footprint ahead along the turn.
+
+use super::{new_slots, SLOTS, TILE};
+use crate::error::{Error, Result};
+use crate::frame::{Frame, RenderStats};
+use crate::kernel::render_surface;
+use serde::Serialize;
+use terracast::tiles::{footprint, Tile, TileCache, TileKey, TileSource, TiledSurface, World};
+use terracast::{Camera, RenderOptions, Resolution};
+
+/// Footprint list capacity: far more than a 32 MiB cache holds.
+const FOOTPRINT: usize = 16_384;
+
+type Keys = heapless::Vec<TileKey, FOOTPRINT>;
+
+/// What a render through the cache did, besides the image.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct TiledRender {
+    /// Tiles in the frame's footprint.
+    pub footprint_tiles: usize,
+    /// Terrain bytes resident when the frame was drawn.
+    pub resident_bytes: u64,
+    /// Tiles loaded for the frame.
+    pub tiles_loaded: u64,
+    /// Footprint tiles that could not be loaded (failed, rejected, or no
+    /// room): drawn from a coarser level.
+    pub misses: usize,
+    /// Of those, tiles rejected for a bad checksum.
+    pub rejected: u64,
+    /// Samples read from a coarser level than the caster asked for.
+    pub degraded_samples: u32,
+    /// Bytes the source read.
+    pub bytes_read: u64,
+}
+
+fn level_bias(options: &RenderOptions) -> f32 {
+    match options.resolution {
+        Resolution::Multi { pixel_to_voxel } => pixel_to_voxel.to_num(),
+        Resolution::Single => 1.0,
+    }
+}
+
+fn collect(
+    world: &World,
+    camera: &Camera,
+    size: (u32, u32),
+    bias: f32,
+    widen_deg: f32,
+    keys: &mut Keys,
+) -> Result<()> {
+    footprint::<TILE, FOOTPRINT>(world, camera, size.0, size.1, bias, widen_deg, keys)
+        .map(|_| ())
+        .map_err(|e| Error::new(format!("view footprint: {e}")))
+}
+
+/// Renders one view of `source` (camera in world coordinates) through a
+/// cache of [`SLOTS`] tiles, loading the view's footprint first.
+pub fn render_tiled<S: TileSource<TILE>>(
+    source: &mut S,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    options: &RenderOptions,
+) -> Result<(Frame, RenderStats, TiledRender)> {
+    let world = source.world();
+    let mut slots = new_slots();
+    let mut cache = TileCache::<TILE, SLOTS>::new(world, &mut slots);
+    let mut needed = Box::new(Keys::new());
+    collect(
+        &world,
+        camera,
+        (width, height),
+        level_bias(options),
+        0.0,
+        &mut needed,
+    )?;
+    cache.begin_frame();
+    let mut misses = 0;
+    // Coarse levels first: if the cache cannot hold everything, the fine
+    // tiles are the ones left out, and coarse ones stand in for them.
+    for key in needed.iter().rev() {
+        if cache.require(*key, source).is_err() {
+            misses += 1;
+        }
+    }
+    let surface = TiledSurface::around(&cache, camera.eye);
+    let (frame, mut stats) =
+        render_surface(&surface, &surface.local(camera), width, height, options)?;
+    stats.resident_bytes = cache.resident_bytes() as u64;
+    let cache_stats = cache.stats();
+    let tiled = TiledRender {
+        footprint_tiles: needed.len(),
+        resident_bytes: cache.resident_bytes() as u64,
+        tiles_loaded: cache_stats.loads,
+        misses,
+        rejected: cache_stats.rejected,
+        degraded_samples: surface.degraded_samples(),
+        bytes_read: cache_stats.bytes_read,
+    };
+    Ok((frame, stats, tiled))
+}
+
+/// How to fly through a tiled terrain.
+#[derive(Debug, Clone)]
+pub struct PageOptions {
+    /// Image size.
+    pub size: (u32, u32),
+    /// Frames to fly.
+    pub frames: u32,
+    /// Frames a second.
+    pub fps: f32,
+    /// Heading change, degrees a second (Cohen-Or's test: one field of view
+    /// a second).
+    pub turn_deg_per_s: f32,
+    /// Ground speed, voxels a second.
+    pub speed: f32,
+    /// Start: eye position (world), heading, pitch, field of view.
+    pub start: Camera,
+    /// Tiles the loader may fetch during one frame (the disk's share).
+    pub load_budget: u32,
+    /// Fetch the next frame's footprint and the extended one ahead; off,
+    /// the loader only fetches what the frame just lacked.
+    pub prefetch: bool,
+    /// How far ahead the extended footprint looks, seconds.
+    pub lead_s: f32,
+    /// Kernel options.
+    pub options: RenderOptions,
+}
+
+/// One frame of a paged flight.
+#[derive(Debug, Clone, Serialize)]
+pub struct PagedFrame {
+    /// Frame number.
+    pub frame: u32,
+    /// Tiles the frame's view needed.
+    pub footprint_tiles: usize,
+    /// Of those, tiles not resident when it was drawn (drawn from a
+    /// coarser level instead).
+    pub missing_tiles: usize,
+    /// Samples the frame read from a coarser level than asked for.
+    pub degraded_samples: u32,
+    /// Tiles loaded while this frame was drawn (the first frame: before).
+    pub loads: u64,
+    /// Bytes the source read for them.
+    pub bytes_read: u64,
+    /// Terrain bytes resident when the frame was drawn.
+    pub resident_bytes: u64,
+    /// Bytes of the frame's own footprint.
+    pub footprint_bytes: u64,
+    /// Steps per pixel.
+    pub steps_per_pixel: f64,
+}
+
+/// A paged flight's frames and summary.
+#[derive(Debug, Clone, Serialize)]
+pub struct PageReport {
+    /// Side of the world, and the bytes it stands for at 4 a voxel.
+    pub world_width: u32,
+    /// Side of the world.
+    pub world_depth: u32,
+    /// Cache capacity in bytes.
+    pub cache_bytes: u64,
+    /// Every frame.
+    pub frames: Vec<PagedFrame>,
+}
+
+impl PageReport {
+    /// Frames after the first drawn with a footprint tile missing.
+    pub fn frames_missing_after_first(&self) -> usize {
+        self.frames
+            .iter()
+            .skip(1)
+            .filter(|f| f.missing_tiles > 0)
+            .count()
+    }
+
+    /// Resident bytes over the frame's footprint bytes: mean and largest,
+    /// after the first frame.
+    pub fn resident_ratio(&self) -> (f64, f64) {
+        let ratios: Vec<f64> = self
+            .frames
+            .iter()
+            .skip(1)
+            .map(|f| f.resident_bytes as f64 / f.footprint_bytes.max(1) as f64)
+            .collect();
+        let mean = ratios.iter().sum::<f64>() / ratios.len().max(1) as f64;
+        (mean, ratios.iter().copied().fold(0.0, f64::max))
+    }
+
+    /// Loads per frame after the first: mean and largest.
+    pub fn loads_per_frame(&self) -> (f64, u64) {
+        let loads: Vec<u64> = self.frames.iter().skip(1).map(|f| f.loads).collect();
+        let mean = loads.iter().sum::<u64>() as f64 / loads.len().max(1) as f64;
+        (mean, loads.iter().copied().max().unwrap_or(0))
+    }
+}
+
+/// The camera `t` seconds into the flight: turning at a steady rate,
+/// moving along its heading.
+pub fn flight_camera(options: &PageOptions, t: f32) -> Camera {
+    let start = &options.start;
+    let turn = options.turn_deg_per_s.to_radians();
+    let yaw0 = start.yaw_deg.to_radians();
+    // Position: the integral of the heading over time.
+    let (dx, dy) = if turn.abs() < 1e-6 {
+        (yaw0.cos() * t, yaw0.sin() * t)
+    } else {
+        (
+            ((yaw0 + turn * t).sin() - yaw0.sin()) / turn,
+            (yaw0.cos() - (yaw0 + turn * t).cos()) / turn,
+        )
+    };
+    Camera {
+        eye: [
+            start.eye[0] + options.speed * dx,
+            start.eye[1] + options.speed * dy,
+            start.eye[2],
+        ],
+        yaw_deg: start.yaw_deg + options.turn_deg_per_s * t,
+        ..*start
+    }
+}
+
+/// Flies `options.frames` frames over `source` through a cache of
+/// [`SLOTS`] tiles; `each_frame` gets every frame's image and record.
+pub fn page_flight<S: TileSource<TILE>>(
+    source: &mut S,
+    options: &PageOptions,
+    each_frame: &mut dyn FnMut(&Frame, &PagedFrame) -> Result<()>,
+) -> Result<PageReport> {
+    if !(options.fps > 0.0 && options.fps.is_finite()) {
+        return Err(Error::new("--fps must be a positive number"));
+    }
+    let world = source.world();
+    let bias = level_bias(&options.options);
+    let mut slots = new_slots();
+    let mut cache = TileCache::<TILE, SLOTS>::new(world, &mut slots);
+    let (mut needed, mut ahead) = (Box::new(Keys::new()), Box::new(Keys::new()));
+    let mut frames = Vec::new();
+    let period = 1.0 / options.fps;
+    for frame in 0..options.frames {
+        let t = frame as f32 * period;
+        let camera = flight_camera(options, t);
+        needed.clear();
+        collect(&world, &camera, options.size, bias, 0.0, &mut needed)?;
+        let before = cache.stats();
+        cache.begin_frame();
+        let mut missing: Vec<TileKey> =
+            needed.iter().filter(|k| !cache.pin(**k)).copied().collect();
+        if frame == 0 {
+            // The first frame waits for its tiles.
+            for key in missing.iter().rev() {
+                let _ = cache.require(*key, source);
+            }
+            missing.retain(|k| !cache.contains(k));
+        }
+        let after_first_loads = cache.stats();
+        let surface = TiledSurface::around(&cache, camera.eye);
+        let (image, stats) = render_surface(
+            &surface,
+            &surface.local(&camera),
+            options.size.0,
+            options.size.1,
+            &options.options,
+        )?;
+        let degraded = surface.degraded_samples();
+        let resident = cache.resident_bytes() as u64;
+
+        // While the frame is drawn: what it lacked, then (with prefetch)
+        // the next frame's footprint, pinned so that nothing evicts it
+        // before that frame, then the extended one ahead, coarse levels
+        // first within each. The first frame waits for all of it.
+        let mut budget = if frame == 0 {
+            u32::MAX
+        } else {
+            options.load_budget
+        };
+        let mut fetch = |cache: &mut TileCache<'_, TILE, SLOTS>, keys: &[TileKey], pin: bool| {
+            for key in keys.iter().rev() {
+                if cache.contains(key) {
+                    if pin {
+                        cache.pin(*key);
+                    }
+                    continue;
+                }
+                if budget == 0 {
+                    return;
+                }
+                budget -= 1;
+                let _ = if pin {
+                    cache.require(*key, source)
+                } else {
+                    cache.prefetch(*key, source)
+                };
+            }
+        };
+        fetch(&mut cache, &missing, true);
+        ahead.clear();
+        if options.prefetch {
+            let next = flight_camera(options, (frame + 1) as f32 * period);
+            collect(&world, &next, options.size, bias, 0.0, &mut ahead)?;
+            fetch(&mut cache, &ahead, true);
+            let lead = options.lead_s.max(period);
+            let widen = options.turn_deg_per_s.abs() * lead / 2.0;
+            let later = flight_camera(options, t + lead);
+            collect(&world, &later, options.size, bias, widen, &mut ahead)?;
+            let mut by_level: Vec<TileKey> = ahead.to_vec();
+            by_level.sort_by_key(|k| k.level);
+            fetch(&mut cache, &by_level, false);
+            // Hold no more than this view and the next ones need.
+            cache.retain(|k| ahead.binary_search(k).is_ok());
+        } else {
+            cache.retain(|k| needed.binary_search(k).is_ok());
+        }
+        let end = cache.stats();
+        let loads_now = if frame == 0 {
+            end.loads - before.loads
+        } else {
+            end.loads - after_first_loads.loads
+        };
+        let record = PagedFrame {
+            frame,
+            footprint_tiles: needed.len(),
+            missing_tiles: missing.len(),
+            degraded_samples: degraded,
+            loads: loads_now,
+            bytes_read: end.bytes_read - before.bytes_read,
+            resident_bytes: resident,
+            footprint_bytes: (needed.len() * Tile::<TILE>::BYTES) as u64,
+            steps_per_pixel: stats.steps as f64 / stats.pixels.max(1) as f64,
+        };
+        each_frame(&image, &record)?;
+        frames.push(record);
+    }
+    Ok(PageReport {
+        world_width: world.width,
+        world_depth: world.depth,
+        cache_bytes: (SLOTS * Tile::<TILE>::BYTES) as u64,
+        frames,
+    })
+}

@@ -1,0 +1,306 @@
+//! Out-of-core terrain: packed files render as their PNGs do, bit for bit;
+//! a flight over 64 GiB of procedural terrain pages through a 28 MiB cache
+//! with no frame drawn short of a tile after the first; damaged files,
+//! failing and slow sources never stop a frame.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+use terracast::tiles::{cut_tile, Tile, TileError, TileKey, TileSource, World};
+use terracast::{Camera, RenderOptions};
+use terracast_sim::kernel::render_kernel;
+use terracast_sim::scene::{load_pair, procedural};
+use terracast_sim::tiles::{
+    pack, page_flight, render_tiled, PackInput, PageOptions, ProceduralSource, TilesFile, TILE,
+};
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("terracast-tiles-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn pack_input(height: &Path, color: Option<&Path>, scale: f32) -> PackInput {
+    PackInput {
+        height: height.to_path_buf(),
+        color: color.map(Path::to_path_buf),
+        height_scale: scale,
+        filter: terracast::HeightFilter::Mean,
+        seed: 1,
+    }
+}
+
+/// A 203 x 150 crop of the built-in scene as a 16-bit height PNG (1/16
+/// voxel a unit) and an RGB color PNG.
+fn odd_sized_maps() -> (PathBuf, PathBuf) {
+    let scene = procedural(256, 3);
+    let (w, d) = (203u32, 150u32);
+    let mut heights = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::new(w, d);
+    let mut colors = image::RgbImage::new(w, d);
+    for y in 0..d {
+        for x in 0..w {
+            let h = scene.height(x as usize, y as usize);
+            heights.put_pixel(x, y, image::Luma([(h * 16.0).round() as u16]));
+            colors.put_pixel(x, y, image::Rgb(scene.colors[(y * 256 + x) as usize]));
+        }
+    }
+    let (hp, cp) = (temp("odd-h.png"), temp("odd-c.png"));
+    heights.save(&hp).unwrap();
+    colors.save(&cp).unwrap();
+    (hp, cp)
+}
+
+fn views(w: f32, d: f32, top: f32) -> Vec<Camera> {
+    [
+        ([w * 0.5, d * 0.1, top + 20.0], 90.0, 15.0),
+        ([-30.0, d * 0.5, top + 60.0], 10.0, 30.0),
+        ([w * 0.3, d * 0.8, top * 0.6], 250.0, 4.0),
+        ([w * 0.5, d * 0.5, top + 300.0], 0.0, 90.0),
+    ]
+    .into_iter()
+    .map(|(eye, yaw_deg, pitch_deg)| Camera {
+        eye,
+        yaw_deg,
+        pitch_deg,
+        ..Camera::default()
+    })
+    .collect()
+}
+
+/// Packs the maps, then checks every tile against the pyramid in memory and
+/// every view against the render from the maps.
+fn packed_equals_maps(height: &Path, color: Option<&Path>, scale: f32, name: &str) {
+    let out = temp(name);
+    let summary = pack(&pack_input(height, color, scale), &out, &mut |_, _| {}).unwrap();
+    let scene = load_pair(height, color, scale, 1).unwrap();
+    let kernel = scene.to_kernel().unwrap();
+    let pyramid = kernel.pyramid().unwrap();
+    let mut file = TilesFile::open(&out).unwrap();
+    let world = file.world();
+    assert_eq!((world.width, world.depth), (scene.width, scene.depth));
+    let (mut from_file, mut cut) = (Box::new(Tile::<TILE>::EMPTY), Box::new(Tile::EMPTY));
+    let mut tiles = 0;
+    for level in 0..world.levels() {
+        let (tx, ty) = world.tiles(level, TILE as u32);
+        for y in 0..ty {
+            for x in 0..tx {
+                let key = TileKey { level, x, y };
+                file.load(key, &mut from_file).unwrap();
+                assert!(cut_tile(&pyramid, key, &mut cut));
+                assert!(
+                    from_file == cut,
+                    "{name}: tile {key:?} differs from the pyramid's"
+                );
+                tiles += 1;
+            }
+        }
+    }
+    assert_eq!(tiles, summary.tiles);
+    let top = scene.max_height();
+    for camera in views(scene.width as f32, scene.depth as f32, top) {
+        let options = RenderOptions::default();
+        let (from_maps, _) = render_kernel(&kernel, &camera, 96, 72, &options).unwrap();
+        let (from_tiles, _, tiled) = render_tiled(&mut file, &camera, 96, 72, &options).unwrap();
+        assert!(from_maps.colors == from_tiles.colors, "{name}: {camera:?}");
+        assert_eq!(
+            (tiled.misses, tiled.degraded_samples),
+            (0, 0),
+            "{name}: {camera:?}"
+        );
+        assert!(tiled.resident_bytes > 0 && tiled.tiles_loaded as usize == tiled.footprint_tiles);
+    }
+    println!(
+        "{name}: {}x{}, {} levels, {} tiles, {} bytes: every tile and view identical",
+        summary.width, summary.depth, summary.levels, summary.tiles, summary.bytes
+    );
+}
+
+#[test]
+fn packed_files_render_as_their_maps_bit_for_bit() {
+    let (height, color) = odd_sized_maps();
+    packed_equals_maps(&height, Some(&color), 1.0 / 16.0, "odd.tiles");
+    // Without a color map, colored by height and slope as `render` does.
+    packed_equals_maps(&height, None, 1.0 / 16.0, "odd-gray.tiles");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+    let comanche = data.join("comanche");
+    if comanche.join("D7.png").exists() {
+        packed_equals_maps(
+            &comanche.join("D7.png"),
+            Some(&comanche.join("C7W.png")),
+            1.0,
+            "c7w.tiles",
+        );
+        packed_equals_maps(
+            &data.join("srtm/N44W072_3arcsec.hgt"),
+            None,
+            1.0 / 8.0,
+            "srtm.tiles",
+        );
+    } else {
+        println!("../shared/data not found: Comanche and SRTM packs skipped");
+    }
+}
+
+#[test]
+fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
+    let (height, color) = odd_sized_maps();
+    let out = temp("damaged.tiles");
+    pack(
+        &pack_input(&height, Some(&color), 1.0 / 16.0),
+        &out,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let bytes = std::fs::read(&out).unwrap();
+
+    // Truncated: refused on opening, in one line.
+    let truncated = temp("truncated.tiles");
+    std::fs::write(&truncated, &bytes[..bytes.len() - 100]).unwrap();
+    let e = TilesFile::open(&truncated).unwrap_err().to_string();
+    assert!(e.contains("truncated") && !e.contains('\n'), "{e}");
+    // Foreign: a PNG is not a tiled file.
+    let e = TilesFile::open(&color).unwrap_err().to_string();
+    assert!(e.contains("not a terracast tiled terrain file"), "{e}");
+    // Another version.
+    let mut newer = bytes.clone();
+    newer[8] = 9;
+    let versioned = temp("newer.tiles");
+    std::fs::write(&versioned, &newer).unwrap();
+    let e = TilesFile::open(&versioned).unwrap_err().to_string();
+    assert!(e.contains("format version 9"), "{e}");
+
+    // One byte of the first level-0 tile's record flipped: that tile is
+    // rejected, reported, and drawn from level 1; the frame completes.
+    let mut corrupt = bytes.clone();
+    let first_record =
+        corrupt.len() - (corrupt.len() - 44) / (4 + TILE * TILE * 7) * (TILE * TILE * 7);
+    corrupt[first_record + 10] ^= 0xff;
+    let damaged = temp("corrupt.tiles");
+    std::fs::write(&damaged, &corrupt).unwrap();
+    let mut file = TilesFile::open(&damaged).unwrap();
+    let mut tile = Box::new(Tile::<TILE>::EMPTY);
+    let key = TileKey {
+        level: 0,
+        x: 0,
+        y: 0,
+    };
+    assert_eq!(file.load(key, &mut tile), Err(TileError::Checksum));
+    let camera = Camera {
+        eye: [30.0, -20.0, 60.0],
+        yaw_deg: 80.0,
+        pitch_deg: 25.0,
+        ..Camera::default()
+    };
+    let (frame, _, tiled) =
+        render_tiled(&mut file, &camera, 96, 72, &RenderOptions::default()).unwrap();
+    assert_eq!((tiled.misses, tiled.rejected), (1, 1));
+    assert!(tiled.degraded_samples > 0);
+    assert!(frame
+        .colors
+        .iter()
+        .any(|c| *c != terracast::config::DEFAULT_SKY));
+}
+
+/// A procedural source that fails every `every`-th load with an I/O error,
+/// and may sleep on each load.
+struct Flaky {
+    inner: ProceduralSource,
+    every: u32,
+    loads: u32,
+    delay: Duration,
+}
+
+impl TileSource<TILE> for Flaky {
+    fn world(&self) -> World {
+        self.inner.world()
+    }
+    fn load(&mut self, key: TileKey, tile: &mut Tile<TILE>) -> Result<usize, TileError> {
+        self.loads += 1;
+        std::thread::sleep(self.delay);
+        if self.every > 0 && self.loads % self.every == 0 {
+            return Err(TileError::Io);
+        }
+        self.inner.load(key, tile)
+    }
+}
+
+fn flight(frames: u32, prefetch: bool) -> PageOptions {
+    PageOptions {
+        size: (320, 240),
+        frames,
+        fps: 30.0,
+        turn_deg_per_s: 60.0,
+        speed: 300.0,
+        start: Camera {
+            eye: [65_536.0, 65_536.0, 2_500.0],
+            pitch_deg: 20.0,
+            ..Camera::default()
+        },
+        load_budget: 81,
+        prefetch,
+        lead_s: 0.25,
+        options: RenderOptions::default(),
+    }
+}
+
+#[test]
+fn a_flight_over_64_gib_pages_through_a_fixed_cache_without_missing_a_tile() {
+    let mut source = ProceduralSource::new(131_072, 1).unwrap();
+    assert!(source.virtual_bytes() >= 64 << 30);
+    // 1.5 s turning one field of view (60 degrees) a second.
+    let report = page_flight(&mut source, &flight(45, true), &mut |_, _| Ok(())).unwrap();
+    let (mean_loads, most_loads) = report.loads_per_frame();
+    let (mean_ratio, most_ratio) = report.resident_ratio();
+    println!(
+        "64 GiB flight, cache {} MiB: first frame {} loads; after it {} frames short of a tile, loads a frame mean {mean_loads:.1} most {most_loads}, resident / footprint mean {mean_ratio:.2} most {most_ratio:.2}",
+        report.cache_bytes >> 20,
+        report.frames[0].loads,
+        report.frames_missing_after_first()
+    );
+    assert_eq!(report.frames_missing_after_first(), 0);
+    assert!(report.frames.iter().all(|f| f.degraded_samples == 0));
+    assert!(most_loads <= 81 && mean_loads > 0.0);
+    assert!(most_ratio <= 2.0, "resident {most_ratio:.2}x the footprint");
+    assert!(report.cache_bytes <= 32 << 20);
+
+    // Without prefetch the same flight is drawn short of tiles: the
+    // extended footprint is what keeps it whole.
+    let mut source = ProceduralSource::new(131_072, 1).unwrap();
+    let bare = page_flight(&mut source, &flight(10, false), &mut |_, _| Ok(())).unwrap();
+    assert!(bare.frames_missing_after_first() > 0);
+}
+
+#[test]
+fn failing_and_slow_sources_never_stop_a_frame_and_change_nothing_but_time() {
+    let run = |every: u32, delay_ms: u64| {
+        let mut source = Flaky {
+            inner: ProceduralSource::new(131_072, 1).unwrap(),
+            every,
+            loads: 0,
+            delay: Duration::from_millis(delay_ms),
+        };
+        let mut images = Vec::new();
+        let report = page_flight(&mut source, &flight(6, true), &mut |image, _| {
+            images.push(image.colors.clone());
+            Ok(())
+        })
+        .unwrap();
+        (report, images)
+    };
+    let (fast, fast_images) = run(0, 0);
+    // A slow source (1 ms a tile) gives the same frames and records: the
+    // loader's budget is in tiles, not in wall time.
+    let (slow, slow_images) = run(0, 1);
+    assert!(fast_images == slow_images);
+    assert_eq!(
+        serde_json::to_string(&fast.frames).unwrap(),
+        serde_json::to_string(&slow.frames).unwrap()
+    );
+    // One load in seven fails: every frame is still drawn, the failures
+    // show as missing tiles drawn from coarser levels.
+    let (flaky, flaky_images) = run(7, 0);
+    assert_eq!(flaky_images.len(), 6);
+    assert!(flaky.frames.iter().map(|f| f.missing_tiles).sum::<usize>() > 0);
+    assert!(flaky_images
+        .iter()
+        .all(|i| i.iter().any(|c| *c != terracast::config::DEFAULT_SKY)));
+}
