@@ -4,6 +4,7 @@
 
 use super::{Tile, TileError, TileKey, TileSource, World};
 use heapless::index_map::FnvIndexMap;
+use heapless::Vec;
 
 /// What the cache has done since it was made.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -38,6 +39,8 @@ pub struct TileCache<'a, const T: usize, const N: usize> {
     slots: &'a mut [Tile<T>; N],
     keys: [Option<TileKey>; N],
     stamps: [u32; N],
+    /// The highest bound of each slot's tile (0 for level 0).
+    peaks: [u16; N],
     directory: FnvIndexMap<TileKey, u16, N>,
     frame: u32,
     world: World,
@@ -59,6 +62,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
             slots,
             keys: [None; N],
             stamps: [0; N],
+            peaks: [0; N],
             directory: FnvIndexMap::new(),
             frame: 1,
             world,
@@ -85,7 +89,31 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
     /// The tile `key`, if resident.
     #[inline]
     pub fn get(&self, key: &TileKey) -> Option<&Tile<T>> {
-        self.slot(key).and_then(|s| self.slots.get(s))
+        self.lookup(key).map(|(_, tile)| tile)
+    }
+
+    /// The slot and tile of `key`, if resident.
+    #[inline]
+    pub(crate) fn lookup(&self, key: &TileKey) -> Option<(usize, &Tile<T>)> {
+        let slot = self.slot(key)?;
+        Some((slot, self.slots.get(slot)?))
+    }
+
+    /// The highest height (U12.4) of levels `0..=key.level` in tile
+    /// `key`'s area and one cell around it, from the resident tiles of the
+    /// level above (their bounds); `None` when one of them is not resident
+    /// or `key` is on the top level. Lets [`super::footprint_under`] cut
+    /// the footprint to the terrain that is really there.
+    pub fn ceiling(&self, key: TileKey) -> Option<u16> {
+        let parents = ceiling_tiles::<T>(&self.world, key);
+        if parents.is_empty() {
+            return None;
+        }
+        let mut peak = 0u16;
+        for parent in &parents {
+            peak = peak.max(self.peaks[self.slot(parent)?]);
+        }
+        Some(peak)
     }
 
     /// Whether `key` is resident.
@@ -154,6 +182,13 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
                 // keys of the N slots, one of which was just freed.
                 let _ = self.directory.insert(key, slot as u16);
                 self.keys[slot] = Some(key);
+                self.peaks[slot] = self.slots[slot]
+                    .bounds
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .max()
+                    .unwrap_or(0);
                 self.stamps[slot] = stamp;
                 Ok(())
             }
@@ -218,6 +253,34 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
     pub fn stats(&self) -> CacheStats {
         self.stats
     }
+}
+
+/// The tiles of the level above whose bounds cover tile `key`'s points
+/// and one cell around them (one to four; none on the top level).
+pub(crate) fn ceiling_tiles<const T: usize>(world: &World, key: TileKey) -> Vec<TileKey, 4> {
+    let mut out = Vec::new();
+    let Some(parent) = key.level.checked_add(1).filter(|&l| l < world.levels()) else {
+        return out;
+    };
+    let t = T as i64;
+    // The child's points and one cell around, in parent points.
+    let span = |c: u32| {
+        let lo = (i64::from(c) * t - 1).div_euclid(2) - 1;
+        let hi = ((i64::from(c) + 1) * t + 1) / 2 + 1;
+        (lo.max(0) / t, hi / t)
+    };
+    let ((x0, x1), (y0, y1)) = (span(key.x), span(key.y));
+    let (tiles_x, tiles_y) = world.tiles(parent, T as u32);
+    for y in y0..=y1.min(i64::from(tiles_y) - 1) {
+        for x in x0..=x1.min(i64::from(tiles_x) - 1) {
+            let _ = out.push(TileKey {
+                level: parent,
+                x: x as u32,
+                y: y as u32,
+            });
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@
 //! edges) against the frustum's planes: conservative, never missing a
 //! tile a ray reads. Float math, once a frame.
 
+use super::cache::ceiling_tiles;
 use super::{TileKey, World};
 use crate::view::Camera;
 use glam::DVec3;
@@ -82,6 +83,33 @@ pub fn footprint<const T: usize, const F: usize>(
     height: u32,
     pixel_to_voxel: f32,
     widen_deg: f32,
+    out: &mut Vec<TileKey, F>,
+) -> Result<u8, FootprintFull> {
+    footprint_under::<T, F>(
+        world,
+        camera,
+        width,
+        height,
+        pixel_to_voxel,
+        widen_deg,
+        &|_| None,
+        out,
+    )
+}
+
+/// [`footprint`], with each tile's box only as high as `ceiling` says the
+/// terrain there is (U12.4; `None`: the world's highest height). With
+/// [`super::TileCache::ceiling`], the coarser tiles already resident cut
+/// the finer levels' footprint down to the terrain the view can see.
+#[allow(clippy::too_many_arguments)]
+pub fn footprint_under<const T: usize, const F: usize>(
+    world: &World,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    pixel_to_voxel: f32,
+    widen_deg: f32,
+    ceiling: &dyn Fn(TileKey) -> Option<u16>,
     out: &mut Vec<TileKey, F>,
 ) -> Result<u8, FootprintFull> {
     let (origin, top) = window_origin(world, camera.eye);
@@ -163,14 +191,31 @@ pub fn footprint<const T: usize, const F: usize>(
                     libm::sqrt(dx * dx + dy * dy) <= cone
                 };
                 let depth_limit = if near_nadir { f64::INFINITY } else { far };
-                if !box_in_frustum(eye, forward, &planes, depth_limit, bx, by, [0.0, top_z]) {
-                    continue;
-                }
                 let key = TileKey {
                     level,
                     x: tx,
                     y: ty,
                 };
+                let in_view = |top: f64| {
+                    box_in_frustum(eye, forward, &planes, depth_limit, bx, by, [0.0, top])
+                };
+                if !in_view(top_z) {
+                    continue;
+                }
+                let roof = ceiling(key);
+                // A footprint holds the tiles its cut relies on (whether
+                // the cut keeps this tile or not), so that the next
+                // frame's is cut the same way.
+                if roof.is_some() {
+                    for parent in ceiling_tiles::<T>(world, key) {
+                        if out.push(parent).is_err() {
+                            full = true;
+                        }
+                    }
+                }
+                if roof.is_some_and(|c| !in_view(f64::from(c) / 16.0)) {
+                    continue;
+                }
                 if out.push(key).is_err() {
                     full = true;
                 }

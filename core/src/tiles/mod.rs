@@ -44,7 +44,9 @@ mod footprint;
 mod surface;
 
 pub use cache::{CacheStats, TileCache};
-pub use footprint::{footprint, window_origin, FootprintFull, WINDOW_SIDE, WINDOW_TOP};
+pub use footprint::{
+    footprint, footprint_under, window_origin, FootprintFull, WINDOW_SIDE, WINDOW_TOP,
+};
 pub use surface::{TiledGrid, TiledSurface};
 
 use crate::pyramid::level_side;

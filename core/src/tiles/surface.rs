@@ -5,7 +5,7 @@ use super::footprint::{window_origin, WINDOW_SIDE};
 use super::{TileCache, TileKey, World};
 use crate::surface::{Extent, Grid, Surface};
 use crate::{Camera, Rgb};
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 /// log2 of the row stride of level 0 in a window: every level's grid fits
 /// its stride (`2^(15 − l)` ≥ the window's `2^(14 − l) + 1` points), and
@@ -29,6 +29,8 @@ pub struct TiledSurface<'c, 'a, const T: usize, const N: usize> {
     top: u8,
     world_levels: u8,
     degraded: AtomicU32,
+    /// Which slots the frame has read.
+    touched: [AtomicBool; N],
 }
 
 impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
@@ -47,6 +49,7 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
             top,
             world_levels: world.levels(),
             degraded: AtomicU32::new(0),
+            touched: core::array::from_fn(|_| AtomicBool::new(false)),
         }
     }
 
@@ -70,9 +73,25 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
         self.degraded.load(Ordering::Relaxed)
     }
 
+    /// Tiles the caster has read through this surface: the frame's own
+    /// footprint, exactly.
+    pub fn touched_tiles(&self) -> usize {
+        self.touched
+            .iter()
+            .filter(|t| t.load(Ordering::Relaxed))
+            .count()
+    }
+
     /// The world of the cache.
     fn world(&self) -> World {
         self.cache.world()
+    }
+
+    #[inline(always)]
+    fn touch(&self, slot: usize) {
+        if let Some(flag) = self.touched.get(slot) {
+            flag.store(true, Ordering::Relaxed);
+        }
     }
 
     /// The resident tile holding world point `(x, y)` of `level`, or the
@@ -88,7 +107,8 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
                 x: x >> shift,
                 y: y >> shift,
             };
-            if let Some(tile) = self.cache.get(&key) {
+            if let Some((slot, tile)) = self.cache.lookup(&key) {
+                self.touch(slot);
                 if level_at != level {
                     self.degraded.fetch_add(1, Ordering::Relaxed);
                 }
@@ -201,7 +221,8 @@ impl<'c, 'a, const T: usize, const N: usize> Surface for TiledSurface<'c, 'a, T,
             y: wy >> shift,
         };
         // A missing bound proves nothing: the caller assumes the worst.
-        let tile = self.cache.get(&key)?;
+        let (slot, tile) = self.cache.lookup(&key)?;
+        self.touch(slot);
         let bound = tile.bounds[(wy & mask) as usize][(wx & mask) as usize];
         let stride_log2 = STRIDE_LOG2 - u32::from(level);
         Some((bound, ((y as usize) << stride_log2) + x as usize))

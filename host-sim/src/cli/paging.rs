@@ -290,7 +290,11 @@ pub(super) fn page_command(args: PageArgs) -> Result<()> {
         report.frames.len().saturating_sub(1)
     );
     println!("loads a frame after the first: mean {mean_loads:.1}, most {max_loads}");
+    let (mean_touched, max_touched) = report.resident_over_touched();
     println!("resident bytes / frame footprint: mean {mean_ratio:.2}, most {max_ratio:.2}");
+    println!(
+        "resident bytes / tiles the frame read: mean {mean_touched:.2}, most {max_touched:.2}"
+    );
     if let Some(path) = &args.report {
         let json = serde_json::to_string_pretty(&report).map_err(|e| Error::new(e.to_string()))?;
         std::fs::write(path, format!("{json}\n"))

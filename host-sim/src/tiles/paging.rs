@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
 use crate::kernel::render_surface;
 use serde::Serialize;
-use terracast::tiles::{footprint, Tile, TileCache, TileKey, TileSource, TiledSurface, World};
+use terracast::tiles::{footprint_under, Tile, TileCache, TileKey, TileSource, TiledSurface};
 use terracast::{Camera, RenderOptions, Resolution};
 
 /// Footprint list capacity: far more than a 32 MiB cache holds.
@@ -23,6 +23,8 @@ type Keys = heapless::Vec<TileKey, FOOTPRINT>;
 pub struct TiledRender {
     /// Tiles in the frame's footprint.
     pub footprint_tiles: usize,
+    /// Of the resident tiles, those the frame read.
+    pub touched_tiles: usize,
     /// Terrain bytes resident when the frame was drawn.
     pub resident_bytes: u64,
     /// Tiles loaded for the frame.
@@ -45,17 +47,58 @@ fn level_bias(options: &RenderOptions) -> f32 {
     }
 }
 
+/// Adds the footprint of `camera` to `keys`, cut to the terrain height
+/// the coarser tiles resident in `cache` show.
 fn collect(
-    world: &World,
+    cache: &TileCache<'_, TILE, SLOTS>,
     camera: &Camera,
     size: (u32, u32),
     bias: f32,
     widen_deg: f32,
     keys: &mut Keys,
-) -> Result<()> {
-    footprint::<TILE, FOOTPRINT>(world, camera, size.0, size.1, bias, widen_deg, keys)
-        .map(|_| ())
-        .map_err(|e| Error::new(format!("view footprint: {e}")))
+) -> Result<u8> {
+    let ceiling = |key| cache.ceiling(key);
+    footprint_under::<TILE, FOOTPRINT>(
+        &cache.world(),
+        camera,
+        size.0,
+        size.1,
+        bias,
+        widen_deg,
+        &ceiling,
+        keys,
+    )
+    .map_err(|e| Error::new(format!("view footprint: {e}")))
+}
+
+/// Loads the view's footprint level by level from the top, each level's
+/// cut by the bounds of the one above, loaded just before; leaves the
+/// footprint in `needed` and returns the tiles that could not be loaded.
+/// If the cache cannot hold everything, the fine tiles are the ones left
+/// out, and coarse ones stand in for them.
+fn load_view<S: TileSource<TILE>>(
+    cache: &mut TileCache<'_, TILE, SLOTS>,
+    source: &mut S,
+    camera: &Camera,
+    size: (u32, u32),
+    bias: f32,
+    needed: &mut Keys,
+) -> Result<usize> {
+    let mut misses = 0;
+    let mut level = collect(cache, camera, size, bias, 0.0, needed)?;
+    loop {
+        needed.clear();
+        collect(cache, camera, size, bias, 0.0, needed)?;
+        for key in needed.iter().filter(|k| k.level == level) {
+            if cache.require(*key, source).is_err() {
+                misses += 1;
+            }
+        }
+        if level == 0 {
+            return Ok(misses);
+        }
+        level -= 1;
+    }
 }
 
 /// Renders one view of `source` (camera in world coordinates) through a
@@ -71,23 +114,15 @@ pub fn render_tiled<S: TileSource<TILE>>(
     let mut slots = new_slots();
     let mut cache = TileCache::<TILE, SLOTS>::new(world, &mut slots);
     let mut needed = Box::new(Keys::new());
-    collect(
-        &world,
+    cache.begin_frame();
+    let misses = load_view(
+        &mut cache,
+        source,
         camera,
         (width, height),
         level_bias(options),
-        0.0,
         &mut needed,
     )?;
-    cache.begin_frame();
-    let mut misses = 0;
-    // Coarse levels first: if the cache cannot hold everything, the fine
-    // tiles are the ones left out, and coarse ones stand in for them.
-    for key in needed.iter().rev() {
-        if cache.require(*key, source).is_err() {
-            misses += 1;
-        }
-    }
     let surface = TiledSurface::around(&cache, camera.eye);
     let (frame, mut stats) =
         render_surface(&surface, &surface.local(camera), width, height, options)?;
@@ -95,6 +130,7 @@ pub fn render_tiled<S: TileSource<TILE>>(
     let cache_stats = cache.stats();
     let tiled = TiledRender {
         footprint_tiles: needed.len(),
+        touched_tiles: surface.touched_tiles(),
         resident_bytes: cache.resident_bytes() as u64,
         tiles_loaded: cache_stats.loads,
         misses,
@@ -137,8 +173,11 @@ pub struct PageOptions {
 pub struct PagedFrame {
     /// Frame number.
     pub frame: u32,
-    /// Tiles the frame's view needed.
+    /// Tiles the frame's view may need (the conservative footprint the
+    /// loader works from).
     pub footprint_tiles: usize,
+    /// Tiles the frame actually read.
+    pub touched_tiles: usize,
     /// Of those, tiles not resident when it was drawn (drawn from a
     /// coarser level instead).
     pub missing_tiles: usize,
@@ -187,6 +226,21 @@ impl PageReport {
             .iter()
             .skip(1)
             .map(|f| f.resident_bytes as f64 / f.footprint_bytes.max(1) as f64)
+            .collect();
+        let mean = ratios.iter().sum::<f64>() / ratios.len().max(1) as f64;
+        (mean, ratios.iter().copied().fold(0.0, f64::max))
+    }
+
+    /// Resident bytes over the bytes of the tiles the frame read: mean and
+    /// largest, after the first frame.
+    pub fn resident_over_touched(&self) -> (f64, f64) {
+        let ratios: Vec<f64> = self
+            .frames
+            .iter()
+            .skip(1)
+            .map(|f| {
+                f.resident_bytes as f64 / (f.touched_tiles.max(1) * Tile::<TILE>::BYTES) as f64
+            })
             .collect();
         let mean = ratios.iter().sum::<f64>() / ratios.len().max(1) as f64;
         (mean, ratios.iter().copied().fold(0.0, f64::max))
@@ -246,19 +300,16 @@ pub fn page_flight<S: TileSource<TILE>>(
     for frame in 0..options.frames {
         let t = frame as f32 * period;
         let camera = flight_camera(options, t);
-        needed.clear();
-        collect(&world, &camera, options.size, bias, 0.0, &mut needed)?;
         let before = cache.stats();
         cache.begin_frame();
-        let mut missing: Vec<TileKey> =
-            needed.iter().filter(|k| !cache.pin(**k)).copied().collect();
+        needed.clear();
         if frame == 0 {
             // The first frame waits for its tiles.
-            for key in missing.iter().rev() {
-                let _ = cache.require(*key, source);
-            }
-            missing.retain(|k| !cache.contains(k));
+            load_view(&mut cache, source, &camera, options.size, bias, &mut needed)?;
+        } else {
+            collect(&cache, &camera, options.size, bias, 0.0, &mut needed)?;
         }
+        let missing: Vec<TileKey> = needed.iter().filter(|k| !cache.pin(**k)).copied().collect();
         let after_first_loads = cache.stats();
         let surface = TiledSurface::around(&cache, camera.eye);
         let (image, stats) = render_surface(
@@ -269,6 +320,7 @@ pub fn page_flight<S: TileSource<TILE>>(
             &options.options,
         )?;
         let degraded = surface.degraded_samples();
+        let touched = surface.touched_tiles();
         let resident = cache.resident_bytes() as u64;
 
         // While the frame is drawn: what it lacked, then (with prefetch)
@@ -289,7 +341,8 @@ pub fn page_flight<S: TileSource<TILE>>(
                     continue;
                 }
                 if budget == 0 {
-                    return;
+                    // Out of loads; resident ones are still pinned.
+                    continue;
                 }
                 budget -= 1;
                 let _ = if pin {
@@ -303,12 +356,12 @@ pub fn page_flight<S: TileSource<TILE>>(
         ahead.clear();
         if options.prefetch {
             let next = flight_camera(options, (frame + 1) as f32 * period);
-            collect(&world, &next, options.size, bias, 0.0, &mut ahead)?;
+            collect(&cache, &next, options.size, bias, 0.0, &mut ahead)?;
             fetch(&mut cache, &ahead, true);
             let lead = options.lead_s.max(period);
             let widen = options.turn_deg_per_s.abs() * lead / 2.0;
             let later = flight_camera(options, t + lead);
-            collect(&world, &later, options.size, bias, widen, &mut ahead)?;
+            collect(&cache, &later, options.size, bias, widen, &mut ahead)?;
             let mut by_level: Vec<TileKey> = ahead.to_vec();
             by_level.sort_by_key(|k| k.level);
             fetch(&mut cache, &by_level, false);
@@ -326,6 +379,7 @@ pub fn page_flight<S: TileSource<TILE>>(
         let record = PagedFrame {
             frame,
             footprint_tiles: needed.len(),
+            touched_tiles: touched,
             missing_tiles: missing.len(),
             degraded_samples: degraded,
             loads: loads_now,
