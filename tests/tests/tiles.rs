@@ -141,6 +141,29 @@ fn packed_files_render_as_their_maps_bit_for_bit() {
 }
 
 #[test]
+fn pack_holds_a_few_strips_of_rows_however_tall_the_map() {
+    // 96 x 300 and 96 x 3000: at most a strip of rows and one of bounds a
+    // level (12 levels at 3000 rows), far fewer than the map's rows.
+    let held = |depth: u32| {
+        let mut heights = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::new(96, depth);
+        for (x, y, p) in heights.enumerate_pixels_mut() {
+            *p = image::Luma([((x * 7 + y * 13) % 900) as u16 * 16]);
+        }
+        let path = temp(&format!("tall-{depth}.png"));
+        heights.save(&path).unwrap();
+        let out = temp(&format!("tall-{depth}.tiles"));
+        pack(&pack_input(&path, None, 1.0 / 16.0), &out, &mut |_, _| {})
+            .unwrap()
+            .rows_held_at_most
+    };
+    let (short, tall) = (held(300), held(3000));
+    println!("rows held at most: {short} for 300 rows, {tall} for 3000");
+    let levels = World::new(96, 3000, 0).unwrap().levels() as usize;
+    assert!(tall <= levels * 2 * (TILE + 4), "{short} then {tall}");
+    assert!(tall < 3000 / 3, "{tall} rows held of 3000");
+}
+
+#[test]
 fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
     let (height, color) = odd_sized_maps();
     let out = temp("damaged.tiles");

@@ -311,6 +311,13 @@ mod tests {
         }
     }
 
+    fn coded() -> Coded {
+        Coded {
+            fail: None,
+            loads: 0,
+        }
+    }
+
     fn key(x: u32, y: u32) -> TileKey {
         TileKey { level: 0, x, y }
     }
@@ -318,10 +325,7 @@ mod tests {
     #[test]
     fn loads_once_and_finds_by_key() {
         let mut slots = [Tile::<4>::EMPTY; 4];
-        let mut source = Coded {
-            fail: None,
-            loads: 0,
-        };
+        let mut source = coded();
         let mut cache = TileCache::<4, 4>::new(source.world(), &mut slots);
         cache.begin_frame();
         for (x, y) in [(1, 2), (3, 0), (1, 2)] {
@@ -344,10 +348,7 @@ mod tests {
     #[test]
     fn evicts_the_least_recently_used_and_never_a_pinned_tile() {
         let mut slots = [Tile::<4>::EMPTY; 4];
-        let mut source = Coded {
-            fail: None,
-            loads: 0,
-        };
+        let mut source = coded();
         let mut cache = TileCache::<4, 4>::new(source.world(), &mut slots);
         // Frame 1 uses four tiles; frame 2 uses two of them again.
         cache.begin_frame();
@@ -385,10 +386,7 @@ mod tests {
     #[test]
     fn a_prefetched_tile_goes_before_the_current_frame_and_after_older_ones() {
         let mut slots = [Tile::<4>::EMPTY; 2];
-        let mut source = Coded {
-            fail: None,
-            loads: 0,
-        };
+        let mut source = coded();
         let mut cache = TileCache::<4, 2>::new(source.world(), &mut slots);
         cache.begin_frame();
         cache.require(key(0, 0), &mut source).unwrap();
@@ -406,7 +404,7 @@ mod tests {
         let mut slots = [Tile::<4>::EMPTY; 2];
         let mut source = Coded {
             fail: Some(TileError::Io),
-            loads: 0,
+            ..coded()
         };
         let mut cache = TileCache::<4, 2>::new(source.world(), &mut slots);
         cache.begin_frame();

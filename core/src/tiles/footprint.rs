@@ -70,48 +70,52 @@ impl core::fmt::Display for FootprintFull {
 
 impl core::error::Error for FootprintFull {}
 
-/// Appends to `out` the tiles (of side `T`) a `width × height` frame of
-/// `camera` (world coordinates) needs at level bias `pixel_to_voxel`, with
-/// the field of view widened by `widen_deg` on each side; sorted, without
+/// The frame a footprint is made for.
+#[derive(Debug, Clone, Copy)]
+pub struct FootprintView {
+    /// The camera, in world coordinates.
+    pub camera: Camera,
+    /// Image size in pixels.
+    pub width: u32,
+    /// Image size in pixels.
+    pub height: u32,
+    /// The level bias the frame renders at (its pixel-to-voxel ratio).
+    pub pixel_to_voxel: f32,
+    /// Degrees added to each side of the field of view: 0 for the frame
+    /// itself, more for an extended footprint to prefetch.
+    pub widen_deg: f32,
+}
+
+/// Appends to `out` the tiles (of side `T`) `view` needs; sorted, without
 /// duplicates (with what `out` held before). Returns the window's highest
 /// level. [`FootprintFull`] when `out` ran out of room (it then holds a
 /// part of the footprint).
 pub fn footprint<const T: usize, const F: usize>(
     world: &World,
-    camera: &Camera,
-    width: u32,
-    height: u32,
-    pixel_to_voxel: f32,
-    widen_deg: f32,
+    view: &FootprintView,
     out: &mut Vec<TileKey, F>,
 ) -> Result<u8, FootprintFull> {
-    footprint_under::<T, F>(
-        world,
-        camera,
-        width,
-        height,
-        pixel_to_voxel,
-        widen_deg,
-        &|_| None,
-        out,
-    )
+    footprint_under::<T, F>(world, view, &|_| None, out)
 }
 
 /// [`footprint`], with each tile's box only as high as `ceiling` says the
 /// terrain there is (U12.4; `None`: the world's highest height). With
 /// [`super::TileCache::ceiling`], the coarser tiles already resident cut
 /// the finer levels' footprint down to the terrain the view can see.
-#[allow(clippy::too_many_arguments)]
 pub fn footprint_under<const T: usize, const F: usize>(
     world: &World,
-    camera: &Camera,
-    width: u32,
-    height: u32,
-    pixel_to_voxel: f32,
-    widen_deg: f32,
+    view: &FootprintView,
     ceiling: &dyn Fn(TileKey) -> Option<u16>,
     out: &mut Vec<TileKey, F>,
 ) -> Result<u8, FootprintFull> {
+    let FootprintView {
+        camera,
+        width,
+        height,
+        pixel_to_voxel,
+        widen_deg,
+    } = *view;
+    let camera = &camera;
     let (origin, top) = window_origin(world, camera.eye);
     let [forward, right, up] = camera.axes();
     let eye = DVec3::new(
@@ -268,6 +272,16 @@ fn box_in_frustum(
 mod tests {
     use super::*;
 
+    fn frame(camera: Camera, widen_deg: f32) -> FootprintView {
+        FootprintView {
+            camera,
+            width: 320,
+            height: 240,
+            pixel_to_voxel: 1.0,
+            widen_deg,
+        }
+    }
+
     fn world(side: u32) -> World {
         World::new(side, side, 200 * 16).unwrap()
     }
@@ -303,7 +317,7 @@ mod tests {
             ..Camera::default()
         };
         let mut keys = Vec::<TileKey, 4096>::new();
-        let top = footprint::<64, 4096>(&w, &camera, 320, 240, 1.0, 0.0, &mut keys).unwrap();
+        let top = footprint::<64, 4096>(&w, &frame(camera, 0.0), &mut keys).unwrap();
         assert_eq!(top, 13);
         // Level 0 tiles lie ahead (+x) of the eye, near it.
         let level0: std::vec::Vec<_> = keys.iter().filter(|k| k.level == 0).collect();
@@ -321,12 +335,12 @@ mod tests {
         assert!(keys.windows(2).all(|p| p[0] < p[1]));
         // Widening only adds tiles.
         let mut wide = Vec::<TileKey, 4096>::new();
-        footprint::<64, 4096>(&w, &camera, 320, 240, 1.0, 30.0, &mut wide).unwrap();
+        footprint::<64, 4096>(&w, &frame(camera, 30.0), &mut wide).unwrap();
         assert!(keys.iter().all(|k| wide.contains(k)) && wide.len() > keys.len());
         // A list too short says so.
         let mut short = Vec::<TileKey, 8>::new();
         assert_eq!(
-            footprint::<64, 8>(&w, &camera, 320, 240, 1.0, 0.0, &mut short),
+            footprint::<64, 8>(&w, &frame(camera, 0.0), &mut short),
             Err(FootprintFull)
         );
     }

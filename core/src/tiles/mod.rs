@@ -3,7 +3,9 @@
 //! and a surface the caster renders from the cache (Cohen-Or §3.2).
 //!
 //! ```
-//! use terracast::tiles::{Tile, TileCache, TileError, TileKey, TileSource, TiledSurface, World};
+//! use terracast::tiles::{
+//!     footprint, FootprintView, Tile, TileCache, TileError, TileKey, TileSource, TiledSurface, World,
+//! };
 //! use terracast::{render, Camera, CountingProbe, Framebuffer, RenderOptions, View};
 //!
 //! /// A flat green world, 256 voxels a side, made on demand.
@@ -24,8 +26,8 @@
 //! // The tiles the frame needs, loaded before it is drawn (a flight loads
 //! // the next frame's during this one: see `prefetch`).
 //! let mut needed = heapless::Vec::<TileKey, 256>::new();
-//! let surface_top = terracast::tiles::footprint::<16, 256>(&Flat.world(), &camera, 32, 24, 1.0, 0.0, &mut needed);
-//! assert!(surface_top.is_ok());
+//! let frame = FootprintView { camera, width: 32, height: 24, pixel_to_voxel: 1.0, widen_deg: 0.0 };
+//! footprint::<16, 256>(&Flat.world(), &frame, &mut needed)?;
 //! cache.begin_frame();
 //! for key in &needed {
 //!     cache.require(*key, &mut Flat)?;
@@ -45,7 +47,8 @@ mod surface;
 
 pub use cache::{CacheStats, TileCache};
 pub use footprint::{
-    footprint, footprint_under, window_origin, FootprintFull, WINDOW_SIDE, WINDOW_TOP,
+    footprint, footprint_under, window_origin, FootprintFull, FootprintView, WINDOW_SIDE,
+    WINDOW_TOP,
 };
 pub use surface::{TiledGrid, TiledSurface};
 
@@ -265,16 +268,42 @@ mod tests {
         (heights, colors)
     }
 
+    /// A map and the storage of its pyramid.
+    struct Built {
+        size: (u32, u32),
+        heights: vec::Vec<u16>,
+        colors: vec::Vec<Rgb>,
+        coarse: (vec::Vec<u16>, vec::Vec<Rgb>, vec::Vec<u16>),
+    }
+
+    impl Built {
+        fn hills(w: u32, d: u32) -> Self {
+            let (heights, colors) = hills(w, d);
+            let terrain = Terrain::new(w, d, &heights, &colors).unwrap();
+            let n = pyramid_points(w, d);
+            let (mut ph, mut pc) = (vec![0u16; n], vec![[0u8; 3]; n]);
+            let mut pb = vec![0u16; pyramid_cells(w, d)];
+            Pyramid::build(&terrain, HeightFilter::Mean, &mut ph, &mut pc, &mut pb).unwrap();
+            Self {
+                size: (w, d),
+                heights,
+                colors,
+                coarse: (ph, pc, pb),
+            }
+        }
+
+        fn pyramid(&self) -> Pyramid<'_> {
+            let (w, d) = self.size;
+            let terrain = Terrain::new(w, d, &self.heights, &self.colors).unwrap();
+            let (ph, pc, pb) = &self.coarse;
+            Pyramid::new(terrain, ph, pc, pb).unwrap()
+        }
+    }
+
     #[test]
     fn rendering_from_tiles_equals_rendering_from_the_pyramid() {
-        let (w, d) = (203u32, 150u32);
-        let (heights, colors) = hills(w, d);
-        let terrain = Terrain::new(w, d, &heights, &colors).unwrap();
-        let n = pyramid_points(w, d);
-        let (mut ph, mut pc) = (vec![0u16; n], vec![[0u8; 3]; n]);
-        let mut pb = vec![0u16; pyramid_cells(w, d)];
-        Pyramid::build(&terrain, HeightFilter::Mean, &mut ph, &mut pc, &mut pb).unwrap();
-        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
+        let built = Built::hills(203, 150);
+        let pyramid = built.pyramid();
         let mut source = Cut(&pyramid);
         let mut slots = vec![Tile::<16>::EMPTY; 256].into_boxed_slice();
         let slots: &mut [Tile<16>; 256] = (&mut slots[..]).try_into().unwrap();
@@ -292,7 +321,14 @@ mod tests {
                 ..Camera::default()
             };
             let mut needed = heapless::Vec::<TileKey, 512>::new();
-            footprint::<16, 512>(&source.world(), &camera, 64, 48, 1.0, 0.0, &mut needed).unwrap();
+            let frame = FootprintView {
+                camera,
+                width: 64,
+                height: 48,
+                pixel_to_voxel: 1.0,
+                widen_deg: 0.0,
+            };
+            footprint::<16, 512>(&source.world(), &frame, &mut needed).unwrap();
             cache.begin_frame();
             for key in &needed {
                 cache.require(*key, &mut source).unwrap();
@@ -332,14 +368,9 @@ mod tests {
 
     #[test]
     fn a_missing_tile_reads_the_coarser_level_and_is_counted() {
-        let (w, d) = (64u32, 64u32);
-        let (heights, colors) = hills(w, d);
-        let terrain = Terrain::new(w, d, &heights, &colors).unwrap();
-        let n = pyramid_points(w, d);
-        let (mut ph, mut pc) = (vec![0u16; n], vec![[0u8; 3]; n]);
-        let mut pb = vec![0u16; pyramid_cells(w, d)];
-        Pyramid::build(&terrain, HeightFilter::Mean, &mut ph, &mut pc, &mut pb).unwrap();
-        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
+        let built = Built::hills(64, 64);
+        let pyramid = built.pyramid();
+        let (heights, ph) = (&built.heights, &built.coarse.0);
         let mut source = Cut(&pyramid);
         let mut slots = vec![Tile::<16>::EMPTY; 64].into_boxed_slice();
         let slots: &mut [Tile<16>; 64] = (&mut slots[..]).try_into().unwrap();

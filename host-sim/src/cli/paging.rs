@@ -62,12 +62,13 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
     })?;
     bar.finish_and_clear();
     println!(
-        "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}, {} bytes -> {}",
+        "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}, {} bytes, at most {} rows held -> {}",
         summary.width,
         summary.depth,
         summary.levels,
         summary.tiles,
         summary.bytes,
+        summary.rows_held_at_most,
         args.out.display()
     );
     Ok(())

@@ -49,6 +49,9 @@ pub struct PackSummary {
     pub tiles: u64,
     /// File size in bytes.
     pub bytes: u64,
+    /// Most rows (of points and of bounds, all levels) held at once: the
+    /// streaming's memory, whatever the input's height.
+    pub rows_held_at_most: usize,
 }
 
 /// Packs `input` into `out`, calling `progress(rows done, rows)` now and
@@ -146,6 +149,7 @@ pub fn pack(
     if let (Some(last), Some(row_colors)) = (held.take(), colors.finish(depth)) {
         builder.push(0, depth - 1, last, row_colors)?;
     }
+    let rows_held_at_most = builder.rows_held_at_most;
     builder.finish(max_height)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
     Ok(PackSummary {
@@ -154,6 +158,7 @@ pub fn pack(
         levels: header.levels,
         tiles: header.tiles,
         bytes,
+        rows_held_at_most,
     })
 }
 
@@ -453,6 +458,7 @@ struct Builder {
     filter: HeightFilter,
     writer: TilesWriter,
     tile: Box<Tile<TILE>>,
+    rows_held_at_most: usize,
 }
 
 impl Builder {
@@ -478,6 +484,7 @@ impl Builder {
             filter,
             writer,
             tile: Box::new(Tile::EMPTY),
+            rows_held_at_most: 0,
         }
     }
 
@@ -515,6 +522,12 @@ impl Builder {
             }
         }
         self.forget(level);
+        let held = self
+            .levels
+            .iter()
+            .map(|l| l.points.len() + l.bounds.len())
+            .sum();
+        self.rows_held_at_most = self.rows_held_at_most.max(held);
         Ok(())
     }
 
@@ -637,16 +650,22 @@ impl Builder {
 
     /// Drops the rows of `level` nothing will read again.
     fn forget(&mut self, level: usize) {
-        let child_bounded = self.levels.get(level + 1).map_or(u32::MAX, |c| c.bounded);
+        let coarser = self.levels.get(level + 1).map(|c| c.bounded);
         let l = &mut self.levels[level];
         // Rows still read: the strip being gathered, the coarse filter
-        // (2y − 1 up), this level's next bound row, and the next level's
-        // bounds (level 0's points, other levels' bounds: 2j up).
-        let keep = (l.strips * TILE as u32)
-            .min((2 * l.coarsened).saturating_sub(1))
-            .min(l.bounded)
-            .min(child_bounded.saturating_mul(2))
-            .saturating_sub(2);
+        // (2y − 1 up), this level's next bound row (levels 1 and up), and
+        // the next level's bounds (level 0's points, other levels' bounds:
+        // 2j up).
+        let mut keep = l.strips * TILE as u32;
+        if let Some(child_bounded) = coarser {
+            keep = keep
+                .min((2 * l.coarsened).saturating_sub(1))
+                .min(child_bounded.saturating_mul(2));
+        }
+        if level > 0 {
+            keep = keep.min(l.bounded);
+        }
+        let keep = keep.saturating_sub(2);
         l.points = l.points.split_off(&keep);
         l.bounds = l.bounds.split_off(&keep);
     }

@@ -10,7 +10,9 @@ use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
 use crate::kernel::render_surface;
 use serde::Serialize;
-use terracast::tiles::{footprint_under, Tile, TileCache, TileKey, TileSource, TiledSurface};
+use terracast::tiles::{
+    footprint_under, FootprintView, Tile, TileCache, TileKey, TileSource, TiledSurface,
+};
 use terracast::{Camera, RenderOptions, Resolution};
 
 /// Footprint list capacity: far more than a 32 MiB cache holds.
@@ -58,17 +60,15 @@ fn collect(
     keys: &mut Keys,
 ) -> Result<u8> {
     let ceiling = |key| cache.ceiling(key);
-    footprint_under::<TILE, FOOTPRINT>(
-        &cache.world(),
-        camera,
-        size.0,
-        size.1,
-        bias,
+    let view = FootprintView {
+        camera: *camera,
+        width: size.0,
+        height: size.1,
+        pixel_to_voxel: bias,
         widen_deg,
-        &ceiling,
-        keys,
-    )
-    .map_err(|e| Error::new(format!("view footprint: {e}")))
+    };
+    footprint_under::<TILE, FOOTPRINT>(&cache.world(), &view, &ceiling, keys)
+        .map_err(|e| Error::new(format!("view footprint: {e}")))
 }
 
 /// Loads the view's footprint level by level from the top, each level's
