@@ -101,6 +101,22 @@ fn load_view<S: TileSource<TILE>>(
     }
 }
 
+/// `camera` in the window's coordinates, refused in one line when the eye
+/// is too far from the terrain for the caster's coordinates.
+fn local_camera(surface: &TiledSurface<'_, '_, TILE, SLOTS>, camera: &Camera) -> Result<Camera> {
+    let local = surface.local(camera);
+    let limit = terracast::config::MAX_EYE_COORD;
+    if local.eye[0].abs() > limit || local.eye[1].abs() > limit {
+        return Err(Error::new(format!(
+            "eye ({}, {}) is too far from the terrain: it must be within {limit} voxels of the window the view is drawn from (origin {:?})",
+            camera.eye[0],
+            camera.eye[1],
+            surface.origin()
+        )));
+    }
+    Ok(local)
+}
+
 /// Renders one view of `source` (camera in world coordinates) through a
 /// cache of [`SLOTS`] tiles, loading the view's footprint first.
 pub fn render_tiled<S: TileSource<TILE>>(
@@ -124,8 +140,13 @@ pub fn render_tiled<S: TileSource<TILE>>(
         &mut needed,
     )?;
     let surface = TiledSurface::around(&cache, camera.eye);
-    let (frame, mut stats) =
-        render_surface(&surface, &surface.local(camera), width, height, options)?;
+    let (frame, mut stats) = render_surface(
+        &surface,
+        &local_camera(&surface, camera)?,
+        width,
+        height,
+        options,
+    )?;
     stats.resident_bytes = cache.resident_bytes() as u64;
     let cache_stats = cache.stats();
     let tiled = TiledRender {
@@ -314,7 +335,7 @@ pub fn page_flight<S: TileSource<TILE>>(
         let surface = TiledSurface::around(&cache, camera.eye);
         let (image, stats) = render_surface(
             &surface,
-            &surface.local(&camera),
+            &local_camera(&surface, &camera)?,
             options.size.0,
             options.size.1,
             &options.options,
