@@ -1,6 +1,6 @@
 //! What the caster reads: a stack of grids (the pyramid's levels) and their
 //! height bounds, whether borrowed whole ([`crate::Pyramid`]) or paged in
-//! tiles ([`crate::TiledSurface`]).
+//! tiles ([`crate::tiles::TiledSurface`]).
 //!
 //! The caster addresses a grid point of level `l` by a linear index
 //! `y·stride + x`, with `stride` the grid's own (a borrowed level's width,
