@@ -21,6 +21,12 @@ pub struct Extent {
     /// The highest height (U12.4) anywhere on any level: rays above it can
     /// no longer hit.
     pub max_height: u16,
+    /// Whether the map's edges are the terrain's own: then a ray that
+    /// leaves the map between its level's grid lines tests its last sample
+    /// inside on level 0, so that the terrain's edge keeps its silhouette.
+    /// False for a window cut out of a larger terrain, whose edges are not
+    /// the terrain's.
+    pub real_edges: bool,
 }
 
 /// One level's grid points, addressed by linear index.

@@ -129,6 +129,7 @@ impl<'a> Terrain<'a> {
             width: self.width,
             depth: self.depth,
             max_height: self.max_height,
+            real_edges: true,
         }
     }
     /// Bytes of terrain this view of the data covers (heights and colors).

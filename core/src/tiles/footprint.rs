@@ -12,7 +12,10 @@
 //! depth where level 1 begins: focal length in pixels over the
 //! pixel-to-voxel ratio), with a margin of two level-`l` cells and an
 //! eighth of the depth.
-//! The top level reaches to the window's edge. Rays too steep to double
+//! The top level reaches to the window's edge. On a world with real edges
+//! (one that fits the window), level 0 also covers the edges in view: a
+//! ray leaving the map tests its last sample there on level 0. Rays too
+//! steep to double
 //! their step stay on low levels at any depth: under the eye, each level
 //! also covers the cone of those rays. A tile is tested as the box
 //! of its cells (one cell wider each side, for the cells across tile
@@ -226,6 +229,38 @@ pub fn footprint_under<const T: usize, const F: usize>(
             }
         }
     }
+    // A world that fits the window has real edges: rays leaving it test
+    // their last sample on level 0 there, at any distance.
+    if world.width <= WINDOW_SIDE && world.depth <= WINDOW_SIDE {
+        let t = T as u32;
+        let (w, d) = (world.width, world.depth);
+        let (tiles_x, tiles_y) = world.tiles(0, t);
+        let edge_columns = [0, 1.min(w - 1) / t, (w - 2) / t, (w - 1) / t];
+        let edge_rows = [0, 1.min(d - 1) / t, (d - 2) / t, (d - 1) / t];
+        for ty in 0..tiles_y {
+            for tx in 0..tiles_x {
+                if !(edge_columns.contains(&tx) || edge_rows.contains(&ty)) {
+                    continue;
+                }
+                let span = f64::from(t);
+                let bx = [f64::from(tx) * span - 1.0, f64::from(tx + 1) * span + 1.0];
+                let by = [f64::from(ty) * span - 1.0, f64::from(ty + 1) * span + 1.0];
+                let in_view =
+                    box_in_frustum(eye, forward, &planes, f64::INFINITY, bx, by, [0.0, top_z]);
+                if in_view
+                    && out
+                        .push(TileKey {
+                            level: 0,
+                            x: tx,
+                            y: ty,
+                        })
+                        .is_err()
+                {
+                    full = true;
+                }
+            }
+        }
+    }
     out.sort_unstable();
     dedup(out);
     if full {
@@ -319,8 +354,15 @@ mod tests {
         let mut keys = Vec::<TileKey, 4096>::new();
         let top = footprint::<64, 4096>(&w, &frame(camera, 0.0), &mut keys).unwrap();
         assert_eq!(top, 13);
-        // Level 0 tiles lie ahead (+x) of the eye, near it.
-        let level0: std::vec::Vec<_> = keys.iter().filter(|k| k.level == 0).collect();
+        // Level 0 tiles lie ahead (+x) of the eye, near it, but for the far
+        // edge of the map in view (the world fits a window: real edges).
+        let (near, edge): (std::vec::Vec<&TileKey>, std::vec::Vec<&TileKey>) = keys
+            .iter()
+            .filter(|k| k.level == 0)
+            .partition(|k| k.x < 127 && k.y > 0 && k.y < 127);
+        assert!(edge.iter().any(|k| k.x == 127 && k.y == 4000 / 64));
+        assert!(edge.iter().all(|k| k.x == 127), "{edge:?}");
+        let level0 = near;
         assert!(!level0.is_empty());
         for k in &level0 {
             assert!(k.x * 64 + 64 >= 3990, "{k:?} behind the eye");

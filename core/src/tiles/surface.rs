@@ -45,6 +45,7 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
                 width: (world.width - origin[0]).min(WINDOW_SIDE),
                 depth: (world.depth - origin[1]).min(WINDOW_SIDE),
                 max_height: world.max_height,
+                real_edges: world.width <= WINDOW_SIDE && world.depth <= WINDOW_SIDE,
             },
             top,
             world_levels: world.levels(),

@@ -102,6 +102,9 @@ pub(crate) struct Ray {
     pub start: i32,
     /// Last sample where a hit is possible.
     pub end: i32,
+    /// `end` is where the ray leaves a map with real edges (not where it
+    /// rises above the highest terrain or sinks below 0).
+    edge_end: bool,
     /// Largest minor coordinate inside the map, Q16.
     pub minor_max: i32,
     /// Minor-coordinate drift per major step of the pixel center's own ray
@@ -320,6 +323,7 @@ impl View {
             _ => last.min(start.max(div_ceil(z0, -dz))),
         };
 
+        let edge_end = extent.real_edges && end == last;
         let narrow = |v: i64| v.clamp(-(1 << 20), 1 << 20) as i32;
         let mut ray = Ray {
             key,
@@ -332,6 +336,7 @@ impl View {
             first: narrow(first),
             start: narrow(start),
             end: narrow(end),
+            edge_end,
             minor_max: minor_max.clamp(0, i64::from(i32::MAX)) as i32,
             color_drift: 0,
             lod: Lod::new(plan, run, dz),
@@ -471,11 +476,13 @@ impl Ray {
     }
 
     /// Whether `k` is the ray's end sample and lies between the grid lines
-    /// of its level: a walk tests it anyway (against the level's grid line
-    /// at or before it), so that a ray that ends inside the map (below the
-    /// ground, or at its edge) cannot step over its last hit. It stays on
-    /// its level so that a frame reads each level only out to that level's
-    /// distance, which is what a tile footprint holds.
+    /// of its level: a walk tests it anyway, so that a ray that ends inside
+    /// the map (below the ground, or at its edge) cannot step over its last
+    /// hit. Where the ray leaves a map with real edges it is tested on
+    /// level 0 (the edge keeps its silhouette); elsewhere on its level,
+    /// against the grid line at or before it, so that a frame reads each
+    /// level only out to that level's distance, and level 0 along the map's
+    /// edges, which is what a tile footprint holds.
     #[inline]
     fn is_extra_end(&self, k: i32) -> bool {
         k == self.end && !self.on_level_grid(k, self.level_at(k))
@@ -524,7 +531,12 @@ impl Ray {
     /// reached by walking.
     #[inline]
     pub fn cursor<T: Surface + ?Sized>(&self, surface: &T, k: i32) -> Cursor {
-        self.cursor_on(surface, k, self.level_at(k))
+        let level = if self.edge_end && self.is_extra_end(k) {
+            0
+        } else {
+            self.level_at(k)
+        };
+        self.cursor_on(surface, k, level)
     }
 
     /// The position of sample `k` on `level`, whatever the schedule says.
