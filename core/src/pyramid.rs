@@ -299,6 +299,10 @@ impl<'a> Surface for Pyramid<'a> {
         self.levels.get(usize::from(level)).copied()
     }
     #[inline(always)]
+    fn base(&self) -> Terrain<'_> {
+        *Pyramid::base(self)
+    }
+    #[inline(always)]
     fn top(&self) -> u8 {
         Pyramid::top(self)
     }

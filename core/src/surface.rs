@@ -46,8 +46,10 @@ pub trait Surface {
     type Grid<'s>: Grid
     where
         Self: 's;
-    /// Level `level`, if the surface has it. Level 0 always exists.
+    /// Level `level`, if the surface has it.
     fn grid(&self, level: u8) -> Option<Self::Grid<'_>>;
+    /// Level 0, which every surface has.
+    fn base(&self) -> Self::Grid<'_>;
     /// The highest level (0 for a single resolution).
     fn top(&self) -> u8;
     /// Level 0's size and the highest height.

@@ -19,7 +19,7 @@ use crate::surface::Surface;
 use crate::view::ray::Ray;
 
 /// The first sample in `from..=end` where `ray` may hit any level of
-/// `pyramid` (every sample before it is above every level's surface), or
+/// `surface` (every sample before it is above every level's surface), or
 /// `None` when it cannot hit there. After `tests` rounds (each at most two
 /// bound tests) it stops and hands over the sample it has proven up to.
 pub(crate) fn first_hit<T: Surface + ?Sized, P: Probe>(

@@ -439,9 +439,7 @@ fn shade_above<T: Surface + ?Sized, P: Probe>(
     probe: &mut P,
 ) -> Sample {
     let at = ray.cursor(surface, k);
-    let color = Stage::new(surface, ray, at.level)
-        .and_then(|stage| stage.color(&ray.color_cursor(&at), probe));
-    match color {
+    match Stage::new(surface, ray, at.level).color(&ray.color_cursor(&at), probe) {
         Some(color) => Sample {
             color,
             distance: ray.distance(k).clamp(0, i64::from(Sample::SKY - 1)) as u32,
@@ -467,9 +465,8 @@ fn retrace<T: Surface + ?Sized, P: Probe>(
     while at.k > ray.first && allowance > 0 {
         allowance -= 1;
         let before = ray.cursor(surface, ray.previous_visited(at.k));
-        let Some((cell, c)) = Stage::new(surface, ray, before.level)
-            .and_then(|stage| stage.clearance_recent(&before, recent, probe))
-        else {
+        let stage = Stage::new(surface, ray, before.level);
+        let Some((cell, c)) = stage.clearance_recent(&before, recent, probe) else {
             break;
         };
         recent.add(cell);
@@ -498,9 +495,7 @@ fn shade<T: Surface + ?Sized, P: Probe>(
     probe: &mut P,
 ) -> Sample {
     let (position, before) = crossing(ray, &hit, below, above);
-    let Some(stage) = Stage::new(surface, ray, hit.level) else {
-        return sky(options);
-    };
+    let stage = Stage::new(surface, ray, hit.level);
     let color = if options.shading == Shading::Nearest {
         stage.nearest_color(&ray.color_cursor(&hit), probe)
     } else {
@@ -510,9 +505,8 @@ fn shade<T: Surface + ?Sized, P: Probe>(
             .map(|on_hit_line| match before {
                 Some((k, t)) => {
                     let before = ray.cursor(surface, k);
-                    let before_color = Stage::new(surface, ray, before.level)
-                        .and_then(|stage| stage.color(&ray.color_cursor(&before), probe));
-                    match before_color {
+                    let before_stage = Stage::new(surface, ray, before.level);
+                    match before_stage.color(&ray.color_cursor(&before), probe) {
                         Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
                         None => on_hit_line,
                     }

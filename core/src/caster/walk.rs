@@ -49,22 +49,15 @@ fn strides(row: isize, x_major: bool) -> (isize, isize) {
     }
 }
 
-/// The grid of `level`, or level 0's if the surface lacks it.
-#[inline]
-pub(crate) fn grid_or_base<T: Surface + ?Sized>(surface: &T, level: u8) -> Option<T::Grid<'_>> {
-    surface.grid(level).or_else(|| surface.grid(0))
-}
-
 impl<G: Grid> Stage<G> {
-    /// The stage of `level` for `ray` (level 0 if the surface lacks it);
-    /// `None` for a surface with no grid at all.
+    /// The stage of `level` for `ray` (level 0 if the surface lacks it).
     #[inline]
-    pub fn new<'s, T>(surface: &'s T, ray: &Ray, level: u8) -> Option<Self>
+    pub fn new<'s, T>(surface: &'s T, ray: &Ray, level: u8) -> Self
     where
         T: Surface<Grid<'s> = G> + ?Sized,
     {
         let level = level.min(surface.top());
-        let here = grid_or_base(surface, level)?;
+        let here = surface.grid(level).unwrap_or_else(|| surface.base());
         let below = level
             .checked_sub(1)
             .and_then(|l| surface.grid(l))
@@ -77,7 +70,7 @@ impl<G: Grid> Stage<G> {
         } else {
             0
         };
-        Some(Self {
+        Self {
             level,
             here,
             below,
@@ -86,7 +79,7 @@ impl<G: Grid> Stage<G> {
             step: sign * major_stride,
             dminor: ray.dminor.to_bits() << level,
             dz: ray.dz.to_bits() << level,
-        })
+        }
     }
 
     /// Samples per step.
@@ -278,9 +271,7 @@ pub(crate) fn walk<T: Surface + ?Sized, P: Probe>(
     let mut last: Option<(i32, i32)> = None;
     let mut first = Some(&*recent);
     loop {
-        let Some(stage) = Stage::new(surface, ray, at.level) else {
-            return Walk::Exit { last: at.k - 1 };
-        };
+        let stage = Stage::new(surface, ray, at.level);
         let switch = ray.next_switch(at.level, at.k);
         match stage.steps(at, end, switch, first.take(), &mut last, probe) {
             Run::Hit {
@@ -441,7 +432,7 @@ mod tests {
                 let mut k = ray.start;
                 loop {
                     let at = ray.cursor(&pyramid, k);
-                    let stage = Stage::new(&pyramid, &ray, at.level).unwrap();
+                    let stage = Stage::new(&pyramid, &ray, at.level);
                     levels_seen |= 1 << at.level;
                     if k + stage.stride() > ray.end {
                         break;

@@ -179,16 +179,23 @@ impl<'c, 'a, const T: usize, const N: usize> Surface for TiledSurface<'c, 'a, T,
 
     #[inline]
     fn grid(&self, level: u8) -> Option<Self::Grid<'_>> {
-        if level > self.top {
-            return None;
-        }
-        Some(TiledGrid {
+        (level <= self.top).then(|| TiledGrid {
             surface: self,
             level,
             shift: STRIDE_LOG2 - u32::from(level),
             origin: self.origin.map(|o| o >> level),
             size: self.world().level_size(level),
         })
+    }
+    #[inline]
+    fn base(&self) -> Self::Grid<'_> {
+        TiledGrid {
+            surface: self,
+            level: 0,
+            shift: STRIDE_LOG2,
+            origin: self.origin,
+            size: (self.world().width, self.world().depth),
+        }
     }
     fn top(&self) -> u8 {
         self.top

@@ -703,7 +703,7 @@ mod tests {
             for col in 0..32 {
                 for row in 0..8 {
                     let ray = view.pixel_ray(&terrain.extent(), &LodPlan::SINGLE, col, row * 16);
-                    let stage = Stage::new(&pyramid, &ray, 0).unwrap();
+                    let stage = Stage::new(&pyramid, &ray, 0);
                     for k in ray.first..=ray.end {
                         let cur = ray.cursor(&pyramid, k);
                         assert!(stage.clearance(&cur).is_some(), "yaw {yaw} k {k}");

@@ -219,9 +219,9 @@ pub struct PagedFrame {
 /// A paged flight's frames and summary.
 #[derive(Debug, Clone, Serialize)]
 pub struct PageReport {
-    /// Side of the world, and the bytes it stands for at 4 a voxel.
+    /// Side of the world along x.
     pub world_width: u32,
-    /// Side of the world.
+    /// Side of the world along y.
     pub world_depth: u32,
     /// Cache capacity in bytes.
     pub cache_bytes: u64,
@@ -331,7 +331,6 @@ pub fn page_flight<S: TileSource<TILE>>(
             collect(&cache, &camera, options.size, bias, 0.0, &mut needed)?;
         }
         let missing: Vec<TileKey> = needed.iter().filter(|k| !cache.pin(**k)).copied().collect();
-        let after_first_loads = cache.stats();
         let surface = TiledSurface::around(&cache, camera.eye);
         let (image, stats) = render_surface(
             &surface,
@@ -392,18 +391,13 @@ pub fn page_flight<S: TileSource<TILE>>(
             cache.retain(|k| needed.binary_search(k).is_ok());
         }
         let end = cache.stats();
-        let loads_now = if frame == 0 {
-            end.loads - before.loads
-        } else {
-            end.loads - after_first_loads.loads
-        };
         let record = PagedFrame {
             frame,
             footprint_tiles: needed.len(),
             touched_tiles: touched,
             missing_tiles: missing.len(),
             degraded_samples: degraded,
-            loads: loads_now,
+            loads: end.loads - before.loads,
             bytes_read: end.bytes_read - before.bytes_read,
             resident_bytes: resident,
             footprint_bytes: (needed.len() * Tile::<TILE>::BYTES) as u64,
