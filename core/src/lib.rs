@@ -21,7 +21,7 @@
 //! const POINTS: usize = pyramid_points(4, 4);
 //! let (mut coarse_heights, mut coarse_colors) = ([0u16; POINTS], [[0u8; 3]; POINTS]);
 //! let mut bounds = [0u16; pyramid_cells(4, 4)];
-//! Pyramid::build(&terrain, HeightFilter::Mean, &mut coarse_heights, &mut coarse_colors, &mut bounds)?;
+//! Pyramid::build(&terrain, HeightFilter::default(), &mut coarse_heights, &mut coarse_colors, &mut bounds)?;
 //! let pyramid = Pyramid::new(terrain, &coarse_heights, &coarse_colors, &bounds)?;
 //!
 //! let camera = Camera { eye: [-2.0, 1.5, 5.0], pitch_deg: 30.0, ..Camera::default() };

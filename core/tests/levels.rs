@@ -37,7 +37,7 @@ impl Map {
         };
         let terrain = Terrain::new(side, side, &map.heights, &map.colors).unwrap();
         let (h, c, b) = &mut map.coarse;
-        Pyramid::build(&terrain, HeightFilter::Mean, h, c, b).unwrap();
+        Pyramid::build(&terrain, HeightFilter::default(), h, c, b).unwrap();
         map
     }
 

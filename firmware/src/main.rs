@@ -215,7 +215,7 @@ fn run() -> Result<(), &'static str> {
     let start = ticks();
     Pyramid::build(
         &terrain,
-        HeightFilter::Mean,
+        HeightFilter::default(),
         coarse_heights,
         coarse_colors,
         bounds,

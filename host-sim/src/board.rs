@@ -250,7 +250,7 @@ impl SceneFile {
         let mut bounds = vec![0u16; pyramid_cells(w, d)];
         Pyramid::build(
             &terrain,
-            HeightFilter::Mean,
+            HeightFilter::default(),
             &mut coarse_heights,
             &mut coarse_colors,
             &mut bounds,

@@ -128,7 +128,7 @@ impl Scene {
     /// Converts to the kernel's format (heights rounded to 1/16 voxel) and
     /// builds the pyramid with mean heights.
     pub fn to_kernel(&self) -> Result<KernelScene> {
-        self.to_kernel_with(HeightFilter::Mean)
+        self.to_kernel_with(HeightFilter::default())
     }
 
     /// As [`Scene::to_kernel`], with the coarse levels' height filter.

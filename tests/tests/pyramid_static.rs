@@ -31,7 +31,7 @@ fn check(side: u32, heights: &mut [u16], colors: &mut [[u8; 3]], bounds: &mut [u
     base[n / 2 + side as usize / 3] = Terrain::quantize_height(4000.0).unwrap();
     let base_colors = vec![[10, 200, 30]; n];
     let terrain = Terrain::new(side, side, &base, &base_colors).unwrap();
-    Pyramid::build(&terrain, HeightFilter::Mean, heights, colors, bounds).unwrap();
+    Pyramid::build(&terrain, HeightFilter::default(), heights, colors, bounds).unwrap();
     let pyramid = Pyramid::new(terrain, heights, colors, bounds).unwrap();
     let top = pyramid.level(pyramid.levels() - 1).unwrap();
     assert_eq!((top.width(), top.depth()), (2, 2));

@@ -24,7 +24,7 @@ fn pack_input(height: &Path, color: Option<&Path>, scale: f32) -> PackInput {
         height: height.to_path_buf(),
         color: color.map(Path::to_path_buf),
         height_scale: scale,
-        filter: terracast::HeightFilter::Mean,
+        filter: terracast::HeightFilter::default(),
         seed: 1,
     }
 }

@@ -315,7 +315,7 @@ mod tests {
         let points = pyramid_points(side, side);
         let (mut h, mut c) = (vec![0u16; points], vec![[0u8; 3]; points]);
         let mut b = vec![0u16; pyramid_cells(side, side)];
-        Pyramid::build(&terrain, HeightFilter::Mean, &mut h, &mut c, &mut b).unwrap();
+        Pyramid::build(&terrain, HeightFilter::default(), &mut h, &mut c, &mut b).unwrap();
         let pyramid = Pyramid::new(terrain, &h, &c, &b).unwrap();
         let options = RenderOptions::default();
         for (eye, pitch) in [

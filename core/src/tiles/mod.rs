@@ -283,7 +283,7 @@ mod tests {
             let n = pyramid_points(w, d);
             let (mut ph, mut pc) = (vec![0u16; n], vec![[0u8; 3]; n]);
             let mut pb = vec![0u16; pyramid_cells(w, d)];
-            Pyramid::build(&terrain, HeightFilter::Mean, &mut ph, &mut pc, &mut pb).unwrap();
+            Pyramid::build(&terrain, HeightFilter::default(), &mut ph, &mut pc, &mut pb).unwrap();
             Self {
                 size: (w, d),
                 heights,

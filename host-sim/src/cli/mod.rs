@@ -122,10 +122,22 @@ pub enum ResolutionArg {
 /// How the pyramid's coarse heights are filtered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum HeightFilterArg {
+    /// The finer point at the coarse point's position (the default).
+    Subsample,
     /// Tent-weighted mean of the nine finer points.
     Mean,
     /// Largest of the nine finer points.
     Max,
+}
+
+impl From<HeightFilterArg> for HeightFilter {
+    fn from(arg: HeightFilterArg) -> Self {
+        match arg {
+            HeightFilterArg::Subsample => Self::Subsample,
+            HeightFilterArg::Mean => Self::Mean,
+            HeightFilterArg::Max => Self::Max,
+        }
+    }
 }
 
 /// How the kernel colors a hit.
@@ -264,7 +276,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 1.0, value_name = "RATIO")]
     pixel_to_voxel: f32,
     /// Kernel: how the pyramid's coarse heights are made.
-    #[arg(long, value_enum, default_value_t = HeightFilterArg::Mean)]
+    #[arg(long, value_enum, default_value_t = HeightFilterArg::Subsample)]
     height_filter: HeightFilterArg,
     /// Kernel: how rays cast from the eye find their first hit.
     #[arg(long, value_enum, default_value_t = FirstHitArg::Hierarchical)]
@@ -397,11 +409,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let (frame, stats) = match args.method {
         Method::Kernel => {
             let options = kernel_options(&args, sky)?;
-            let filter = match args.height_filter {
-                HeightFilterArg::Mean => HeightFilter::Mean,
-                HeightFilterArg::Max => HeightFilter::Max,
-            };
-            let kernel = scene.to_kernel_with(filter)?;
+            let kernel = scene.to_kernel_with(args.height_filter.into())?;
             View::new(&camera, width, height).map_err(view_error)?;
             render_kernel(&kernel, &camera, width, height, &options)?
         }

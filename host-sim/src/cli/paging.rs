@@ -30,7 +30,7 @@ pub(super) struct PackArgs {
     )]
     height_scale: f32,
     /// How the pyramid's coarse heights are made.
-    #[arg(long, value_enum, default_value_t = super::HeightFilterArg::Mean)]
+    #[arg(long, value_enum, default_value_t = super::HeightFilterArg::Subsample)]
     height_filter: super::HeightFilterArg,
     /// Seed of the coloring's texture (without --color).
     #[arg(long, default_value_t = 1, value_name = "N")]
@@ -46,10 +46,7 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
         height: args.height,
         color: args.color,
         height_scale: args.height_scale,
-        filter: match args.height_filter {
-            super::HeightFilterArg::Mean => HeightFilter::Mean,
-            super::HeightFilterArg::Max => HeightFilter::Max,
-        },
+        filter: args.height_filter.into(),
         seed: args.seed,
     };
     let bar = ProgressBar::new(0).with_style(
@@ -103,10 +100,7 @@ pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> 
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
     let options = kernel_options(args, sky)?;
     if let Terrain::File(file) = &terrain {
-        let wanted = match args.height_filter {
-            super::HeightFilterArg::Mean => HeightFilter::Mean,
-            super::HeightFilterArg::Max => HeightFilter::Max,
-        };
+        let wanted = HeightFilter::from(args.height_filter);
         if file.filter() != wanted {
             return Err(Error::new(format!(
                 "{} was packed with --height-filter {:?}; pack it again to render with another",

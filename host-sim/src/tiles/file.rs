@@ -12,7 +12,7 @@
 //! | 4, 4 | width, depth of level 0 in points |
 //! | 4 | levels |
 //! | 2 | highest height, U12.4 |
-//! | 1 | height filter: 0 mean, 1 max |
+//! | 1 | height filter: 0 mean, 1 max, 2 subsample |
 //! | 1 | reserved, 0 |
 //! | 8 | tile count |
 //! | 4 | CRC-32 of the 40 bytes before it |
@@ -74,7 +74,11 @@ impl Header {
         b[20..24].copy_from_slice(&self.world.depth.to_le_bytes());
         b[24..28].copy_from_slice(&u32::from(self.levels).to_le_bytes());
         b[28..30].copy_from_slice(&self.world.max_height.to_le_bytes());
-        b[30] = u8::from(self.filter == HeightFilter::Max);
+        b[30] = match self.filter {
+            HeightFilter::Mean => 0,
+            HeightFilter::Max => 1,
+            HeightFilter::Subsample => 2,
+        };
         b[32..40].copy_from_slice(&self.tiles.to_le_bytes());
         let crc = crc32fast::hash(&b[..40]);
         b[40..44].copy_from_slice(&crc.to_le_bytes());
@@ -155,10 +159,15 @@ impl TilesFile {
         let max_height = u16::from_le_bytes([b[28], b[29]]);
         let world = World::new(u32_at(16), u32_at(20), max_height)
             .ok_or_else(|| fail("impossible map size in the header"))?;
-        let filter = if b[30] == 1 {
-            HeightFilter::Max
-        } else {
-            HeightFilter::Mean
+        let filter = match b[30] {
+            0 => HeightFilter::Mean,
+            1 => HeightFilter::Max,
+            2 => HeightFilter::Subsample,
+            other => {
+                return Err(fail(&format!(
+                    "unknown height filter {other} in the header"
+                )))
+            }
         };
         let header = Header::new(world, filter);
         let tiles = u64::from_le_bytes(b[32..40].try_into().unwrap_or_default());

@@ -555,7 +555,9 @@ impl Builder {
                     }
                 }
             }
+            let center = (2 * x).min(fine.width - 1) as usize;
             heights.push(match self.filter {
+                HeightFilter::Subsample => rows[1].0[center],
                 HeightFilter::Mean => ((h_sum + 8) >> 4) as u16,
                 HeightFilter::Max => h_max,
             });
