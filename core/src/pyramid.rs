@@ -253,21 +253,25 @@ impl<'a> Pyramid<'a> {
     }
 
     /// Number of levels, level 0 included.
+    #[inline]
     pub fn levels(&self) -> usize {
         self.levels.len()
     }
 
     /// The highest level (0 for a flat pyramid).
+    #[inline]
     pub fn top(&self) -> u8 {
         (self.levels.len() - 1) as u8
     }
 
     /// Level `level`, if the pyramid has it.
+    #[inline]
     pub fn level(&self, level: usize) -> Option<&Terrain<'a>> {
         self.levels.get(level)
     }
 
     /// Level 0: the terrain itself.
+    #[inline]
     pub fn base(&self) -> &Terrain<'a> {
         // A pyramid always holds level 0.
         &self.levels[0]
@@ -282,6 +286,7 @@ impl<'a> Pyramid<'a> {
     }
 
     /// Whether the hierarchical first hit can be used.
+    #[inline]
     pub fn has_bounds(&self) -> bool {
         !self.bounds.is_empty()
     }
@@ -316,9 +321,11 @@ impl<'a> Surface for Pyramid<'a> {
     fn top(&self) -> u8 {
         Pyramid::top(self)
     }
+    #[inline]
     fn extent(&self) -> Extent {
         self.base().extent()
     }
+    #[inline]
     fn has_bounds(&self) -> bool {
         Pyramid::has_bounds(self)
     }

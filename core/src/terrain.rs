@@ -104,26 +104,32 @@ impl<'a> Terrain<'a> {
     pub const MAX_HEIGHT: f32 = u16::MAX as f32 / (1u32 << HEIGHT_FRAC_BITS) as f32;
 
     /// Grid points along x.
+    #[inline]
     pub fn width(&self) -> u32 {
         self.width
     }
     /// Grid points along y.
+    #[inline]
     pub fn depth(&self) -> u32 {
         self.depth
     }
     /// The stored heights (U12.4).
+    #[inline]
     pub fn heights(&self) -> &'a [u16] {
         self.heights
     }
     /// The colors.
+    #[inline]
     pub fn colors(&self) -> &'a [Rgb] {
         self.colors
     }
     /// The highest stored height (U12.4): rays above it can no longer hit.
+    #[inline]
     pub fn max_height(&self) -> u16 {
         self.max_height
     }
     /// The size and highest height, for clipping rays.
+    #[inline]
     pub fn extent(&self) -> Extent {
         Extent {
             width: self.width,

@@ -298,6 +298,7 @@ impl View {
     /// Sets up the ray along direction `d` (I32F32 bits) in `plane`: `d`'s
     /// horizontal part only sets how steep the ray is (it is parallel to
     /// the plane, up to rounding).
+    #[inline]
     pub(crate) fn ray(&self, extent: &Extent, plan: &LodPlan, d: [i64; 3], plane: &Plane) -> Ray {
         let (dz, run) = Self::slope(&d, plane);
         let Plane {

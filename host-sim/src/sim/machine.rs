@@ -7,8 +7,8 @@
 //! clock_mhz = 40.0          # i860XR
 //!
 //! [cycles]
-//! per_ray = 1960            # ray set-up, shading and resume included
-//! per_step = 266            # one traversal step or bound test
+//! per_ray = 1949            # ray set-up, shading and resume included
+//! per_step = 260            # one traversal step or bound test
 //! per_color = 0             # (shading is inside per_ray)
 //! per_local_fetch = 2       # a voxel from local memory
 //! pool_lock = 100           # take a column under the pool's semaphore
@@ -42,7 +42,7 @@
 //! through the kernel's instructions per pixel against steps per pixel of
 //! the eight renders of `scripts/board-check` (Cortex-M7; four views, each
 //! with the default coherence and with every ray cast from the eye; the
-//! `cost fit` line it prints) is 1960 instructions a ray plus 266 a step,
+//! `cost fit` line it prints) is 1949 instructions a ray plus 260 a step,
 //! taken as i860 cycles at one instruction a cycle (both are 32-bit cores
 //! that do 64-bit division in software). Change them to model another
 //! processor or a faster kernel.
@@ -164,8 +164,8 @@ impl Default for Machine {
 impl Default for Cycles {
     fn default() -> Self {
         Self {
-            per_ray: 1960,
-            per_step: 266,
+            per_ray: 1949,
+            per_step: 260,
             per_color: 0,
             per_local_fetch: 2,
             pool_lock: 100,
@@ -362,14 +362,14 @@ mod tests {
         // scripts/board-check (README, "The board"): each view with the
         // default coherence, then from the eye.
         let board = [
-            (1.41, 2161.0),
-            (1.30, 1939.0),
-            (1.60, 2682.0),
-            (1.46, 2693.0),
-            (13.85, 5796.0),
-            (13.00, 4916.0),
-            (18.01, 6922.0),
-            (13.71, 5688.0),
+            (1.41, 2138.0),
+            (1.31, 1915.0),
+            (1.60, 2665.0),
+            (1.46, 2677.0),
+            (13.77, 5680.0),
+            (12.95, 4804.0),
+            (17.97, 6786.0),
+            (13.69, 5587.0),
         ];
         let n = board.len() as f64;
         let (mx, my) = board
