@@ -70,6 +70,15 @@ pub fn settings() -> Vec<Setting> {
             },
         ),
         kernel(
+            "kernel pixel-to-voxel 0.5",
+            RenderOptions {
+                resolution: Resolution::Multi {
+                    pixel_to_voxel: U8F8::from_num(0.5),
+                },
+                ..default
+            },
+        ),
+        kernel(
             "kernel pixel-to-voxel 2",
             RenderOptions {
                 resolution: Resolution::Multi {

@@ -12,13 +12,19 @@
 //!   to 3 dB below at worst and to fewer steps on every grazing view, so
 //!   a regression shows.
 
-use terracast::{Coherence, HeightFilter, Resolution};
+use terracast::{Coherence, HeightFilter, Resolution, U8F8};
 use terracast_sim::metrics::{median_relative_depth_error, psnr, sky_agreement};
 use terracast_sim::reference::Reference;
 use terracast_sim::scene::Scene;
 use terracast_tests::{camera, comanche, kernel_view, reference_view};
 
 const SIZE: (u32, u32) = (640, 360);
+
+/// The pyramid switching a level later: where a voxel of the finer level
+/// gets narrower than half a pixel.
+const HALF: Resolution = Resolution::Multi {
+    pixel_to_voxel: U8F8::from_bits(128),
+};
 
 /// (eye, yaw, pitch) per view; yaws cover all four quadrants, and both
 /// x-major and y-major rays.
@@ -54,6 +60,7 @@ fn kernel_matches_reference_on_comanche_maps() {
             for (name, resolution) in [
                 ("single", Resolution::Single),
                 ("pyramid", Resolution::DEFAULT),
+                ("pyramid 0.5", HALF),
             ] {
                 let (k, stats) = kernel_view(&kernel, &cam, SIZE, Coherence::DEFAULT, resolution);
                 steps.push(stats.steps);
@@ -71,6 +78,11 @@ fn kernel_matches_reference_on_comanche_maps() {
                 scores.push(p);
             }
             let (single, pyramid) = (scores[0], scores[1]);
+            println!(
+                "  pyramid at pixel-to-voxel 0.5 - single: {:+.2} dB, {:.2}x the steps",
+                scores[2] - single,
+                steps[2] as f64 / steps[0] as f64
+            );
             // The other height filters, for the README's comparison.
             for (filter, levels) in &other_filters {
                 let (m, _) =
@@ -135,16 +147,18 @@ fn far_views_on_tiled_maps() {
         for (eye, yaw, pitch) in FAR {
             let cam = camera(eye, yaw, pitch);
             let r = reference_view(&reference, &cam, SIZE);
-            let [(single, single_steps), (pyramid, pyramid_steps)] =
-                [Resolution::Single, Resolution::DEFAULT].map(|resolution| {
+            let [(single, single_steps), (pyramid, pyramid_steps), (half, half_steps)] =
+                [Resolution::Single, Resolution::DEFAULT, HALF].map(|resolution| {
                     let (k, stats) =
                         kernel_view(&kernel, &cam, SIZE, Coherence::DEFAULT, resolution);
                     (psnr(&k.colors, &r.colors), stats.steps)
                 });
             let steps = pyramid_steps as f64 / single_steps as f64;
             println!(
-                "far C{color}/D{height} x4 eye {eye:?} yaw {yaw:>5} pitch {pitch:>4}: single {single:.2} dB, pyramid {pyramid:.2} dB ({:+.2}), {steps:.2}x the steps",
-                pyramid - single
+                "far C{color}/D{height} x4 eye {eye:?} yaw {yaw:>5} pitch {pitch:>4}: single {single:.2} dB, pyramid {pyramid:.2} dB ({:+.2}), {steps:.2}x the steps; at pixel-to-voxel 0.5 {half:.2} dB ({:+.2}), {:.2}x the steps",
+                pyramid - single,
+                half - single,
+                half_steps as f64 / single_steps as f64
             );
             if pyramid < single - 3.0 || steps >= 0.5 {
                 failures.push(format!("C{color} yaw {yaw}"));
