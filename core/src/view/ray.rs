@@ -340,7 +340,7 @@ impl View {
             edge_end,
             minor_max: minor_max.clamp(0, i64::from(i32::MAX)) as i32,
             color_drift: 0,
-            lod: Lod::new(plan, run, dz),
+            lod: Lod::new(plan, run, dz, delta0, end),
             begins: [i32::MAX; LEVEL_SLOTS],
             known: 1,
         };
@@ -350,7 +350,15 @@ impl View {
 }
 
 impl Lod {
-    fn new(plan: &LodPlan, run: i64, dz: i64) -> Self {
+    /// The schedule of a ray of major-axis component `run` and height
+    /// increment `dz` whose sample 0 is `delta0` from the eye and whose last
+    /// sample is `end`.
+    fn new(plan: &LodPlan, run: i64, dz: i64, delta0: i64, end: i64) -> Self {
+        const SINGLE: Lod = Lod {
+            reach: i64::MAX,
+            dt: 0,
+            top: 0,
+        };
         // Doubling must keep the height increment inside I16F16 with room
         // for the height itself: |dz|·2^l <= 2^29.
         let mut top = plan.top;
@@ -358,15 +366,18 @@ impl Lod {
             top -= 1;
         }
         if top == 0 {
-            return Self {
-                reach: i64::MAX,
-                dt: 0,
-                top,
-            };
+            return SINGLE;
         }
         // reach = D1·|d_major|: Q16 times Q32 (taken as Q16), in range for
         // every depth and direction View accepts.
         let reach = ((plan.level1_depth.min(1 << 40) * (run >> 16)) >> 16).clamp(1, 1 << 40);
+        // A ray that ends before level 1 can begin steps on level 0 only:
+        // it needs no schedule and no level weight (the division below).
+        // It samples and shades exactly as with the levels it never
+        // reaches.
+        if (reach - delta0 + ONE - 1) >> COORD_FRAC_BITS > end {
+            return SINGLE;
+        }
         // t goes from 0 to 1 over the level's `2^(l−1)·reach` voxels, which
         // are `reach/2` steps of `2^l`: dt = 2 / reach (Q16 over Q16).
         let dt = ((1i64 << 33) / reach).min(1 << 24) as i32;
@@ -378,7 +389,7 @@ impl Ray {
     /// Works out `begins` for every level up to the first that begins past
     /// the end (or the top).
     fn schedule(&mut self) {
-        self.begins = [i32::MAX; LEVEL_SLOTS];
+        // Entries from `known` on are never read.
         self.begins[0] = self.first;
         let top = usize::from(self.lod.top).min(LEVEL_SLOTS - 1);
         let mut level = 1;
