@@ -726,8 +726,10 @@ mod tests {
     }
 
     /// A ray over a long map with levels 0 to 4, switching at `reach`.
+    /// A level ray across a 64-voxel map that runs to the map's far edge
+    /// (the terrain, above the eye, keeps it from ending early).
     fn ray_with_levels(forward: bool, eye_x: f32) -> Ray {
-        let (h, c) = flat(64, 0);
+        let (h, c) = flat(64, 1000);
         let terrain = Terrain::new(64, 64, &h, &c).unwrap();
         let cam = Camera {
             eye: [eye_x, 31.5, 3.0],
@@ -775,6 +777,30 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_ray_that_ends_before_level_one_has_no_schedule() {
+        // Over flat ground at height 0 the level ray ends where it starts
+        // (it never gets down to the surface): no level, no weight.
+        let (h, c) = flat(64, 0);
+        let terrain = Terrain::new(64, 64, &h, &c).unwrap();
+        let cam = Camera {
+            eye: [0.3, 31.5, 3.0],
+            ..Camera::default()
+        };
+        let view = View::new(&cam, 64, 1).unwrap();
+        let plan = LodPlan {
+            level1_depth: 3 << 16,
+            top: 4,
+        };
+        let short = view.pixel_ray(&terrain.extent(), &plan, 32, 0);
+        assert_eq!((short.lod.top, short.lod.dt), (0, 0));
+        assert!((short.first..=short.end).all(|k| short.level_at(k) == 0));
+        // The same direction with room to run keeps its levels.
+        let long = ray_with_levels(true, 0.3);
+        assert_eq!(long.lod.top, 4);
+        assert!(long.lod.dt > 0);
     }
 
     #[test]
