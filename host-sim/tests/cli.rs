@@ -198,3 +198,42 @@ fn procedural_scene_needs_no_data() {
     assert_eq!(code, 0, "{err}");
     assert_eq!(image::open(&png).unwrap().width(), 64);
 }
+
+#[test]
+fn a_tiles_file_renders_with_the_height_filter_it_was_packed_with() {
+    let (h, c) = small_maps();
+    let tiles = temp("mean.tiles");
+    let (code, _, err) = sim(&[
+        "pack",
+        "--height",
+        s(&h),
+        "--color",
+        s(&c),
+        "--height-filter",
+        "mean",
+        "--out",
+        s(&tiles),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let png = temp("tiles.png");
+    let render = |filter: &str| {
+        sim(&[
+            "render",
+            "--terrain",
+            s(&tiles),
+            "--height-filter",
+            filter,
+            "--size",
+            "32x24",
+            "--out",
+            s(&png),
+        ])
+    };
+    // The default (subsample) asks for the filter the file was packed with.
+    let (code, _, err) = render("subsample");
+    assert_ne!(code, 0);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("render it with --height-filter mean"), "{err}");
+    let (code, _, err) = render("mean");
+    assert_eq!(code, 0, "{err}");
+}

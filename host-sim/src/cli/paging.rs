@@ -102,10 +102,10 @@ pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> 
     if let Terrain::File(file) = &terrain {
         let wanted = HeightFilter::from(args.height_filter);
         if file.filter() != wanted {
+            let packed = format!("{:?}", file.filter()).to_lowercase();
             return Err(Error::new(format!(
-                "{} was packed with --height-filter {:?}; pack it again to render with another",
+                "{} was packed with --height-filter {packed}; render it with --height-filter {packed}, or pack it again",
                 file.path().display(),
-                file.filter()
             )));
         }
     }
