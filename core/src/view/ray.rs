@@ -116,7 +116,9 @@ pub(crate) struct Ray {
     /// for it several times a ray: `begins[l]` is the first sample of level
     /// `l` (`begins[0] = first`), known for `l < known`, which covers every
     /// level up to the one in effect at `end`. Samples past that are
-    /// scheduled on demand (only the coherence proof asks about them).
+    /// scheduled on demand (only the coherence proof asks about them). A
+    /// ray that ends before level 1 can begin has no levels at all
+    /// (`lod.top` is 0), at any sample.
     begins: [i32; LEVEL_SLOTS],
     known: u8,
 }
@@ -781,23 +783,26 @@ mod tests {
 
     #[test]
     fn a_ray_that_ends_before_level_one_has_no_schedule() {
-        // Over flat ground at height 0 the level ray ends where it starts
-        // (it never gets down to the surface): no level, no weight.
+        // Looking 30° down from 3 voxels over flat ground at height 0, the
+        // ray is at the ground about 5 voxels out, before level 1 begins at
+        // 20: no level, no weight.
         let (h, c) = flat(64, 0);
         let terrain = Terrain::new(64, 64, &h, &c).unwrap();
         let cam = Camera {
             eye: [0.3, 31.5, 3.0],
+            pitch_deg: 30.0,
             ..Camera::default()
         };
         let view = View::new(&cam, 64, 1).unwrap();
         let plan = LodPlan {
-            level1_depth: 3 << 16,
+            level1_depth: 20 << 16,
             top: 4,
         };
         let short = view.pixel_ray(&terrain.extent(), &plan, 32, 0);
+        assert!((3..=8).contains(&short.end), "end {}", short.end);
         assert_eq!((short.lod.top, short.lod.dt), (0, 0));
         assert!((short.first..=short.end).all(|k| short.level_at(k) == 0));
-        // The same direction with room to run keeps its levels.
+        // A ray with room to run keeps its levels.
         let long = ray_with_levels(true, 0.3);
         assert_eq!(long.lod.top, 4);
         assert!(long.lod.dt > 0);
