@@ -275,9 +275,10 @@ struct RenderArgs {
     /// and blurrier.
     #[arg(long, default_value_t = 1.0, value_name = "RATIO")]
     pixel_to_voxel: f32,
-    /// Kernel: how the pyramid's coarse heights are made.
-    #[arg(long, value_enum, default_value_t = HeightFilterArg::Subsample)]
-    height_filter: HeightFilterArg,
+    /// Kernel: how the pyramid's coarse heights are made [default:
+    /// subsample; with --terrain, the filter the file was packed with].
+    #[arg(long, value_enum)]
+    height_filter: Option<HeightFilterArg>,
     /// Kernel: how rays cast from the eye find their first hit.
     #[arg(long, value_enum, default_value_t = FirstHitArg::Hierarchical)]
     first_hit: FirstHitArg,
@@ -409,7 +410,10 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let (frame, stats) = match args.method {
         Method::Kernel => {
             let options = kernel_options(&args, sky)?;
-            let kernel = scene.to_kernel_with(args.height_filter.into())?;
+            let kernel = scene.to_kernel_with(
+                args.height_filter
+                    .map_or_else(HeightFilter::default, Into::into),
+            )?;
             View::new(&camera, width, height).map_err(view_error)?;
             render_kernel(&kernel, &camera, width, height, &options)?
         }

@@ -99,12 +99,13 @@ pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> 
     let (width, height) = args.size;
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
     let options = kernel_options(args, sky)?;
-    if let Terrain::File(file) = &terrain {
-        let wanted = HeightFilter::from(args.height_filter);
-        if file.filter() != wanted {
+    // A file's levels are built already: it renders with its own filter,
+    // and asking for another is an error rather than a silent substitute.
+    if let (Terrain::File(file), Some(wanted)) = (&terrain, args.height_filter) {
+        if file.filter() != HeightFilter::from(wanted) {
             let packed = format!("{:?}", file.filter()).to_lowercase();
             return Err(Error::new(format!(
-                "{} was packed with --height-filter {packed}; render it with --height-filter {packed}, or pack it again",
+                "{} was packed with --height-filter {packed}; leave --height-filter out to render with it, or pack the file again",
                 file.path().display(),
             )));
         }
