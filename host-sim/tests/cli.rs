@@ -13,7 +13,13 @@ fn temp(name: &str) -> PathBuf {
 }
 
 fn small_maps() -> (PathBuf, PathBuf) {
-    let (h, c) = (temp("h.png"), temp("c.png"));
+    maps_named("h.png", "c.png")
+}
+
+/// A 16 x 16 height map and color map under these names. Tests run in
+/// parallel: each writes its own files.
+fn maps_named(height: &str, color: &str) -> (PathBuf, PathBuf) {
+    let (h, c) = (temp(height), temp(color));
     image::GrayImage::from_fn(16, 16, |x, y| image::Luma([(x * 3 + y) as u8]))
         .save(&h)
         .unwrap();
@@ -25,7 +31,7 @@ fn small_maps() -> (PathBuf, PathBuf) {
 
 #[test]
 fn renders_png_depth_and_stats_as_the_contract_says() {
-    let (h, c) = small_maps();
+    let (h, c) = maps_named("contract-h.png", "contract-c.png");
     let (png, pfm, json) = (temp("v.png"), temp("v.pfm"), temp("v.json"));
     for method in ["kernel", "reference", "march", "voxelspace"] {
         let (code, _, err) = sim(&[
@@ -201,7 +207,7 @@ fn procedural_scene_needs_no_data() {
 
 #[test]
 fn a_tiles_file_renders_with_its_own_height_filter() {
-    let (h, c) = small_maps();
+    let (h, c) = maps_named("tiles-h.png", "tiles-c.png");
     let tiles = temp("mean.tiles");
     let (code, _, err) = sim(&[
         "pack",
