@@ -377,7 +377,7 @@ impl Lod {
         // it needs no schedule and no level weight (the division below).
         // It samples and shades exactly as with the levels it never
         // reaches.
-        if (reach - delta0 + ONE - 1) >> COORD_FRAC_BITS > end {
+        if first_sample_from(reach, delta0) > end {
             return SINGLE;
         }
         // t goes from 0 to 1 over the level's `2^(l−1)·reach` voxels, which
@@ -385,6 +385,13 @@ impl Lod {
         let dt = ((1i64 << 33) / reach).min(1 << 24) as i32;
         Self { reach, dt, top }
     }
+}
+
+/// The first sample at or past major-axis distance `distance` (Q16) on a
+/// ray whose sample 0 is `delta0` (Q16) from the eye.
+#[inline]
+fn first_sample_from(distance: i64, delta0: i64) -> i64 {
+    (distance - delta0 + ONE - 1) >> COORD_FRAC_BITS
 }
 
 impl Ray {
@@ -433,8 +440,7 @@ impl Ray {
     /// The first sample at distance `reach << (level − 1)` or beyond.
     #[inline]
     fn threshold(&self, level: u8) -> i32 {
-        let distance = self.lod.reach << (level - 1);
-        let k = (distance - self.delta0 + ONE - 1) >> COORD_FRAC_BITS;
+        let k = first_sample_from(self.lod.reach << (level - 1), self.delta0);
         k.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
     }
 

@@ -130,6 +130,25 @@ pub enum HeightFilterArg {
     Max,
 }
 
+impl From<HeightFilter> for HeightFilterArg {
+    fn from(filter: HeightFilter) -> Self {
+        match filter {
+            HeightFilter::Subsample => Self::Subsample,
+            HeightFilter::Mean => Self::Mean,
+            HeightFilter::Max => Self::Max,
+        }
+    }
+}
+
+impl HeightFilterArg {
+    /// The name `--height-filter` takes.
+    fn name(self) -> String {
+        self.to_possible_value()
+            .map(|v| v.get_name().to_owned())
+            .unwrap_or_default()
+    }
+}
+
 impl From<HeightFilterArg> for HeightFilter {
     fn from(arg: HeightFilterArg) -> Self {
         match arg {

@@ -103,7 +103,7 @@ pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> 
     // and asking for another is an error rather than a silent substitute.
     if let (Terrain::File(file), Some(wanted)) = (&terrain, args.height_filter) {
         if file.filter() != HeightFilter::from(wanted) {
-            let packed = format!("{:?}", file.filter()).to_lowercase();
+            let packed = super::HeightFilterArg::from(file.filter()).name();
             return Err(Error::new(format!(
                 "{} was packed with --height-filter {packed}; leave --height-filter out to render with it, or pack the file again",
                 file.path().display(),
