@@ -288,6 +288,10 @@ fn run() -> Result<(), &'static str> {
         // The same view with every ray cast from the eye: many more steps
         // for the same rays, which separates the cost of a step from the
         // cost of a ray, and checks the slow path on the board too.
+        // scripts/board-profile leaves it out, to profile the default alone.
+        if option_env!("TERRACAST_BOARD_DEFAULT_ONLY").is_some() {
+            continue;
+        }
         let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
             .map_err(|_| "framebuffer too small")?;
         let start = ticks();

@@ -358,6 +358,72 @@ mod tests {
         }
     }
 
+    #[test]
+    fn an_allowance_past_i32_max_is_no_limit() {
+        // Hills under a low, shallow eye: long rays, sky above them.
+        let side = 64u32;
+        let heights: vec::Vec<u16> = (0..side * side)
+            .map(|i| ((i % side * 5 + i / side * 3) % 40) as u16 * 16)
+            .collect();
+        let colors: vec::Vec<crate::Rgb> = (0..side * side)
+            .map(|i| [(i % 251) as u8, (i % 97) as u8, 60])
+            .collect();
+        let terrain = Terrain::new(side, side, &heights, &colors).unwrap();
+        let points = pyramid_points(side, side);
+        let (mut h, mut c) = (vec![0u16; points], vec![[0u8; 3]; points]);
+        let mut b = vec![0u16; pyramid_cells(side, side)];
+        Pyramid::build(&terrain, HeightFilter::default(), &mut h, &mut c, &mut b).unwrap();
+        let pyramid = Pyramid::new(terrain, &h, &c, &b).unwrap();
+        let options = RenderOptions::default();
+        let camera = Camera {
+            eye: [3.0, 5.0, 50.0],
+            yaw_deg: 40.0,
+            pitch_deg: 4.0,
+            ..Camera::default()
+        };
+        let view = View::new(&camera, 32, 24).unwrap();
+        let frame = Frame::new(&pyramid, &view, &options);
+        let render_with = |allowance: Option<u32>| {
+            let mut pixels = [[0u8; 3]; 32 * 24];
+            let mut sink = crate::Framebuffer::new(&mut pixels, 32, 24).unwrap();
+            for line in 0..view.lines() {
+                let mut probe = crate::NoProbe;
+                match allowance {
+                    Some(n) => line_with(
+                        &pyramid,
+                        &view,
+                        &options,
+                        &frame,
+                        line,
+                        &mut sink,
+                        &mut probe,
+                        &mut Fixed(n),
+                    ),
+                    None => line_with(
+                        &pyramid,
+                        &view,
+                        &options,
+                        &frame,
+                        line,
+                        &mut sink,
+                        &mut probe,
+                        &mut super::super::Unlimited,
+                    ),
+                }
+            }
+            pixels
+        };
+        let unlimited = render_with(None);
+        assert!(unlimited.contains(&options.sky));
+        assert!(unlimited.iter().any(|p| *p != options.sky));
+        for allowance in [i32::MAX as u32, i32::MAX as u32 + 1, u32::MAX - 1] {
+            assert!(
+                render_with(Some(allowance)) == unlimited,
+                "allowance {allowance}"
+            );
+        }
+    }
+
     fn cost(steps: u64, coarse_lines: u32) -> FrameCost {
         FrameCost {
             steps,

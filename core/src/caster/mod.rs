@@ -22,7 +22,7 @@ pub use budget::{FrameCost, Governor};
 use crate::probe::Probe;
 use crate::sink::{Sample, Sink};
 use crate::surface::Surface;
-use crate::view::ray::{Cursor, Lod, LodPlan, Plane, Ray, RayKey};
+use crate::view::ray::{Clip, Cursor, Lod, LodPlan, Plane, Ray, RayKey};
 use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
 use first_hit::first_hit;
@@ -233,7 +233,10 @@ impl Allowances for Unlimited {
 #[derive(Debug, Clone, Copy)]
 struct Anchor {
     key: RayKey,
-    lod: Lod,
+    /// `None` for a ray whose schedule was not worked out: one that resumed
+    /// past its end, which only [`Coherence::AcrossLevels`] lets a ray do
+    /// without it (see [`Anchor::clears_all_of`]).
+    lod: Option<Lod>,
     start: i32,
     k: i32,
     dminor: i32,
@@ -295,15 +298,29 @@ fn line_with<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances>(
             let offset = (((2 * sub + 1 - samples) * 8) >> log2) * step;
             probe.ray();
             let d = view.direction_on(&line, pixel.s, offset);
-            let mut ray = view.ray(&extent, &frame.lod, d, &plane);
-            ray.color_drift = plane.drift(&d, pixel.offset) as i32;
+            let clip = view.clip(&extent, &d, &plane);
             let allowance = allowances.next();
-            let sample = if ray.start > ray.end {
+            let sample = if clip.start > clip.end {
                 sky(options)
             } else if allowance == 0 {
                 // No step left in the budget: repeat the ray before.
                 previous.unwrap_or_else(|| sky(options))
+            } else if let Some(a) =
+                anchor.filter(|a| frame.resume && a.clears_all_of(&clip, frame.same_schedule))
+            {
+                // It would resume past its own end (the ray below left the
+                // terrain): sky, and no more of its set-up is needed.
+                anchor = Some(Anchor {
+                    lod: None,
+                    start: clip.start,
+                    k: clip.end + 1,
+                    dz: clip.dz as i32,
+                    ..a
+                });
+                sky(options)
             } else {
+                let mut ray = view.ray_with(&extent, &frame.lod, &plane, &clip);
+                ray.color_drift = plane.drift(&d, pixel.offset) as i32;
                 let resume = anchor
                     .filter(|_| frame.resume)
                     .and_then(|a| resume_at(&a, &ray, frame.same_schedule));
@@ -319,7 +336,7 @@ fn line_with<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances>(
                 );
                 anchor = Some(Anchor {
                     key: ray.key,
-                    lod: ray.lod,
+                    lod: Some(ray.lod),
                     start: ray.start,
                     k: clear_until,
                     dminor: ray.dminor.to_bits(),
@@ -353,10 +370,23 @@ fn line_with<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances>(
 /// from the eye.
 fn resume_at(anchor: &Anchor, ray: &Ray, same_schedule: bool) -> Option<i32> {
     let same_plane = anchor.key == ray.key && anchor.dminor == ray.dminor.to_bits();
-    if !same_plane || ray.dz.to_bits() < anchor.dz || (same_schedule && anchor.lod != ray.lod) {
+    if !same_plane || ray.dz.to_bits() < anchor.dz || (same_schedule && anchor.lod != Some(ray.lod))
+    {
         return None;
     }
     (anchor.start < anchor.k).then_some(anchor.k)
+}
+
+impl Anchor {
+    /// Whether the next ray of the line, clipped to `clip`, would resume
+    /// (see [`resume_at`]) past its last sample, so that its walk is empty
+    /// and it sees the sky whatever the rest of its set-up. Its plane is
+    /// the anchor's (the line's). Rays compared by schedule are left to
+    /// the full set-up.
+    #[inline]
+    fn clears_all_of(&self, clip: &Clip, same_schedule: bool) -> bool {
+        !same_schedule && clip.dz >= i64::from(self.dz) && self.start < self.k && self.k > clip.end
+    }
 }
 
 fn sky(options: &RenderOptions) -> Sample {
@@ -389,7 +419,9 @@ fn cast<T: Surface + ?Sized, P: Probe>(
         let end = if allowance == u32::MAX {
             ray.end
         } else {
-            ray.end.min(from.saturating_add(allowance as i32 - 1))
+            // (An allowance past i32::MAX is no limit on any ray.)
+            let allowance = i32::try_from(allowance).unwrap_or(i32::MAX);
+            ray.end.min(from.saturating_add(allowance - 1))
         };
         if from > end {
             Walk::Exit { last: end }
@@ -616,6 +648,53 @@ mod tests {
         );
         let subvoxel = terrain_pixels(shaded(Shading::Subvoxel));
         assert!(subvoxel.iter().any(|c| c[0] > 20 && c[0] < 235));
+    }
+
+    #[test]
+    fn rays_above_a_line_that_left_the_terrain_see_the_same_sky_without_their_set_up() {
+        use crate::{Camera, Framebuffer, Pyramid, Terrain};
+        // Ridges across a 32 x 32 map, seen from low and far: most lines
+        // leave the terrain part way up. At single resolution every ray's
+        // schedule is the same, so Exact resumes exactly where AcrossLevels
+        // does; only AcrossLevels skips the set-up of rays that would
+        // resume past their end.
+        let heights: [u16; 1024] = core::array::from_fn(|i| ((i % 32 * 7) % 20) as u16 * 16);
+        let colors: [Rgb; 1024] = core::array::from_fn(|i| [(i % 256) as u8, (i / 4) as u8, 90]);
+        let terrain = Terrain::new(32, 32, &heights, &colors).unwrap();
+        let pyramid = Pyramid::flat(terrain);
+        for (eye, yaw, pitch) in [
+            ([-6.0, 16.0, 22.0], 0.0, 3.0),
+            ([2.0, 3.0, 25.0], 45.0, 20.0),
+            ([40.0, 30.0, 24.0], 200.0, -5.0),
+            ([16.0, 16.0, 30.0], 300.0, 40.0),
+        ] {
+            let camera = Camera {
+                eye,
+                yaw_deg: yaw,
+                pitch_deg: pitch,
+                ..Camera::default()
+            };
+            let view = View::new(&camera, 24, 18).unwrap();
+            let image = |coherence| {
+                let mut pixels = [[0u8; 3]; 24 * 18];
+                let mut frame = Framebuffer::new(&mut pixels, 24, 18).unwrap();
+                let options = RenderOptions {
+                    coherence,
+                    resolution: Resolution::Single,
+                    ..RenderOptions::default()
+                };
+                render(&pyramid, &view, &options, &mut frame, &mut crate::NoProbe);
+                pixels
+            };
+            let skipping = image(Coherence::AcrossLevels);
+            assert!(skipping.contains(&DEFAULT_SKY), "{eye:?}: no sky");
+            assert!(
+                skipping.iter().any(|p| *p != DEFAULT_SKY),
+                "{eye:?}: only sky"
+            );
+            assert!(skipping == image(Coherence::Exact), "{eye:?}");
+            assert!(skipping == image(Coherence::Off), "{eye:?}");
+        }
     }
 
     #[test]

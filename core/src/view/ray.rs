@@ -297,12 +297,44 @@ impl View {
         (dz, run)
     }
 
-    /// Sets up the ray along direction `d` (I32F32 bits) in `plane`: `d`'s
-    /// horizontal part only sets how steep the ray is (it is parallel to
-    /// the plane, up to rounding).
+    /// The slope of direction `d` (I32F32 bits) in `plane` and the samples
+    /// where a ray along it can hit: the part of a ray's set-up that tells
+    /// whether it needs the rest (see [`View::ray_with`]).
     #[inline]
-    pub(crate) fn ray(&self, extent: &Extent, plan: &LodPlan, d: [i64; 3], plane: &Plane) -> Ray {
-        let (dz, run) = Self::slope(&d, plane);
+    pub(crate) fn clip(&self, extent: &Extent, d: &[i64; 3], plane: &Plane) -> Clip {
+        let (dz, run) = Self::slope(d, plane);
+        let (first, last) = (plane.first, plane.last);
+        let z0 = self.eye[2].to_bits() + ((plane.delta0 * dz) >> COORD_FRAC_BITS);
+        let start = first.max(0);
+        // A hit needs the ray at or below the highest height; a falling ray
+        // is certainly below the surface once its height is <= 0.
+        let top = i64::from(extent.max_height) << (COORD_FRAC_BITS - HEIGHT_FRAC_BITS);
+        let end = match dz.signum() {
+            1 => last.min(div_floor(top - z0, dz)),
+            0 if z0 > top => start - 1,
+            0 => last,
+            _ => last.min(start.max(div_ceil(z0, -dz))),
+        };
+        Clip {
+            dz,
+            run,
+            z0,
+            wide_end: end,
+            start: narrow(start),
+            end: narrow(end),
+        }
+    }
+
+    /// Sets up the ray clipped by [`View::clip`]: its level schedule and
+    /// everything the walk needs.
+    #[inline]
+    pub(crate) fn ray_with(
+        &self,
+        extent: &Extent,
+        plan: &LodPlan,
+        plane: &Plane,
+        clip: &Clip,
+    ) -> Ray {
         let Plane {
             key,
             dminor,
@@ -314,20 +346,15 @@ impl View {
             minor_max,
             ..
         } = *plane;
-        let z0 = self.eye[2].to_bits() + ((delta0 * dz) >> COORD_FRAC_BITS);
-        let start = first.max(0);
-        // A hit needs the ray at or below the highest height; a falling ray
-        // is certainly below the surface once its height is <= 0.
-        let top = i64::from(extent.max_height) << (COORD_FRAC_BITS - HEIGHT_FRAC_BITS);
-        let end = match dz.signum() {
-            1 => last.min(div_floor(top - z0, dz)),
-            0 if z0 > top => start - 1,
-            0 => last,
-            _ => last.min(start.max(div_ceil(z0, -dz))),
-        };
-
+        let Clip {
+            dz,
+            run,
+            z0,
+            wide_end: end,
+            start,
+            end: narrow_end,
+        } = *clip;
         let edge_end = extent.real_edges && end == last;
-        let narrow = |v: i64| v.clamp(-(1 << 20), 1 << 20) as i32;
         let mut ray = Ray {
             key,
             major0,
@@ -337,8 +364,8 @@ impl View {
             dminor: I16F16::from_bits(dminor as i32),
             dz: I16F16::from_bits(dz as i32),
             first: narrow(first),
-            start: narrow(start),
-            end: narrow(end),
+            start,
+            end: narrow_end,
             edge_end,
             minor_max: minor_max.clamp(0, i64::from(i32::MAX)) as i32,
             color_drift: 0,
@@ -349,6 +376,31 @@ impl View {
         ray.schedule();
         ray
     }
+}
+
+/// A sample number as a ray keeps it: far outside any map, but in range of
+/// every sum the caster forms with it.
+#[inline]
+fn narrow(v: i64) -> i32 {
+    v.clamp(-(1 << 20), 1 << 20) as i32
+}
+
+/// A ray's slope and the samples where it can hit (see [`View::clip`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Clip {
+    /// Height change per major-axis step, Q16, and the direction's
+    /// major-axis component (I32F32 bits).
+    pub dz: i64,
+    run: i64,
+    /// Height at sample 0, Q16.
+    z0: i64,
+    /// `end` before narrowing.
+    wide_end: i64,
+    /// First sample the traversal visits and last where a hit is
+    /// possible, as [`Ray::start`] and [`Ray::end`] will have them: no
+    /// hit at all when `start > end`.
+    pub start: i32,
+    pub end: i32,
 }
 
 impl Lod {
@@ -636,7 +688,8 @@ impl View {
                 + self.per_column[i].to_bits() * i64::from(column)
                 + ((self.per_row[i].to_bits() * row16) >> 4)
         });
-        self.ray(extent, plan, d, &Plane::new(self, extent, &d))
+        let plane = Plane::new(self, extent, &d);
+        self.ray_with(extent, plan, &plane, &self.clip(extent, &d, &plane))
     }
 }
 
