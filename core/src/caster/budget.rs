@@ -298,6 +298,17 @@ mod tests {
         fn put(&mut self, _: u32, _: u32, _: crate::Sample) {}
     }
 
+    /// The coarser levels and bounds of `terrain`, built: the storage a
+    /// pyramid over it borrows.
+    fn pyramid_storage(terrain: &Terrain) -> (vec::Vec<u16>, vec::Vec<crate::Rgb>, vec::Vec<u16>) {
+        let (side_x, side_y) = (terrain.width(), terrain.depth());
+        let points = pyramid_points(side_x, side_y);
+        let (mut h, mut c) = (vec![0u16; points], vec![[0u8; 3]; points]);
+        let mut b = vec![0u16; pyramid_cells(side_x, side_y)];
+        Pyramid::build(terrain, HeightFilter::default(), &mut h, &mut c, &mut b).unwrap();
+        (h, c, b)
+    }
+
     #[test]
     fn a_ray_with_allowance_n_takes_at_most_4n_plus_2_steps() {
         // Rough terrain with cliffs: heights jump by up to 200 voxels.
@@ -312,10 +323,7 @@ mod tests {
             .collect();
         let colors = vec![[80u8, 120, 60]; n];
         let terrain = Terrain::new(side, side, &heights, &colors).unwrap();
-        let points = pyramid_points(side, side);
-        let (mut h, mut c) = (vec![0u16; points], vec![[0u8; 3]; points]);
-        let mut b = vec![0u16; pyramid_cells(side, side)];
-        Pyramid::build(&terrain, HeightFilter::default(), &mut h, &mut c, &mut b).unwrap();
+        let (h, c, b) = pyramid_storage(&terrain);
         let pyramid = Pyramid::new(terrain, &h, &c, &b).unwrap();
         let options = RenderOptions::default();
         for (eye, pitch) in [
@@ -369,10 +377,7 @@ mod tests {
             .map(|i| [(i % 251) as u8, (i % 97) as u8, 60])
             .collect();
         let terrain = Terrain::new(side, side, &heights, &colors).unwrap();
-        let points = pyramid_points(side, side);
-        let (mut h, mut c) = (vec![0u16; points], vec![[0u8; 3]; points]);
-        let mut b = vec![0u16; pyramid_cells(side, side)];
-        Pyramid::build(&terrain, HeightFilter::default(), &mut h, &mut c, &mut b).unwrap();
+        let (h, c, b) = pyramid_storage(&terrain);
         let pyramid = Pyramid::new(terrain, &h, &c, &b).unwrap();
         let options = RenderOptions::default();
         let camera = Camera {
@@ -383,44 +388,30 @@ mod tests {
         };
         let view = View::new(&camera, 32, 24).unwrap();
         let frame = Frame::new(&pyramid, &view, &options);
-        let render_with = |allowance: Option<u32>| {
+        // u32::MAX is what the plain render's allowances give: no limit.
+        let render_with = |allowance: u32| {
             let mut pixels = [[0u8; 3]; 32 * 24];
             let mut sink = crate::Framebuffer::new(&mut pixels, 32, 24).unwrap();
             for line in 0..view.lines() {
                 let mut probe = crate::NoProbe;
-                match allowance {
-                    Some(n) => line_with(
-                        &pyramid,
-                        &view,
-                        &options,
-                        &frame,
-                        line,
-                        &mut sink,
-                        &mut probe,
-                        &mut Fixed(n),
-                    ),
-                    None => line_with(
-                        &pyramid,
-                        &view,
-                        &options,
-                        &frame,
-                        line,
-                        &mut sink,
-                        &mut probe,
-                        &mut super::super::Unlimited,
-                    ),
-                }
+                line_with(
+                    &pyramid,
+                    &view,
+                    &options,
+                    &frame,
+                    line,
+                    &mut sink,
+                    &mut probe,
+                    &mut Fixed(allowance),
+                );
             }
             pixels
         };
-        let unlimited = render_with(None);
+        let unlimited = render_with(u32::MAX);
         assert!(unlimited.contains(&options.sky));
         assert!(unlimited.iter().any(|p| *p != options.sky));
         for allowance in [i32::MAX as u32, i32::MAX as u32 + 1, u32::MAX - 1] {
-            assert!(
-                render_with(Some(allowance)) == unlimited,
-                "allowance {allowance}"
-            );
+            assert!(render_with(allowance) == unlimited, "allowance {allowance}");
         }
     }
 
