@@ -297,7 +297,11 @@ fn line_with<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances>(
             // Sub-ray centers, in sixteenths of a pixel from the pixel center.
             let offset = (((2 * sub + 1 - samples) * 8) >> log2) * step;
             probe.ray();
-            let d = view.direction_on(&line, pixel.s, offset);
+            let d = if offset == 0 {
+                view.direction_of(&line, &pixel)
+            } else {
+                view.direction_on(&line, pixel.s, offset)
+            };
             let clip = view.clip(&extent, &d, &plane);
             let allowance = allowances.next();
             let sample = if clip.start > clip.end {

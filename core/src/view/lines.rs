@@ -242,6 +242,11 @@ pub(crate) struct Line {
     pub reference: [i64; 3],
     /// Cross coordinate per unit of axis, Q32 (`(K − t_V) / (s_ref − s_V)`).
     slope: i64,
+    /// The ownership test's per-line terms (see [`Line::owns`]), Q8:
+    /// `|s_ref − s_V|`, and `K ∓ ½ − t_V`.
+    far: i64,
+    nearest_from: i64,
+    nearest_to: i64,
 }
 
 /// A pixel a line owns.
@@ -255,6 +260,8 @@ pub(crate) struct Owned {
     /// The pixel's center less its line's point there, along the cross
     /// coordinate, Q16 pixels (within ±1/2).
     pub offset: i64,
+    /// The line's point there: its cross coordinate, Q16.
+    pub cross: i64,
 }
 
 impl View {
@@ -288,11 +295,16 @@ impl View {
                 }
             }
         };
+        let (s_v, t_v) = sector.vanishing.unwrap_or((0, 0));
+        let k_t = (i64::from(k) << IMG_FRAC) - t_v;
         Some(Line {
             sector,
             k,
             reference,
             slope,
+            far: ((i64::from(sector.s_ref) << IMG_FRAC) - s_v).abs(),
+            nearest_from: k_t - IMG_ONE / 2,
+            nearest_to: k_t + IMG_ONE / 2,
         })
     }
 
@@ -301,7 +313,20 @@ impl View {
     #[inline]
     pub(crate) fn direction_on(&self, line: &Line, s: i32, offset16: i64) -> [i64; 3] {
         let s_q16 = (i64::from(s) << COORD_FRAC_BITS) + (offset16 << (COORD_FRAC_BITS - 4));
-        let t_q16 = line.cross_at(s_q16);
+        self.direction_at(line, s_q16, line.cross_at(s_q16))
+    }
+
+    /// The direction through the pixel `pixel` of `line` looks along: the
+    /// line's point at its axis coordinate, worked out when it was found.
+    #[inline]
+    pub(crate) fn direction_of(&self, line: &Line, pixel: &Owned) -> [i64; 3] {
+        self.direction_at(line, i64::from(pixel.s) << COORD_FRAC_BITS, pixel.cross)
+    }
+
+    /// The direction through image-plane point (`s_q16`, `t_q16`): axis
+    /// and cross coordinates of `line`'s sector, Q16.
+    #[inline]
+    fn direction_at(&self, line: &Line, s_q16: i64, t_q16: i64) -> [i64; 3] {
         let (u, v) = if line.sector.along_rows {
             (t_q16, s_q16)
         } else {
@@ -364,7 +389,7 @@ impl Line {
             return t == self.k;
         };
         let a = ((i64::from(s) << IMG_FRAC) - s_v).abs();
-        let b = ((i64::from(self.sector.s_ref) << IMG_FRAC) - s_v).abs();
+        let b = self.far;
         let dt = (i64::from(t) << IMG_FRAC) - t_v;
         // Rows belong to the sectors above and below V on the diagonals
         // (which `Lines::new` keeps off pixel centers anyway).
@@ -374,9 +399,7 @@ impl Line {
             dt.abs() < a
         };
         // Nearest line: (K − ½ − t_V)·a <= (t − t_V)·b < (K + ½ − t_V)·a.
-        let k = (i64::from(self.k) << IMG_FRAC) - t_v;
-        let half = IMG_ONE / 2;
-        inside && (k - half) * a <= dt * b && dt * b < (k + half) * a
+        inside && self.nearest_from * a <= dt * b && dt * b < self.nearest_to * a
     }
 
     /// The pixels this line owns, in the order their rays are cast.
@@ -435,6 +458,7 @@ impl Iterator for OwnedPixels {
                     y: (self.top_row - row) as u32,
                     s,
                     offset: (i64::from(t) << COORD_FRAC_BITS) - t_q16,
+                    cross: t_q16,
                 });
             }
         }
@@ -578,6 +602,25 @@ mod tests {
                     assert!(
                         (t - f64::from(own)).abs() <= 0.5 + 1e-3,
                         "pitch {pitch}: {t} for {own}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_pixels_direction_is_its_lines_direction_at_the_pixel() {
+        // The caster takes a one-ray pixel's direction from the point the
+        // pixel iterator found, not by working it out again.
+        for pitch in [0.0, 10.0, 45.0, 90.0, -60.0] {
+            let view = view(pitch, 33.0, (40, 30), 70.0);
+            for index in 0..view.lines() {
+                let line = view.line(index).unwrap();
+                for p in line.pixels(30) {
+                    assert_eq!(
+                        view.direction_of(&line, &p),
+                        view.direction_on(&line, p.s, 0),
+                        "pitch {pitch} line {index} pixel {p:?}"
                     );
                 }
             }

@@ -704,6 +704,7 @@ pub(crate) fn div_trunc(a: i64, b: i64) -> i64 {
     }
 }
 
+#[inline]
 fn div_floor(a: i64, b: i64) -> i64 {
     let q = div_trunc(a, b);
     if q * b != a && ((a < 0) != (b < 0)) {
@@ -713,6 +714,7 @@ fn div_floor(a: i64, b: i64) -> i64 {
     }
 }
 
+#[inline]
 fn div_ceil(a: i64, b: i64) -> i64 {
     -div_floor(-a, b)
 }
