@@ -37,7 +37,7 @@ use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
     pyramid_cells, pyramid_points, render, Coherence, Framebuffer, HeightFilter, NoProbe, Pyramid,
-    RenderOptions, Rgb, View,
+    RenderOptions, Resolution, Rgb, View, U8F8,
 };
 use terracast_board::{scene::BoardScene, wire::frame_capture_bytes, CaptureBus, SpiDisplay};
 
@@ -169,6 +169,40 @@ fn write_host_file(name: &str, bytes: &[u8]) -> Result<(), &'static str> {
     Ok(())
 }
 
+/// The settings the views are rendered with: the default, or for
+/// scripts/board-profile the resolution named at build time by
+/// `TERRACAST_BOARD_RESOLUTION` (`single`, or a pixel-to-voxel ratio in
+/// 256ths: `128` is 0.5). scripts/board-check always builds the default.
+fn profiled_options() -> RenderOptions {
+    let resolution = match option_env!("TERRACAST_BOARD_RESOLUTION") {
+        None | Some("") => Resolution::DEFAULT,
+        Some("single") => Resolution::Single,
+        Some(ratio) => Resolution::Multi {
+            pixel_to_voxel: U8F8::from_bits(parse_u16(ratio)),
+        },
+    };
+    RenderOptions {
+        resolution,
+        ..RenderOptions::default()
+    }
+}
+
+/// A decimal `u16` at compile time (0 for anything else).
+const fn parse_u16(text: &str) -> u16 {
+    let bytes = text.as_bytes();
+    let (mut value, mut i) = (0u16, 0);
+    while i < bytes.len() {
+        if !bytes[i].is_ascii_digit() {
+            return 0;
+        }
+        value = value
+            .wrapping_mul(10)
+            .wrapping_add((bytes[i] - b'0') as u16);
+        i += 1;
+    }
+    value
+}
+
 #[entry]
 fn main() -> ! {
     let code = match run() {
@@ -224,7 +258,7 @@ fn run() -> Result<(), &'static str> {
     let pyramid_ticks = ticks() - start;
     let pyramid = Pyramid::new(terrain, coarse_heights, coarse_colors, bounds)
         .map_err(|_| "the kernel refused the pyramid")?;
-    let options = RenderOptions::default();
+    let options = profiled_options();
     let from_eye = RenderOptions {
         coherence: Coherence::Off,
         ..options
