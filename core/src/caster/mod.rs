@@ -8,7 +8,10 @@
 //! With levels, the ray before may have stepped on other levels than this
 //! one near a switch; [`Coherence::Exact`] casts such a ray from the eye,
 //! so the image equals the image with every ray cast from the eye, bit for
-//! bit (tested), and [`Coherence::AcrossLevels`] resumes it anyway. A resumed ray that starts below the
+//! bit (tested), and [`Coherence::AcrossLevels`] resumes it anyway. Under
+//! AcrossLevels, a ray that would resume past its own last sample (the ray
+//! below it left the terrain) is sky after its slope and clip alone. A
+//! resumed ray that starts below the
 //! surface retraces backwards to the last sample above it (Qu et al. §4);
 //! the hit is refined between that sample and the first one below by the
 //! ratio of their clearances, and the color blended across both grid lines.
