@@ -169,38 +169,43 @@ fn write_host_file(name: &str, bytes: &[u8]) -> Result<(), &'static str> {
     Ok(())
 }
 
-/// The settings the views are rendered with: the default, or for
-/// scripts/board-profile the resolution named at build time by
+/// The resolution the views are rendered with: the default, or for
+/// scripts/board-profile the one named at build time by
 /// `TERRACAST_BOARD_RESOLUTION` (`single`, or a pixel-to-voxel ratio in
-/// 256ths: `128` is 0.5). scripts/board-check always builds the default.
-fn profiled_options() -> RenderOptions {
-    let resolution = match option_env!("TERRACAST_BOARD_RESOLUTION") {
-        None | Some("") => Resolution::DEFAULT,
-        Some("single") => Resolution::Single,
-        Some(ratio) => Resolution::Multi {
-            pixel_to_voxel: U8F8::from_bits(parse_u16(ratio)),
-        },
-    };
-    RenderOptions {
-        resolution,
-        ..RenderOptions::default()
-    }
-}
+/// 256ths: `128` is 0.5). Any other value stops the build.
+/// scripts/board-check always builds the default.
+const RESOLUTION: Resolution = match option_env!("TERRACAST_BOARD_RESOLUTION") {
+    Some(name) => resolution_named(name.as_bytes()),
+    None => Resolution::DEFAULT,
+};
 
-/// A decimal `u16` at compile time (0 for anything else).
-const fn parse_u16(text: &str) -> u16 {
-    let bytes = text.as_bytes();
-    let (mut value, mut i) = (0u16, 0);
-    while i < bytes.len() {
-        if !bytes[i].is_ascii_digit() {
-            return 0;
+/// See [`RESOLUTION`]; empty is the default.
+const fn resolution_named(name: &[u8]) -> Resolution {
+    const USAGE: &str =
+        "TERRACAST_BOARD_RESOLUTION: `single`, or a pixel-to-voxel ratio in 256ths (1 to 65535)";
+    if name.is_empty() {
+        return Resolution::DEFAULT;
+    }
+    if name.len() == 6 {
+        let (single, mut i) = (b"single", 0);
+        while i < 6 && name[i] == single[i] {
+            i += 1;
         }
-        value = value
-            .wrapping_mul(10)
-            .wrapping_add((bytes[i] - b'0') as u16);
+        if i == 6 {
+            return Resolution::Single;
+        }
+    }
+    let (mut ratio, mut i) = (0u32, 0);
+    while i < name.len() {
+        assert!(name[i].is_ascii_digit(), "{}", USAGE);
+        ratio = ratio * 10 + (name[i] - b'0') as u32;
+        assert!(ratio <= u16::MAX as u32, "{}", USAGE);
         i += 1;
     }
-    value
+    assert!(ratio >= 1, "{}", USAGE);
+    Resolution::Multi {
+        pixel_to_voxel: U8F8::from_bits(ratio as u16),
+    }
 }
 
 #[entry]
@@ -258,7 +263,10 @@ fn run() -> Result<(), &'static str> {
     let pyramid_ticks = ticks() - start;
     let pyramid = Pyramid::new(terrain, coarse_heights, coarse_colors, bounds)
         .map_err(|_| "the kernel refused the pyramid")?;
-    let options = profiled_options();
+    let options = RenderOptions {
+        resolution: RESOLUTION,
+        ..RenderOptions::default()
+    };
     let from_eye = RenderOptions {
         coherence: Coherence::Off,
         ..options

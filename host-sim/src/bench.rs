@@ -5,8 +5,9 @@
 //! Speed is single-threaded Mpx/s of the render call alone, the best of a
 //! few runs (the machines here are shared; the best run is the least
 //! disturbed), taken in rounds over all settings of a view so that a
-//! change of load disturbs every setting alike. Accuracy is PSNR and SSIM of the colors, sky agreement, and
-//! the median and 95th percentile of the relative depth error.
+//! change of load disturbs every setting alike. Accuracy is PSNR and SSIM
+//! of the colors, sky agreement, and the median and 95th percentile of the
+//! relative depth error.
 
 use crate::baselines::{
     march, march_touching, voxel_space, voxel_space_touching, MarchOptions, VoxelSpaceOptions,

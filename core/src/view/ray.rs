@@ -388,9 +388,9 @@ fn narrow(v: i64) -> i32 {
 /// A ray's slope and the samples where it can hit (see [`View::clip`]).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Clip {
-    /// Height change per major-axis step, Q16, and the direction's
-    /// major-axis component (I32F32 bits).
+    /// Height change per major-axis step, Q16.
     pub dz: i64,
+    /// The direction's major-axis component (I32F32 bits).
     run: i64,
     /// Height at sample 0, Q16.
     z0: i64,
