@@ -328,6 +328,7 @@ fn line_with<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances>(
             } else {
                 let mut ray = view.ray_with(&extent, &frame.lod, &plane, &clip);
                 ray.color_drift = plane.drift(&d, pixel.offset) as i32;
+                ray.schedule();
                 let resume = anchor
                     .filter(|_| frame.resume)
                     .and_then(|a| resume_at(&a, &ray, frame.same_schedule));
