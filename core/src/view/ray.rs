@@ -358,7 +358,7 @@ impl View {
             end: narrow_end,
         } = *clip;
         let edge_end = extent.real_edges && end == last;
-        let ray = Ray {
+        Ray {
             key,
             major0,
             delta0,
@@ -375,8 +375,7 @@ impl View {
             lod: Lod::new(plan, run, dz, delta0, end),
             begins: [i32::MAX; LEVEL_SLOTS],
             known: 1,
-        };
-        ray
+        }
     }
 }
 
@@ -745,6 +744,25 @@ mod tests {
     use crate::caster::walk::Stage;
     use crate::view::Camera;
     use crate::{Pyramid, Terrain};
+
+    #[test]
+    fn saturate_equals_a_clamp_to_i32() {
+        let edges = [
+            i64::from(i32::MAX),
+            i64::from(i32::MIN),
+            1 << 32,
+            -(1 << 32),
+        ];
+        for v in
+            edges
+                .into_iter()
+                .flat_map(|e| [e - 1, e, e + 1])
+                .chain([0, -1, i64::MIN, i64::MAX])
+        {
+            let clamped = v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
+            assert_eq!(saturate(v), clamped, "{v}");
+        }
+    }
 
     #[test]
     fn narrow_division_equals_wide_division() {

@@ -7,8 +7,8 @@
 //! clock_mhz = 40.0          # i860XR
 //!
 //! [cycles]
-//! per_ray = 1739            # ray set-up, shading and resume included
-//! per_step = 274            # one traversal step or bound test
+//! per_ray = 1579            # ray set-up, shading and resume included
+//! per_step = 267            # one traversal step or bound test
 //! per_color = 0             # (shading is inside per_ray)
 //! per_local_fetch = 2       # a voxel from local memory
 //! pool_lock = 100           # take a column under the pool's semaphore
@@ -42,7 +42,7 @@
 //! through the kernel's instructions per pixel against steps per pixel of
 //! the eight renders of `scripts/board-check` (Cortex-M7; four views, each
 //! with the default coherence and with every ray cast from the eye; the
-//! `cost fit` line it prints) is 1739 instructions a ray plus 274 a step,
+//! `cost fit` line it prints) is 1579 instructions a ray plus 267 a step,
 //! taken as i860 cycles at one instruction a cycle (both are 32-bit cores
 //! that do 64-bit division in software). Change them to model another
 //! processor or a faster kernel.
@@ -164,8 +164,8 @@ impl Default for Machine {
 impl Default for Cycles {
     fn default() -> Self {
         Self {
-            per_ray: 1739,
-            per_step: 274,
+            per_ray: 1579,
+            per_step: 267,
             per_color: 0,
             per_local_fetch: 2,
             pool_lock: 100,
@@ -362,14 +362,14 @@ mod tests {
         // scripts/board-check (README, "The board"): each view with the
         // default coherence, then from the eye.
         let board = [
-            (1.41, 1874.0),
-            (1.31, 1621.0),
-            (1.60, 2599.0),
-            (1.46, 2577.0),
-            (13.77, 5628.0),
-            (12.95, 4632.0),
-            (17.97, 6894.0),
-            (13.69, 5651.0),
+            (1.41, 1739.0),
+            (1.31, 1513.0),
+            (1.60, 2373.0),
+            (1.46, 2350.0),
+            (13.77, 5391.0),
+            (12.95, 4453.0),
+            (17.97, 6581.0),
+            (13.69, 5356.0),
         ];
         let n = board.len() as f64;
         let (mx, my) = board
@@ -380,7 +380,7 @@ mod tests {
         let intercept = my - slope * mx;
         let cycles = Machine::default().cycles;
         // The table's figures are rounded (steps a pixel to 0.01, which is
-        // up to 1.4 instructions at 274 a step); the board fits the exact
+        // up to 1.3 instructions at 267 a step); the board fits the exact
         // counts: within two.
         assert!(
             (intercept - cycles.per_ray as f64).abs() <= 2.0,
