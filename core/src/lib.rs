@@ -61,7 +61,7 @@ pub use caster::{
 };
 pub use fixed::types::U8F8;
 pub use pool::{LinePool, Task, Wait};
-pub use probe::{CountingProbe, NoProbe, Probe};
+pub use probe::{CountingProbe, NoProbe, Probe, MAX_COLOR_FETCHES_A_RAY};
 pub use pyramid::{
     level_count, level_side, pyramid_bytes, pyramid_cells, pyramid_points, HeightFilter, Pyramid,
     PyramidError, MAX_LEVELS,

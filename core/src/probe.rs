@@ -21,7 +21,8 @@ pub trait Probe {
         let _ = (level, cell);
     }
     /// The colors of voxel `voxel` of level `level` and its minor-axis
-    /// neighbour were fetched to shade a pixel (and the level below's).
+    /// neighbour were fetched to shade a pixel (and the level below's). At
+    /// most [`MAX_COLOR_FETCHES_A_RAY`] a ray.
     #[inline(always)]
     fn color(&mut self, level: u8, voxel: usize) {
         let _ = (level, voxel);
@@ -35,6 +36,13 @@ pub trait Probe {
     #[inline(always)]
     fn ray(&mut self) {}
 }
+
+/// The most color fetches ([`Probe::color`]) the caster makes for one ray:
+/// a hit is shaded from its own grid line and the one before it, a ray cut
+/// short from the grid line under it, and a sky ray from none. (A fetch
+/// that finds no color, outside the map, is not reported.) A cost model
+/// can reserve this much shading a ray before the frame is rendered.
+pub const MAX_COLOR_FETCHES_A_RAY: u32 = 2;
 
 /// The probe that observes nothing and costs nothing.
 #[derive(Debug, Default, Clone, Copy)]

@@ -70,20 +70,40 @@ pub struct FrameCheck {
     /// Pixels of the decoded board wire that differ from the host frame in
     /// RGB565.
     pub display_differing_pixels: usize,
-    /// Kernel steps of the host render (same traversal as the board's).
+    /// Kernel steps and color fetches of the host render (the board's are
+    /// the same).
     pub steps: u64,
+    /// See `steps`.
+    pub color_fetches: u64,
     /// The board's core clock ticks for the kernel render, and for the
     /// render plus sending the frame through the display driver.
     pub kernel_ticks: u64,
     /// See `kernel_ticks`.
     pub display_ticks: u64,
     /// The same view with every ray cast from the eye: pixels that differ
-    /// between board and host, host steps, and board ticks.
+    /// between board and host, host steps and color fetches, and board
+    /// ticks.
     pub from_eye_differing_pixels: usize,
     /// See `from_eye_differing_pixels`.
     pub from_eye_steps: u64,
     /// See `from_eye_differing_pixels`.
+    pub from_eye_color_fetches: u64,
+    /// See `from_eye_differing_pixels`.
     pub from_eye_ticks: u64,
+}
+
+/// The kernel's cost on the board, in instructions: what
+/// [`BoardReport::cost_fit`] finds and the simulator's default work costs
+/// are (see `sim::machine`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CostFit {
+    /// A ray's set-up, whatever it sees (a sky ray costs this alone).
+    pub per_ray: f64,
+    /// A color fetch: a ray that sees terrain makes one to three (at most
+    /// [`terracast::MAX_COLOR_FETCHES_A_RAY`]) to shade its pixel.
+    pub per_color: f64,
+    /// A traversal step or bound test.
+    pub per_step: f64,
 }
 
 impl FrameCheck {
@@ -118,26 +138,37 @@ impl BoardReport {
         ticks as f64 * per_tick / pixels.max(1.0)
     }
 
-    /// The kernel's cost as `(instructions a ray, instructions a step)`:
-    /// the least-squares line through every render's instructions per pixel
-    /// against its steps per pixel (one ray a pixel), the default renders
-    /// and the from-eye ones together. The simulator's default work costs
-    /// are this fit (see `sim::machine`).
-    pub fn cost_fit(&self) -> (f64, f64) {
+    /// The kernel's cost: the least-squares fit of every render's
+    /// instructions a pixel to its color fetches and steps a pixel (one ray
+    /// a pixel), the default renders and the from-eye ones together. The
+    /// from-eye renders take many times the steps for the same picture,
+    /// which separates steps from the rest; the views' shares of sky
+    /// separate the shading from the ray's set-up.
+    pub fn cost_fit(&self) -> CostFit {
         let pixels = f64::from(self.image.0) * f64::from(self.image.1);
         let per_tick = self.instructions_per_tick;
-        let points: Vec<(f64, f64)> = self
+        let points: Vec<([f64; 2], f64)> = self
             .frames
             .iter()
             .flat_map(|f| {
                 [
-                    (f.steps, f.kernel_ticks),
-                    (f.from_eye_steps, f.from_eye_ticks),
+                    (f.color_fetches, f.steps, f.kernel_ticks),
+                    (f.from_eye_color_fetches, f.from_eye_steps, f.from_eye_ticks),
                 ]
             })
-            .map(|(steps, ticks)| (steps as f64 / pixels, ticks as f64 * per_tick / pixels))
+            .map(|(colors, steps, ticks)| {
+                (
+                    [colors as f64 / pixels, steps as f64 / pixels],
+                    ticks as f64 * per_tick / pixels,
+                )
+            })
             .collect();
-        least_squares(&points)
+        let [per_ray, per_color, per_step] = least_squares(&points);
+        CostFit {
+            per_ray,
+            per_color,
+            per_step,
+        }
     }
 
     /// A table of the views and the summary, for the terminal.
@@ -145,14 +176,14 @@ impl BoardReport {
         let per_tick = self.instructions_per_tick;
         let pixels = f64::from(self.image.0) * f64::from(self.image.1);
         let mut out = String::from(
-            "view  frame       wire       display  steps/px  instr/px  instr/step  instr/px with display  from eye: frame  steps/px  instr/px\n",
+            "view  frame       wire       display  steps/px  colors/px  instr/px  instr/step  instr/px with display  from eye: frame  steps/px  colors/px  instr/px\n",
         );
         for f in &self.frames {
             let verdict = |ok: bool| if ok { "identical" } else { "DIFFERENT" };
             let instructions = f.kernel_ticks as f64 * per_tick;
             let _ = writeln!(
                 out,
-                "{:>4}  {:<10}  {:<9}  {:<7}  {:>8.2}  {:>8.0}  {:>10.0}  {:>21.0}  {:>15}  {:>8.2}  {:>8.0}",
+                "{:>4}  {:<10}  {:<9}  {:<7}  {:>8.2}  {:>9.2}  {:>8.0}  {:>10.0}  {:>21.0}  {:>15}  {:>8.2}  {:>9.2}  {:>8.0}",
                 f.index,
                 verdict(f.differing_pixels == 0),
                 verdict(f.wire_identical),
@@ -162,18 +193,21 @@ impl BoardReport {
                     "DIFFERS"
                 },
                 f.steps as f64 / pixels,
+                f.color_fetches as f64 / pixels,
                 instructions / pixels,
                 instructions / (f.steps.max(1) as f64),
                 f.display_ticks as f64 * per_tick / pixels,
                 verdict(f.from_eye_differing_pixels == 0),
                 f.from_eye_steps as f64 / pixels,
+                f.from_eye_color_fetches as f64 / pixels,
                 f.from_eye_ticks as f64 * per_tick / pixels,
             );
         }
-        let (per_ray, per_step) = self.cost_fit();
+        let fit = self.cost_fit();
         let _ = writeln!(
             out,
-            "cost fit over all renders: {per_ray:.0} instructions a ray + {per_step:.0} a step"
+            "cost fit over all renders: {:.0} instructions a ray + {:.0} a color fetch + {:.0} a step",
+            fit.per_ray, fit.per_color, fit.per_step
         );
         let _ = writeln!(
             out,
@@ -191,13 +225,17 @@ pub struct HostFrame {
     pub rgb: Vec<u8>,
     /// The display wire capture: what the board writes as `wire-K.bin`.
     pub wire: Vec<u8>,
-    /// Kernel steps (the board takes the same ones).
+    /// Kernel steps and color fetches (the board's are the same).
     pub steps: u64,
+    /// See `steps`.
+    pub color_fetches: u64,
     /// The same view with every ray cast from the eye: what the board
     /// writes as `frame-K-from-eye.rgb`, and its steps.
     pub from_eye_rgb: Vec<u8>,
     /// See `from_eye_rgb`.
     pub from_eye_steps: u64,
+    /// See `from_eye_rgb`.
+    pub from_eye_color_fetches: u64,
 }
 
 /// A board scene file read into aligned storage.
@@ -267,22 +305,24 @@ impl SceneFile {
         for (index, camera) in header.views().iter().enumerate() {
             let view = View::new(camera, width, height)
                 .map_err(|e| Error::new(format!("bad board view {index}: {e}")))?;
-            let frame = |options: &RenderOptions| -> Result<(Vec<u8>, u64)> {
+            let frame = |options: &RenderOptions| -> Result<(Vec<u8>, CountingProbe)> {
                 let mut colors = vec![[0u8; 3]; width as usize * height as usize];
                 let mut framebuffer = Framebuffer::new(&mut colors, width, height)
                     .map_err(|e| Error::new(e.to_string()))?;
                 let mut probe = CountingProbe::default();
                 render(&pyramid, &view, options, &mut framebuffer, &mut probe);
-                Ok((colors.into_iter().flatten().collect(), probe.steps))
+                Ok((colors.into_iter().flatten().collect(), probe))
             };
-            let (rgb, steps) = frame(&options)?;
-            let (from_eye_rgb, from_eye_steps) = frame(&from_eye)?;
+            let (rgb, counts) = frame(&options)?;
+            let (from_eye_rgb, from_eye_counts) = frame(&from_eye)?;
             frames.push(HostFrame {
                 rgb,
                 wire: display_capture(&pyramid, &view, &options, width, height)?,
-                steps,
+                steps: counts.steps,
+                color_fetches: counts.color_fetches,
                 from_eye_rgb,
-                from_eye_steps,
+                from_eye_steps: from_eye_counts.steps,
+                from_eye_color_fetches: from_eye_counts.color_fetches,
             });
         }
         Ok(frames)
@@ -337,10 +377,12 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
             wire_identical: host.wire == board_wire,
             display_differing_pixels,
             steps: host.steps,
+            color_fetches: host.color_fetches,
             kernel_ticks,
             display_ticks,
             from_eye_differing_pixels,
             from_eye_steps: host.from_eye_steps,
+            from_eye_color_fetches: host.from_eye_color_fetches,
             from_eye_ticks,
         });
     }
@@ -452,14 +494,34 @@ fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
 }
 
 /// The least-squares line `y = a + b·x` through `points`, as `(a, b)`.
-fn least_squares(points: &[(f64, f64)]) -> (f64, f64) {
+/// The least-squares fit `y = a + b·x₀ + c·x₁` through `points`, as
+/// `[a, b, c]`. Where `x₀` does not vary apart from `x₁` (nothing tells the
+/// two apart), `b` is 0 and `c` is the least-squares line's slope.
+pub(crate) fn least_squares(points: &[([f64; 2], f64)]) -> [f64; 3] {
     let n = points.len().max(1) as f64;
-    let (mx, my) = points
-        .iter()
-        .fold((0.0, 0.0), |(x, y), p| (x + p.0 / n, y + p.1 / n));
-    let spread: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let slope = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>() / spread.max(1e-12);
-    (my - slope * mx, slope)
+    let (m0, m1, my) = points.iter().fold((0.0, 0.0, 0.0), |(a, b, y), p| {
+        (a + p.0[0] / n, b + p.0[1] / n, y + p.1 / n)
+    });
+    // Sums of products about the means: the normal equations of b and c.
+    let sum = |f: &dyn Fn(f64, f64, f64) -> f64| -> f64 {
+        points
+            .iter()
+            .map(|p| f(p.0[0] - m0, p.0[1] - m1, p.1 - my))
+            .sum()
+    };
+    let (s00, s01, s11) = (
+        sum(&|a, _, _| a * a),
+        sum(&|a, b, _| a * b),
+        sum(&|_, b, _| b * b),
+    );
+    let (s0y, s1y) = (sum(&|a, _, y| a * y), sum(&|_, b, y| b * y));
+    let det = s00 * s11 - s01 * s01;
+    let (b, c) = if det.abs() > 1e-9 * (s00 * s11).max(1e-12) {
+        ((s0y * s11 - s1y * s01) / det, (s1y * s00 - s0y * s01) / det)
+    } else {
+        (0.0, s1y / s11.max(1e-12))
+    };
+    [my - b * m0 - c * m1, b, c]
 }
 
 fn read(path: &Path) -> Result<Vec<u8>> {
@@ -471,11 +533,29 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_cost_fit_is_the_least_squares_line() {
-        let (a, b) = least_squares(&[(1.0, 3.0), (2.0, 5.0), (4.0, 9.0)]);
-        assert!((a - 1.0).abs() < 1e-9 && (b - 2.0).abs() < 1e-9, "{a} {b}");
-        let (a, b) = least_squares(&[(0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0)]);
-        assert!((a - 0.5).abs() < 1e-9 && b.abs() < 1e-9, "{a} {b}");
+    fn the_cost_fit_is_the_least_squares_plane() {
+        let close =
+            |got: [f64; 3], want: [f64; 3]| got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-9);
+        // Exactly on y = 1 + 2·x₀ + 3·x₁.
+        let exact: Vec<_> = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [2.0, 5.0]]
+            .into_iter()
+            .map(|x| (x, 1.0 + 2.0 * x[0] + 3.0 * x[1]))
+            .collect();
+        let fit = least_squares(&exact);
+        assert!(close(fit, [1.0, 2.0, 3.0]), "{fit:?}");
+        // Off any plane by ±0.5 in a pattern the regressors cannot follow.
+        let noisy = [
+            ([0.0, 0.0], 1.0),
+            ([1.0, 0.0], 0.0),
+            ([0.0, 1.0], 0.0),
+            ([1.0, 1.0], 1.0),
+        ];
+        let fit = least_squares(&noisy);
+        assert!(close(fit, [0.5, 0.0, 0.0]), "{fit:?}");
+        // x₀ constant: nothing tells it from the intercept, so it gets 0.
+        let line = [([2.0, 1.0], 3.0), ([2.0, 2.0], 5.0), ([2.0, 4.0], 9.0)];
+        let fit = least_squares(&line);
+        assert!(close(fit, [1.0, 0.0, 2.0]), "{fit:?}");
     }
 
     #[test]

@@ -2,11 +2,13 @@
 //! a step budget at the rendering rate, and every display frame between
 //! them warped from the last rendered one toward the display-time camera.
 //!
-//! Time is the modeled machine's ([`Machine`]): a frame of `r` rays and `s`
-//! steps takes `r·per_ray + s·per_step` cycles, spread over the workers (the
-//! line pool keeps them within a few lines of each other, see `sim`). The
-//! budget is what fits the rendering period; the kernel's [`Governor`] keeps
-//! every frame within it, so renders start on a fixed cadence:
+//! Time is the modeled machine's ([`Machine`]): a frame of `r` rays, `c`
+//! color fetches and `s` steps takes `r·per_ray + c·per_color + s·per_step`
+//! cycles, spread over the workers (the line pool keeps them within a few
+//! lines of each other, see `sim`). The budget is what fits the rendering
+//! period once every ray's set-up and its most shading
+//! ([`MAX_COLOR_FETCHES_A_RAY`]) are set aside; the kernel's [`Governor`]
+//! keeps every frame within it, so renders start on a fixed cadence:
 //!
 //! - render `j ≥ 1` starts at `(j − 1)·T`, is done by `j·T`, and is made for
 //!   the first display time at or after `j·T`, from the path's camera then;
@@ -24,7 +26,7 @@ use crate::scene::{KernelScene, Scene};
 use crate::sim::Machine;
 use terracast::{
     control_points, with_margin, Camera, CountingProbe, Framebuffer, Governor, RenderOptions, Rgb,
-    Sample, View, Warp,
+    Sample, View, Warp, MAX_COLOR_FETCHES_A_RAY,
 };
 
 /// A camera path: keyframes in time, linearly interpolated.
@@ -178,7 +180,7 @@ impl Default for FlyOptions {
         Self {
             frames: 150,
             display_hz: 30.0,
-            render_hz: 12.0,
+            render_hz: 10.0,
             size: (200, 150),
             hfov: 60.0,
             margin: 1.2,
@@ -312,12 +314,13 @@ pub fn fly(
     let first = path.camera(0.0, options.hfov);
     let (_, render_size) = with_margin(&first, options.size, options.margin);
     // The budget: the rendering period's cycles on the workers, less the
-    // rays' set-up, in steps.
+    // rays' set-up and their most shading, in steps.
     let workers = f64::from(machine.processors - 1);
     let cycles_per_s = machine.clock_mhz * 1e6 * workers;
     let rays = u64::from(render_size.0) * u64::from(render_size.1);
     let period_cycles = cycles_per_s / options.render_hz;
-    let ray_cycles = (rays * machine.cycles.per_ray) as f64;
+    let c = &machine.cycles;
+    let ray_cycles = (rays * (c.per_ray + u64::from(MAX_COLOR_FETCHES_A_RAY) * c.per_color)) as f64;
     let budget = ((period_cycles - ray_cycles) / machine.cycles.per_step.max(1) as f64).floor();
     if budget < rays as f64 * 0.5 {
         return Err(Error::new(format!(
@@ -343,14 +346,17 @@ pub fn fly(
         let (mut colors, mut distances) = (vec![[0u8; 3]; n], vec![Sample::SKY; n]);
         let mut frame = Framebuffer::with_distances(&mut colors, &mut distances, size.0, size.1)
             .map_err(|e| Error::new(e.to_string()))?;
+        let mut counts = CountingProbe::default();
         let cost = governor.render(
             &pyramid,
             &view,
             &RenderOptions::default(),
             &mut frame,
-            &mut CountingProbe::default(),
+            &mut counts,
         );
-        let seconds = (rays * machine.cycles.per_ray + cost.steps * machine.cycles.per_step) as f64
+        let seconds = (rays * c.per_ray
+            + counts.color_fetches * c.per_color
+            + cost.steps * c.per_step) as f64
             / cycles_per_s;
         let points = control_points(&camera, size, |x, y| {
             let i = y as usize * size.0 as usize + x as usize;
@@ -477,5 +483,63 @@ mod tests {
         for bad in ["", "0 1 2 3 4", "0 1 2 3 4 x", "1 0 0 0 0 0\n0 0 0 0 0 0"] {
             assert!(Path::parse(bad).is_err(), "{bad:?}");
         }
+    }
+
+    /// The budget sets aside `MAX_COLOR_FETCHES_A_RAY` a ray: no ray may
+    /// make more, whatever the setting, and a hit makes that many.
+    #[test]
+    fn no_ray_makes_more_color_fetches_than_the_budget_sets_aside() {
+        use terracast::{Coherence, Resolution, Shading};
+        let scene = crate::scene::procedural(128, 5);
+        let kernel = scene.to_kernel().unwrap();
+        let top = scene.max_height();
+        let settings = [
+            RenderOptions::default(),
+            RenderOptions {
+                resolution: Resolution::Single,
+                ..RenderOptions::default()
+            },
+            RenderOptions {
+                coherence: Coherence::Off,
+                ..RenderOptions::default()
+            },
+            RenderOptions {
+                shading: Shading::Nearest,
+                ..RenderOptions::default()
+            },
+        ];
+        let (mut all_terrain, mut most) = (false, 0.0f64);
+        for options in settings {
+            let pyramid = kernel.pyramid_for(&options).unwrap();
+            // Over the map, from outside, straight down, steep and low: sky,
+            // terrain and map edges.
+            for (eye, yaw, pitch) in [
+                ([64.0, 10.0, top + 5.0], 90.0, 10.0),
+                ([-30.0, 64.0, top + 20.0], 0.0, 20.0),
+                ([64.0, 64.0, top + 40.0], 0.0, 90.0),
+                ([20.0, 20.0, top + 10.0], 45.0, 35.0),
+                ([64.0, 64.0, top + 2.0], 200.0, 0.0),
+            ] {
+                let camera = Camera {
+                    eye,
+                    yaw_deg: yaw,
+                    pitch_deg: pitch,
+                    ..Camera::default()
+                };
+                let view = View::new(&camera, 64, 48).unwrap();
+                let mut colors = vec![[0u8; 3]; 64 * 48];
+                let mut frame = Framebuffer::new(&mut colors, 64, 48).unwrap();
+                let mut counts = CountingProbe::default();
+                terracast::render(&pyramid, &view, &options, &mut frame, &mut counts);
+                let per_ray = counts.color_fetches as f64 / counts.rays as f64;
+                assert!(
+                    counts.color_fetches <= u64::from(MAX_COLOR_FETCHES_A_RAY) * counts.rays,
+                    "{options:?} {eye:?}: {per_ray} a ray"
+                );
+                all_terrain |= pitch == 90.0;
+                most = most.max(per_ray);
+            }
+        }
+        assert!(all_terrain && most > 1.9, "the bound is not tight: {most}");
     }
 }

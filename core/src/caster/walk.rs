@@ -157,24 +157,29 @@ impl<G: Grid> Stage<G> {
     /// The color where a sample's grid line is crossed: two voxels blended by
     /// the subvoxel weight, on this level and on the one below, blended by
     /// the sample's level weight `t` (the soft transition).
+    ///
+    /// Reported to `probe` once both levels gave a color: a lookup that
+    /// finds none leaves the caller to try another, uncounted.
     pub fn color<P: Probe>(&self, at: &Cursor, probe: &mut P) -> Option<Rgb> {
         let here = line_color(&self.here, at.base, self.minor_stride, at.minor, self.level)?;
+        let color = if self.level == 0 {
+            here
+        } else {
+            let below = line_color(
+                &self.below,
+                at.base_below,
+                self.minor_stride_below,
+                at.minor,
+                self.level - 1,
+            )?;
+            let t = (at.t.clamp(0, T_ONE) >> (COORD_FRAC_BITS - WEIGHT_BITS)) as u32;
+            lerp(below, here, t)
+        };
         probe.color(
             self.level,
             index(at.base, self.minor_stride, at.minor, self.level) as usize,
         );
-        if self.level == 0 {
-            return Some(here);
-        }
-        let below = line_color(
-            &self.below,
-            at.base_below,
-            self.minor_stride_below,
-            at.minor,
-            self.level - 1,
-        )?;
-        let t = (at.t.clamp(0, T_ONE) >> (COORD_FRAC_BITS - WEIGHT_BITS)) as u32;
-        Some(lerp(below, here, t))
+        Some(color)
     }
 }
 

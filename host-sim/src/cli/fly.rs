@@ -25,7 +25,7 @@ pub(super) struct FlyArgs {
     display_hz: f64,
     /// Rendering rate the step budget is made for; the frames between are
     /// warped.
-    #[arg(long, default_value_t = 12.0, value_name = "HZ")]
+    #[arg(long, default_value_t = 10.0, value_name = "HZ")]
     render_hz: f64,
     /// Display size.
     #[arg(long, default_value = "200x150", value_parser = parse_size, value_name = "WxH")]
