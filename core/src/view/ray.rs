@@ -640,17 +640,16 @@ impl Ray {
             (major >> level) as isize * stride
         };
         let k64 = i64::from(k);
-        // Inside [first, end] both values are in range by construction; the
-        // clamp keeps an out-of-range request harmless (it reads as far
-        // below the surface, or as outside the map).
-        let fit = saturate;
+        // Inside [first, end] both values are in range by construction;
+        // saturating keeps an out-of-range request harmless (it reads as
+        // far below the surface, or as outside the map).
         Cursor {
             k,
             level,
             base: base_on(level),
             base_below: if level > 0 { base_on(level - 1) } else { 0 },
-            minor: fit(self.minor0 + k64 * i64::from(self.dminor.to_bits())),
-            z: fit(self.z0 + k64 * i64::from(self.dz.to_bits())),
+            minor: saturate(self.minor0 + k64 * i64::from(self.dminor.to_bits())),
+            z: saturate(self.z0 + k64 * i64::from(self.dz.to_bits())),
             t: self.level_weight(k, level),
         }
     }
