@@ -99,7 +99,7 @@ pub struct FrameCheck {
 pub struct CostFit {
     /// A ray's set-up, whatever it sees (a sky ray costs this alone).
     pub per_ray: f64,
-    /// A color fetch: a ray that sees terrain makes one to three (at most
+    /// A color fetch: a ray that sees terrain makes one or two (at most
     /// [`terracast::MAX_COLOR_FETCHES_A_RAY`]) to shade its pixel.
     pub per_color: f64,
     /// A traversal step or bound test.
@@ -208,6 +208,22 @@ impl BoardReport {
             out,
             "cost fit over all renders: {:.0} instructions a ray + {:.0} a color fetch + {:.0} a step",
             fit.per_ray, fit.per_color, fit.per_step
+        );
+        // How far the fit is from each render, as a share of its count.
+        let miss = |colors: u64, steps: u64, ticks: u64| {
+            let predicted = fit.per_ray
+                + fit.per_color * colors as f64 / pixels
+                + fit.per_step * steps as f64 / pixels;
+            let actual = ticks as f64 * per_tick / pixels;
+            100.0 * (predicted - actual).abs() / actual.max(1.0)
+        };
+        let worst =
+            |each: &dyn Fn(&FrameCheck) -> f64| self.frames.iter().map(each).fold(0.0, f64::max);
+        let _ = writeln!(
+            out,
+            "fit off by at most {:.1} % on a default render, {:.1} % on a from-eye one",
+            worst(&|f| miss(f.color_fetches, f.steps, f.kernel_ticks)),
+            worst(&|f| miss(f.from_eye_color_fetches, f.from_eye_steps, f.from_eye_ticks)),
         );
         let _ = writeln!(
             out,

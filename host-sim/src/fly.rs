@@ -508,7 +508,7 @@ mod tests {
                 ..RenderOptions::default()
             },
         ];
-        let (mut all_terrain, mut most) = (false, 0.0f64);
+        let mut most = 0.0f64;
         for options in settings {
             let pyramid = kernel.pyramid_for(&options).unwrap();
             // Over the map, from outside, straight down, steep and low: sky,
@@ -536,10 +536,10 @@ mod tests {
                     counts.color_fetches <= u64::from(MAX_COLOR_FETCHES_A_RAY) * counts.rays,
                     "{options:?} {eye:?}: {per_ray} a ray"
                 );
-                all_terrain |= pitch == 90.0;
                 most = most.max(per_ray);
             }
         }
-        assert!(all_terrain && most > 1.9, "the bound is not tight: {most}");
+        // Straight down every ray hits: nearly two fetches a ray.
+        assert!(most > 1.9, "the bound is not tight: {most}");
     }
 }
