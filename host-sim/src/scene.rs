@@ -125,6 +125,14 @@ impl Scene {
         self.heights.iter().copied().fold(f32::MIN, f32::max)
     }
 
+    /// The commands' eye when none is given: over the middle of the map's
+    /// south edge (12 % of the way in), a little above the highest
+    /// terrain; they look toward +y.
+    pub fn default_eye(&self) -> [f32; 3] {
+        let (w, d) = (self.width as f32, self.depth as f32);
+        [w * 0.5, d * 0.12, self.max_height() + 0.04 * w.min(d)]
+    }
+
     /// Converts to the kernel's format (heights rounded to 1/16 voxel) and
     /// builds the pyramid with mean heights.
     pub fn to_kernel(&self) -> Result<KernelScene> {

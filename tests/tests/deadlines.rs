@@ -7,7 +7,8 @@ use terracast::RenderOptions;
 use terracast_sim::camera::looking;
 use terracast_sim::scene::{procedural, KernelScene};
 use terracast_sim::sim::{
-    flight, record_flight, simulate, FrameTrace, Machine, MissReason, SimResult,
+    flight, record_flight, simulate, table, FrameTrace, Machine, MissReason, SimResult,
+    TABLE_HFOV_DEG, TABLE_MAP_SIDE,
 };
 
 const SIZE: (u32, u32) = (160, 120);
@@ -153,4 +154,38 @@ fn speed_up_is_near_linear_and_the_master_is_not_a_worker() {
         (25.0..=33.0).contains(&speed_up),
         "{two} {thirty_two} {speed_up}"
     );
+}
+
+/// Cohen-Or's pitch trend comes from the frame's footprint: a shallower
+/// view reaches farther over the terrain and takes more steps. On Table 1's
+/// view (only terrain in the frame) the simulated rate rises with pitch at
+/// every processor count, as theirs does. (With sky in the frame the trend
+/// turns over: a sky ray is the cheapest ray; see the README.)
+#[test]
+fn table_1_frame_rate_rises_with_pitch_when_the_frame_sees_terrain() {
+    let map = procedural(TABLE_MAP_SIDE, 1);
+    let scene = map.to_kernel().unwrap();
+    let start = terracast::Camera {
+        hfov_deg: TABLE_HFOV_DEG,
+        ..looking(map.default_eye(), 90.0, 0.0)
+    };
+    let table = table(
+        &scene,
+        &start,
+        (320, 240),
+        3,
+        4.0,
+        &Machine::default(),
+        |_, _| {},
+    )
+    .unwrap();
+    for column in 0..table.processors.len() {
+        let by_pitch: Vec<f64> = table.fps.iter().map(|row| row[column]).collect();
+        assert!(
+            by_pitch.windows(2).all(|pair| pair[0] < pair[1]),
+            "{} processors: fps {by_pitch:?} at pitch {:?}",
+            table.processors[column],
+            table.pitch
+        );
+    }
 }

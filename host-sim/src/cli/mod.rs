@@ -210,9 +210,10 @@ struct SceneArgs {
         value_name = "S"
     )]
     height_scale: f32,
-    /// Side of the procedural scene, used when no --height is given.
-    #[arg(long, default_value_t = 1024, value_name = "N")]
-    procedural_size: u32,
+    /// Side of the procedural scene, used when no --height is given
+    /// [default: 1024; `sim --table`: 4096].
+    #[arg(long, value_name = "N")]
+    procedural_size: Option<u32>,
     /// Seed of the procedural scene.
     #[arg(long, default_value_t = 1, value_name = "N")]
     seed: u64,
@@ -241,15 +242,23 @@ struct CameraArgs {
         value_name = "DEG"
     )]
     pitch: f32,
-    /// Full horizontal field of view in degrees.
-    #[arg(
-        long,
-        default_value_t = 60.0,
-        allow_negative_numbers = true,
-        value_name = "DEG"
-    )]
-    hfov: f32,
+    /// Full horizontal field of view in degrees [default: 60; `sim
+    /// --table`: 30].
+    #[arg(long, allow_negative_numbers = true, value_name = "DEG")]
+    hfov: Option<f32>,
 }
+
+impl CameraArgs {
+    /// The field of view asked for, or the command's default.
+    fn hfov_or(&self, default_deg: f32) -> f32 {
+        self.hfov.unwrap_or(default_deg)
+    }
+}
+
+/// The field of view of a camera given no --hfov (the view contract's).
+const DEFAULT_HFOV_DEG: f32 = 60.0;
+/// The side of the built-in scene given no --procedural-size.
+const DEFAULT_PROCEDURAL_SIDE: u32 = 1024;
 
 #[derive(Debug, clap::Args)]
 struct RenderArgs {
@@ -419,11 +428,11 @@ fn render_command(args: RenderArgs) -> Result<()> {
     }
     let scene = load_scene(&args.scene)?;
     let camera = Camera {
-        eye: args.camera.eye.unwrap_or_else(|| default_eye(&scene)),
+        eye: args.camera.eye.unwrap_or_else(|| scene.default_eye()),
         yaw_deg: args.camera.yaw,
         pitch_deg: args.camera.pitch,
         roll_deg: args.roll,
-        hfov_deg: args.camera.hfov,
+        hfov_deg: args.camera.hfov_or(DEFAULT_HFOV_DEG),
     };
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
     let (frame, stats) = match args.method {
@@ -558,23 +567,23 @@ fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
 }
 
 fn load_scene(args: &SceneArgs) -> Result<Scene> {
+    load_scene_or(args, DEFAULT_PROCEDURAL_SIDE)
+}
+
+/// The scene the arguments name; the built-in one is `default_side` a side
+/// unless --procedural-size says otherwise.
+fn load_scene_or(args: &SceneArgs, default_side: u32) -> Result<Scene> {
     match (&args.height, &args.color) {
         (None, Some(_)) => Err(Error::new("--color needs --height")),
         (None, None) => {
-            if !(2..=8192).contains(&args.procedural_size) {
+            let side = args.procedural_size.unwrap_or(default_side);
+            if !(2..=8192).contains(&side) {
                 return Err(Error::new("--procedural-size must be between 2 and 8192"));
             }
-            Ok(procedural(args.procedural_size, args.seed))
+            Ok(procedural(side, args.seed))
         }
         (Some(h), color) => load_pair(h, color.as_deref(), args.height_scale, args.seed),
     }
-}
-
-/// A view from the middle of the map's south edge, a little above the
-/// highest terrain, toward +y.
-fn default_eye(scene: &Scene) -> [f32; 3] {
-    let (w, d) = (scene.width as f32, scene.depth as f32);
-    [w * 0.5, d * 0.12, scene.max_height() + 0.04 * w.min(d)]
 }
 
 fn view_error(e: ViewError) -> Error {

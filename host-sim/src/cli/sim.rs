@@ -1,12 +1,15 @@
 //! `terracast-sim sim`: a flight on the modeled parallel machine, Table 1,
 //! and the line pool on real threads.
 
-use super::{default_eye, load_scene, parse_size, CameraArgs, SceneArgs};
+use super::{
+    load_scene_or, parse_size, CameraArgs, SceneArgs, DEFAULT_HFOV_DEG, DEFAULT_PROCEDURAL_SIDE,
+};
 use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use crate::sim::threads::render_threads;
 use crate::sim::{
-    flight, record_flight, simulate, Machine, SimResult, Table, TABLE_PITCH, TABLE_PROCESSORS,
+    flight, record_flight, simulate, table, Machine, SimResult, TABLE_HFOV_DEG, TABLE_MAP_SIDE,
+    TABLE_PITCH,
 };
 use std::path::PathBuf;
 use terracast::{Camera, RenderOptions};
@@ -40,7 +43,9 @@ pub(super) struct SimArgs {
     #[arg(long, default_value_t = 4.0, value_name = "V")]
     speed: f32,
     /// Print Table 1 instead: fps for 2 to 32 processors at pitch 14.6°,
-    /// 26.5° and 39° (a flight of --frames frames at each).
+    /// 26.5° and 39° (a flight of --frames frames at each). Its view sees
+    /// only terrain, as Cohen-Or's footprint does: a 4096² map and a 30°
+    /// field unless --procedural-size / --height and --hfov say otherwise.
     #[arg(long)]
     table: bool,
     /// With --table: print it as JSON.
@@ -92,21 +97,50 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
     if !args.speed.is_finite() {
         return Err(Error::new("--speed must be a finite number"));
     }
-    let scene = load_scene(&args.scene)?;
+    // Table 1 has its own view (see TABLE_HFOV_DEG): every flag given
+    // still wins.
+    let (side, hfov) = if args.table {
+        (TABLE_MAP_SIDE, TABLE_HFOV_DEG)
+    } else {
+        (DEFAULT_PROCEDURAL_SIDE, DEFAULT_HFOV_DEG)
+    };
+    let scene = load_scene_or(&args.scene, side)?;
     let kernel = scene.to_kernel()?;
     let start = Camera {
-        eye: args.camera.eye.unwrap_or_else(|| default_eye(&scene)),
+        eye: args.camera.eye.unwrap_or_else(|| scene.default_eye()),
         yaw_deg: args.camera.yaw,
         pitch_deg: args.camera.pitch,
         roll_deg: 0.0,
-        hfov_deg: args.camera.hfov,
+        hfov_deg: args.camera.hfov_or(hfov),
     };
     let options = RenderOptions::default();
     if !args.threads.is_empty() {
         return threads_command(&kernel, &start, &args, &options);
     }
     if args.table {
-        let table = table(&kernel, &start, &args, &options, &machine)?;
+        let [x, y, z] = start.eye;
+        eprintln!(
+            "Table 1 on a {}x{} map: eye ({x:.0}, {y:.0}, {z:.0}), yaw {}°, hfov {}°, {}x{}, {} frames {} voxels apart at each pitch",
+            scene.width, scene.depth, start.yaw_deg, start.hfov_deg, args.size.0, args.size.1, args.frames, args.speed
+        );
+        let table = table(
+            &kernel,
+            &start,
+            args.size,
+            args.frames,
+            args.speed,
+            &machine,
+            |row, done| {
+                eprint!(
+                    "\rrecording pitch {}° ({}/{}): frame {done}/{}   ",
+                    TABLE_PITCH[row],
+                    row + 1,
+                    TABLE_PITCH.len(),
+                    args.frames
+                )
+            },
+        )?;
+        eprintln!();
         if let Some(path) = &args.chart {
             crate::chart::draw_table(path, &table)?;
         }
@@ -185,54 +219,6 @@ fn report(machine: &Machine, result: &SimResult) -> String {
         ms(result.bank_contention)
     );
     out
-}
-
-/// Table 1: one recorded flight per pitch, simulated at each processor
-/// count.
-fn table(
-    kernel: &KernelScene,
-    start: &Camera,
-    args: &SimArgs,
-    options: &RenderOptions,
-    machine: &Machine,
-) -> Result<Table> {
-    let mut fps = Vec::new();
-    for (row, &pitch) in TABLE_PITCH.iter().enumerate() {
-        let cameras = flight(
-            &Camera {
-                pitch_deg: pitch as f32,
-                ..*start
-            },
-            args.frames,
-            args.speed,
-        );
-        let traces = record_flight(kernel, &cameras, args.size, options, machine, |done| {
-            eprint!(
-                "\rrecording pitch {pitch}° ({}/{}): frame {done}/{}   ",
-                row + 1,
-                TABLE_PITCH.len(),
-                cameras.len()
-            );
-        })?;
-        fps.push(
-            TABLE_PROCESSORS
-                .iter()
-                .map(|&processors| {
-                    let machine = Machine {
-                        processors,
-                        ..machine.clone()
-                    };
-                    simulate(&machine, &traces).fps()
-                })
-                .collect(),
-        );
-    }
-    eprintln!();
-    Ok(Table {
-        processors: TABLE_PROCESSORS.to_vec(),
-        pitch: TABLE_PITCH.to_vec(),
-        fps,
-    })
 }
 
 fn threads_command(
