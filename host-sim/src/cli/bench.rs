@@ -13,7 +13,7 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub(super) struct BenchArgs {
     /// Shared data folder: adds the Comanche maps C1W/D1 and C7W/D7 to the
-    /// built-in scenes.
+    /// built-in scenes (procedural 1024², 512² and 4096²).
     #[arg(long, value_name = "DIR")]
     data: Option<PathBuf>,
     /// Image size of every view.
@@ -72,6 +72,11 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
     }
     if args.quick {
         named.truncate(1);
+    } else {
+        // Terrain out to 4000 voxels, where a voxel is a seventh of a pixel
+        // at 320 x 240: the pyramid's case, which the smaller maps do not
+        // reach.
+        named.push(("procedural 4096".into(), procedural(4096, 1)));
     }
     let scenes = named
         .into_iter()
@@ -121,6 +126,23 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
         args.repeats
     );
     print!("{}", summary_table(&summaries));
+    // The same measures split by map size: which setting wins depends on
+    // how far the terrain reaches.
+    for (label, large) in [("maps up to 1024²", false), ("maps over 1024²", true)] {
+        let part: Vec<_> = measures
+            .iter()
+            .filter(|m| {
+                scenes.iter().any(|s| {
+                    s.name == m.scene && (s.scene.width.max(s.scene.depth) > 1024) == large
+                })
+            })
+            .cloned()
+            .collect();
+        if !part.is_empty() && part.len() < measures.len() {
+            println!("{label} alone ({} views):", part.len() / summaries.len());
+            print!("{}", summary_table(&summarize(&part)));
+        }
+    }
     if let Some((ratio, kernel, voxel)) = kernel_vs_voxel_space_at_pitch_0(&measures) {
         println!(
             "pitch 0: the kernel is {ratio:.2}x the speed of voxelspace, at {kernel:.2} dB against {voxel:.2} dB"
