@@ -24,7 +24,7 @@
 //! Pyramid::build(&terrain, HeightFilter::default(), &mut coarse_heights, &mut coarse_colors, &mut bounds)?;
 //! let pyramid = Pyramid::new(terrain, &coarse_heights, &coarse_colors, &bounds)?;
 //!
-//! let camera = Camera { eye: [-2.0, 1.5, 5.0], pitch_deg: 30.0, ..Camera::default() };
+//! let camera = Camera::looking([-2.0, 1.5, 5.0], 0.0, 30.0);
 //! let view = View::new(&camera, 8, 6)?;
 //! let mut pixels = [[0u8; 3]; 8 * 6];
 //! let mut frame = Framebuffer::new(&mut pixels, 8, 6)?;

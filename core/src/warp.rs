@@ -323,12 +323,7 @@ mod tests {
     use super::*;
 
     fn camera(eye: [f32; 3], yaw: f32, pitch: f32) -> Camera {
-        Camera {
-            eye,
-            yaw_deg: yaw,
-            pitch_deg: pitch,
-            ..Camera::default()
-        }
+        Camera::looking(eye, yaw, pitch)
     }
 
     /// Control points of a flat ground at height 0 seen by `camera`.

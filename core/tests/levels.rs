@@ -80,12 +80,7 @@ fn first_hit_and_exact_coherence_leave_the_image_unchanged() {
         ([60.0, 200.0, 140.0], 300.0, 90.0),
     ];
     for (eye, yaw, pitch) in cameras {
-        let camera = Camera {
-            eye,
-            yaw_deg: yaw,
-            pitch_deg: pitch,
-            ..Camera::default()
-        };
+        let camera = Camera::looking(eye, yaw, pitch);
         for resolution in [
             Resolution::Single,
             Resolution::Multi {

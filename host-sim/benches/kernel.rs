@@ -36,7 +36,7 @@ fn scene() -> (Scene, &'static str) {
 }
 
 fn camera(pitch: f32) -> Camera {
-    terracast_sim::camera::looking([300.0, 700.0, 170.0], 20.0, pitch)
+    terracast::Camera::looking([300.0, 700.0, 170.0], 20.0, pitch)
 }
 
 /// One benchmarked render.

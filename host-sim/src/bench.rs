@@ -12,7 +12,6 @@
 use crate::baselines::{
     march, march_touching, voxel_space, voxel_space_touching, MarchOptions, VoxelSpaceOptions,
 };
-use crate::camera::looking;
 use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
 use crate::kernel::render_kernel;
@@ -163,7 +162,7 @@ pub fn views(index: usize, scene: &Scene) -> Vec<BenchView> {
         .map(|&pitch| BenchView {
             scene: index,
             name: format!("far pitch {pitch}"),
-            camera: looking(far, 90.0, pitch),
+            camera: Camera::looking(far, 90.0, pitch),
         })
         .collect();
     let (nx, ny) = (w * 0.35, d * 0.4);
@@ -171,7 +170,7 @@ pub fn views(index: usize, scene: &Scene) -> Vec<BenchView> {
     views.push(BenchView {
         scene: index,
         name: "near pitch 10".into(),
-        camera: looking([nx, ny, ground + 25.0], 60.0, 10.0),
+        camera: Camera::looking([nx, ny, ground + 25.0], 60.0, 10.0),
     });
     views
 }

@@ -24,7 +24,7 @@ pub const MAX_IMAGE_HEIGHT: usize = 1024;
 /// map, a steep one and one straight down.
 pub fn board_views(side: u32, top: f32) -> Vec<Camera> {
     let s = side as f32;
-    let camera = crate::camera::looking;
+    let camera = terracast::Camera::looking;
     vec![
         camera([s * 0.5, s * 0.12, top + 0.04 * s], 90.0, 12.0),
         camera([s * 0.08, s * 0.1, top + 0.01 * s], 40.0, 2.0),

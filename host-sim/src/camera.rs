@@ -3,19 +3,6 @@
 
 use terracast::Camera;
 
-/// A camera at `eye` heading `yaw_deg` and looking `pitch_deg` below the
-/// horizon, with the contract's defaults otherwise (no roll, 60° field of
-/// view).
-pub fn looking(eye: [f32; 3], yaw_deg: f32, pitch_deg: f32) -> Camera {
-    Camera {
-        eye,
-        yaw_deg,
-        pitch_deg,
-        roll_deg: 0.0,
-        hfov_deg: 60.0,
-    }
-}
-
 /// Ray directions of one camera and image size.
 #[derive(Debug, Clone, Copy)]
 pub struct ContractCamera {

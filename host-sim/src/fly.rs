@@ -520,12 +520,7 @@ mod tests {
                 ([20.0, 20.0, top + 10.0], 45.0, 35.0),
                 ([64.0, 64.0, top + 2.0], 200.0, 0.0),
             ] {
-                let camera = Camera {
-                    eye,
-                    yaw_deg: yaw,
-                    pitch_deg: pitch,
-                    ..Camera::default()
-                };
+                let camera = Camera::looking(eye, yaw, pitch);
                 let view = View::new(&camera, 64, 48).unwrap();
                 let mut colors = vec![[0u8; 3]; 64 * 48];
                 let mut frame = Framebuffer::new(&mut colors, 64, 48).unwrap();

@@ -3,8 +3,7 @@
 //! reason their design says (steps, bank contention, disk), identically on
 //! every run.
 
-use terracast::RenderOptions;
-use terracast_sim::camera::looking;
+use terracast::{Camera, RenderOptions};
 use terracast_sim::scene::{procedural, KernelScene};
 use terracast_sim::sim::{
     flight, record_flight, simulate, table, FrameTrace, Machine, MissReason, SimResult,
@@ -36,7 +35,7 @@ fn record(
 
 /// A flight over the map's south edge looking north, `speed` voxels a frame.
 fn traces(scene: &KernelScene, speed: f32, machine: &Machine) -> Vec<FrameTrace> {
-    let start = looking([256.0, 60.0, 200.0], 90.0, 14.6);
+    let start = Camera::looking([256.0, 60.0, 200.0], 90.0, 14.6);
     let cameras = flight(&start, 6, speed);
     record(scene, &cameras, machine)
 }
@@ -44,7 +43,7 @@ fn traces(scene: &KernelScene, speed: f32, machine: &Machine) -> Vec<FrameTrace>
 /// `frames` views from the map's center, turning `step` degrees a frame.
 fn turning(scene: &KernelScene, step: f32, frames: u32, machine: &Machine) -> Vec<FrameTrace> {
     let cameras: Vec<_> = (0..frames)
-        .map(|i| looking([256.0, 256.0, 200.0], step * i as f32, 14.6))
+        .map(|i| Camera::looking([256.0, 256.0, 200.0], step * i as f32, 14.6))
         .collect();
     record(scene, &cameras, machine)
 }
@@ -165,9 +164,9 @@ fn speed_up_is_near_linear_and_the_master_is_not_a_worker() {
 fn table_1_frame_rate_rises_with_pitch_when_the_frame_sees_terrain() {
     let map = procedural(TABLE_MAP_SIDE, 1);
     let scene = map.to_kernel().unwrap();
-    let start = terracast::Camera {
+    let start = Camera {
         hfov_deg: TABLE_HFOV_DEG,
-        ..looking(map.default_eye(), 90.0, 0.0)
+        ..Camera::looking(map.default_eye(), 90.0, 0.0)
     };
     let table = table(
         &scene,

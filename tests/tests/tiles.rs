@@ -57,12 +57,7 @@ fn views(w: f32, d: f32, top: f32) -> Vec<Camera> {
         ([w * 0.5, d * 0.5, top + 300.0], 0.0, 90.0),
     ]
     .into_iter()
-    .map(|(eye, yaw_deg, pitch_deg)| Camera {
-        eye,
-        yaw_deg,
-        pitch_deg,
-        ..Camera::default()
-    })
+    .map(|(eye, yaw_deg, pitch_deg)| Camera::looking(eye, yaw_deg, pitch_deg))
     .collect()
 }
 
@@ -207,12 +202,7 @@ fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
         y: 0,
     };
     assert_eq!(file.load(key, &mut tile), Err(TileError::Checksum));
-    let camera = Camera {
-        eye: [30.0, -20.0, 60.0],
-        yaw_deg: 80.0,
-        pitch_deg: 25.0,
-        ..Camera::default()
-    };
+    let camera = Camera::looking([30.0, -20.0, 60.0], 80.0, 25.0);
     let (frame, _, tiled) =
         render_tiled(&mut file, &camera, 96, 72, &RenderOptions::default()).unwrap();
     assert_eq!((tiled.misses, tiled.rejected), (1, 1));

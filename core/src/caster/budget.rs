@@ -27,7 +27,7 @@
 //! let heights: [u16; 64] = core::array::from_fn(|i| ((i % 8) * (i / 8)) as u16 * 8);
 //! let terrain = Terrain::new(8, 8, &heights, &[[90, 140, 60]; 64])?;
 //! let pyramid = Pyramid::flat(terrain);
-//! let view = View::new(&Camera { eye: [1.0, 1.0, 40.0], yaw_deg: 45.0, pitch_deg: 30.0, ..Camera::default() }, 16, 12)?;
+//! let view = View::new(&Camera::looking([1.0, 1.0, 40.0], 45.0, 30.0), 16, 12)?;
 //! let mut pixels = [[0u8; 3]; 16 * 12];
 //! let mut governor = Governor::new(100);
 //! for _ in 0..3 {
@@ -333,12 +333,7 @@ mod tests {
             ([32.0, 32.0, 300.0], 90.0),
         ] {
             for yaw in [0.0, 37.0, 135.0, 290.0] {
-                let camera = Camera {
-                    eye,
-                    yaw_deg: yaw,
-                    pitch_deg: pitch,
-                    ..Camera::default()
-                };
+                let camera = Camera::looking(eye, yaw, pitch);
                 let view = View::new(&camera, 24, 18).unwrap();
                 let frame = Frame::new(&pyramid, &view, &options);
                 for allowance in [1, 2, 3, 5, 8, 40] {
@@ -380,12 +375,7 @@ mod tests {
         let (h, c, b) = pyramid_storage(&terrain);
         let pyramid = Pyramid::new(terrain, &h, &c, &b).unwrap();
         let options = RenderOptions::default();
-        let camera = Camera {
-            eye: [3.0, 5.0, 50.0],
-            yaw_deg: 40.0,
-            pitch_deg: 4.0,
-            ..Camera::default()
-        };
+        let camera = Camera::looking([3.0, 5.0, 50.0], 40.0, 4.0);
         let view = View::new(&camera, 32, 24).unwrap();
         let frame = Frame::new(&pyramid, &view, &options);
         // u32::MAX is what the plain render's allowances give: no limit.

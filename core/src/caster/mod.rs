@@ -625,12 +625,7 @@ mod tests {
         let colors: [Rgb; 256] = core::array::from_fn(|i| [(i % 2 * 255) as u8; 3]);
         let terrain = Terrain::new(16, 16, &heights, &colors).unwrap();
         let pyramid = Pyramid::flat(terrain);
-        let camera = Camera {
-            eye: [1.3, 2.1, 6.0],
-            yaw_deg: 70.0,
-            pitch_deg: 40.0,
-            ..Camera::default()
-        };
+        let camera = Camera::looking([1.3, 2.1, 6.0], 70.0, 40.0);
         let view = View::new(&camera, 24, 18).unwrap();
         let shaded = |shading| {
             let mut pixels = [[0u8; 3]; 24 * 18];
@@ -676,12 +671,7 @@ mod tests {
             ([40.0, 30.0, 24.0], 200.0, -5.0),
             ([16.0, 16.0, 30.0], 300.0, 40.0),
         ] {
-            let camera = Camera {
-                eye,
-                yaw_deg: yaw,
-                pitch_deg: pitch,
-                ..Camera::default()
-            };
+            let camera = Camera::looking(eye, yaw, pitch);
             let view = View::new(&camera, 24, 18).unwrap();
             let image = |coherence| {
                 let mut pixels = [[0u8; 3]; 24 * 18];

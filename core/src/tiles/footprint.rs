@@ -345,12 +345,7 @@ mod tests {
     #[test]
     fn the_footprint_is_in_front_of_the_eye_and_coarsens_with_distance() {
         let w = world(8192);
-        let camera = Camera {
-            eye: [4000.0, 4000.0, 300.0],
-            yaw_deg: 0.0,
-            pitch_deg: 10.0,
-            ..Camera::default()
-        };
+        let camera = Camera::looking([4000.0, 4000.0, 300.0], 0.0, 10.0);
         let mut keys = Vec::<TileKey, 4096>::new();
         let top = footprint::<64, 4096>(&w, &frame(camera, 0.0), &mut keys).unwrap();
         assert_eq!(top, 13);

@@ -22,7 +22,7 @@
 //!
 //! let mut slots = [Tile::<16>::EMPTY; 256];
 //! let mut cache = TileCache::<16, 256>::new(Flat.world(), &mut slots);
-//! let camera = Camera { eye: [128.0, 20.0, 30.0], yaw_deg: 90.0, pitch_deg: 20.0, ..Camera::default() };
+//! let camera = Camera::looking([128.0, 20.0, 30.0], 90.0, 20.0);
 //! // The tiles the frame needs, loaded before it is drawn (a flight loads
 //! // the next frame's during this one: see `prefetch`).
 //! let mut needed = heapless::Vec::<TileKey, 256>::new();
@@ -314,12 +314,7 @@ mod tests {
             ([10.0, 10.0, 70.0], 45.0, 3.0),
             ([100.0, 70.0, 300.0], 10.0, 90.0),
         ] {
-            let camera = Camera {
-                eye,
-                yaw_deg: yaw,
-                pitch_deg: pitch,
-                ..Camera::default()
-            };
+            let camera = Camera::looking(eye, yaw, pitch);
             let mut needed = heapless::Vec::<TileKey, 512>::new();
             let frame = FootprintView {
                 camera,

@@ -47,15 +47,30 @@ impl Camera {
     }
 }
 
-impl Default for Camera {
-    fn default() -> Self {
+impl Camera {
+    /// A camera at `eye` heading `yaw_deg` and looking `pitch_deg` below
+    /// the horizon, with the contract's defaults otherwise: no roll, a 60°
+    /// field of view.
+    ///
+    /// ```
+    /// use terracast::Camera;
+    /// let camera = Camera::looking([512.0, 40.0, 180.0], 90.0, 12.0);
+    /// assert_eq!((camera.roll_deg, camera.hfov_deg), (0.0, 60.0));
+    /// ```
+    pub const fn looking(eye: [f32; 3], yaw_deg: f32, pitch_deg: f32) -> Self {
         Self {
-            eye: [0.0, 0.0, 100.0],
-            yaw_deg: 0.0,
-            pitch_deg: 0.0,
+            eye,
+            yaw_deg,
+            pitch_deg,
             roll_deg: 0.0,
             hfov_deg: 60.0,
         }
+    }
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self::looking([0.0, 0.0, 100.0], 0.0, 0.0)
     }
 }
 

@@ -805,12 +805,7 @@ mod tests {
         let terrain = Terrain::new(16, 16, &h, &c).unwrap();
         let pyramid = Pyramid::flat(terrain);
         for yaw in [0.0, 37.0, 90.0, 150.0, 200.0, 271.0, 333.0] {
-            let cam = Camera {
-                eye: [-5.5, 7.25, 20.0],
-                yaw_deg: yaw,
-                pitch_deg: 10.0,
-                ..Camera::default()
-            };
+            let cam = Camera::looking([-5.5, 7.25, 20.0], yaw, 10.0);
             let view = View::new(&cam, 32, 8).unwrap();
             for col in 0..32 {
                 for row in 0..8 {

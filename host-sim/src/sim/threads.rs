@@ -126,7 +126,7 @@ mod tests {
         let scene = crate::scene::procedural(128, 5).to_kernel().unwrap();
         let options = RenderOptions::default();
         let cameras: Vec<Camera> = (0..3)
-            .map(|i| crate::camera::looking([64.0, 10.0 + 5.0 * i as f32, 120.0], 90.0, 20.0))
+            .map(|i| terracast::Camera::looking([64.0, 10.0 + 5.0 * i as f32, 120.0], 90.0, 20.0))
             .collect();
         let size = (64, 48);
         let pyramid = scene.pyramid_for(&options).unwrap();

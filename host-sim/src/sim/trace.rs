@@ -223,7 +223,7 @@ mod tests {
     #[test]
     fn the_recording_holds_all_of_the_kernels_work() {
         let scene = crate::scene::procedural(256, 2).to_kernel().unwrap();
-        let camera = crate::camera::looking([128.0, 20.0, 150.0], 90.0, 15.0);
+        let camera = terracast::Camera::looking([128.0, 20.0, 150.0], 90.0, 15.0);
         let options = RenderOptions::default();
         let machine = Machine::default();
         let trace = record_frame(&scene, &camera, (80, 60), &options, &machine).unwrap();
