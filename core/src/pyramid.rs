@@ -371,19 +371,14 @@ struct Grid {
     depth: u32,
 }
 
-impl Grid {
-    /// Index of point `(x, y)`, clamped into the grid.
-    #[inline]
-    fn clamped(&self, x: i64, y: i64) -> usize {
-        let x = x.clamp(0, i64::from(self.width) - 1) as usize;
-        let y = y.clamp(0, i64::from(self.depth) - 1) as usize;
-        y * self.width as usize + x
-    }
-}
-
-/// Tent weights of the 3 × 3 finer points around a coarse point (sum 16).
-const TENT: [[u32; 3]; 3] = [[1, 2, 1], [2, 4, 2], [1, 2, 1]];
-
+/// Builds one coarser level: each coarse point `(x, y)` sits on the finer
+/// point `(2x, 2y)`. Colors are the tent-filtered mean of the 3 × 3 finer
+/// points around it (weights 1 2 1 / 2 4 2 / 1 2 1, sum 16), heights per
+/// `filter`. Neighbours past the map's edge repeat the edge.
+///
+/// Runs once at boot on a board, so it is written for a 32-bit core: the
+/// tent is separable, and the clamped neighbours are worked out once a row
+/// and once a column in word arithmetic.
 fn downsample(
     fine: Grid,
     fine_h: &[u16],
@@ -393,35 +388,55 @@ fn downsample(
     out_c: &mut [Rgb],
     filter: HeightFilter,
 ) {
-    for y in 0..coarse.depth {
-        for x in 0..coarse.width {
-            let (mut h_sum, mut h_max) = (0u32, 0u16);
+    let (fw, fd) = (fine.width as usize, fine.depth as usize);
+    // The finer neighbours of coarse coordinate `v` (`2v − 1`, `2v`,
+    // `2v + 1`), clamped into `0..side`.
+    let taps = |v: usize, side: usize| {
+        let last = side.saturating_sub(1);
+        [
+            (2 * v).saturating_sub(1).min(last),
+            (2 * v).min(last),
+            (2 * v + 1).min(last),
+        ]
+    };
+    for y in 0..coarse.depth as usize {
+        // The three finer rows, sliced once a coarse row.
+        let rows = taps(y, fd).map(|r| r * fw..(r + 1) * fw);
+        let color_rows = rows.clone().map(|r| fine_c.get(r).unwrap_or(&[]));
+        let height_rows = rows.map(|r| fine_h.get(r).unwrap_or(&[]));
+        let out_row = y * coarse.width as usize;
+        for x in 0..coarse.width as usize {
+            let columns = taps(x, fw);
             let mut c_sum = [0u32; 3];
-            let center = fine.clamped(2 * i64::from(x), 2 * i64::from(y));
-            let h_center = fine_h.get(center).copied().unwrap_or(0);
-            for (dy, row) in TENT.iter().enumerate() {
-                for (dx, &w) in row.iter().enumerate() {
-                    let i = fine.clamped(
-                        2 * i64::from(x) + dx as i64 - 1,
-                        2 * i64::from(y) + dy as i64 - 1,
-                    );
-                    let (h, c) = (fine_h.get(i).copied(), fine_c.get(i).copied());
-                    let (h, c) = (h.unwrap_or(0), c.unwrap_or([0; 3]));
-                    h_sum += w * u32::from(h);
-                    h_max = h_max.max(h);
+            for (row, row_weight) in color_rows.iter().zip([1u32, 2, 1]) {
+                for (&column, weight) in columns.iter().zip([1u32, 2, 1]) {
+                    let c = row.get(column).copied().unwrap_or([0; 3]);
                     for (s, v) in c_sum.iter_mut().zip(c) {
-                        *s += w * u32::from(v);
+                        *s += row_weight * weight * u32::from(v);
                     }
                 }
             }
-            let i = (y * coarse.width + x) as usize;
-            if let (Some(h), Some(c)) = (out_h.get_mut(i), out_c.get_mut(i)) {
-                *h = match filter {
-                    HeightFilter::Subsample => h_center,
-                    HeightFilter::Mean => ((h_sum + 8) >> 4) as u16,
-                    HeightFilter::Max => h_max,
-                };
-                *c = c_sum.map(|s| ((s + 8) >> 4) as u8);
+            let height = |row: usize, column: usize| {
+                height_rows[row].get(columns[column]).copied().unwrap_or(0)
+            };
+            let h = match filter {
+                HeightFilter::Subsample => height(1, 1),
+                HeightFilter::Mean => {
+                    let mut sum = 0u32;
+                    for (row, row_weight) in [1u32, 2, 1].into_iter().enumerate() {
+                        for (column, weight) in [1u32, 2, 1].into_iter().enumerate() {
+                            sum += row_weight * weight * u32::from(height(row, column));
+                        }
+                    }
+                    ((sum + 8) >> 4) as u16
+                }
+                HeightFilter::Max => (0..9).map(|t| height(t / 3, t % 3)).max().unwrap_or(0),
+            };
+            if let (Some(out_h), Some(out_c)) =
+                (out_h.get_mut(out_row + x), out_c.get_mut(out_row + x))
+            {
+                *out_h = h;
+                *out_c = c_sum.map(|s| ((s + 8) >> 4) as u8);
             }
         }
     }
@@ -452,22 +467,24 @@ fn build_bounds(terrain: &Terrain<'_>, coarse_heights: &[u16], bounds: &mut [u16
             width: level_side(width, level - 1),
             depth: level_side(depth, level - 1),
         };
+        // Every index below is inside its grid (cells stop one short of
+        // each side), so none is clamped; a missing point would read as the
+        // highest, which keeps the bound conservative.
+        let point = |at: u32| points.get(at as usize).copied().unwrap_or(u16::MAX);
         for j in 0..cd {
             for i in 0..cw {
-                let corner = |dx: u32, dy: u32| {
-                    let at = g.clamped(i64::from(i + dx), i64::from(j + dy));
-                    points.get(at).copied().unwrap_or(u16::MAX)
-                };
-                let mut b = corner(0, 0)
-                    .max(corner(1, 0))
-                    .max(corner(0, 1))
-                    .max(corner(1, 1));
+                let (top, bottom) = (j * g.width + i, (j + 1) * g.width + i);
+                let mut b = point(top)
+                    .max(point(top + 1))
+                    .max(point(bottom))
+                    .max(point(bottom + 1));
                 if level == 1 {
-                    for y in 2 * j..=(2 * j + 2).min(depth - 1) {
-                        for x in 2 * i..=(2 * i + 2).min(width - 1) {
-                            let at = child_grid.clamped(i64::from(x), i64::from(y));
-                            b = b.max(terrain.heights().get(at).copied().unwrap_or(u16::MAX));
-                        }
+                    let finest = terrain.heights();
+                    let (x0, x1) = (2 * i as usize, (2 * i + 2).min(width - 1) as usize);
+                    for y in 2 * j..(2 * j + 3).min(depth) {
+                        let row = (y * width) as usize;
+                        let taps = finest.get(row + x0..=row + x1).unwrap_or(&[u16::MAX]);
+                        b = taps.iter().fold(b, |b, &h| b.max(h));
                     }
                 } else {
                     let (ccw, ccd) = (child_grid.width - 1, child_grid.depth - 1);
@@ -558,6 +575,70 @@ mod tests {
         let [max, _] = built(9, &h, &c, HeightFilter::Max);
         assert!(sub[..25].iter().all(|&v| v == 0));
         assert_eq!(max[2 * 5 + 1], 160);
+    }
+
+    #[test]
+    fn every_level_is_its_definition_on_any_map_shape() {
+        // Each coarse point from the 3 x 3 finer points around it, edges
+        // repeated: the tent mean of colors, heights by the filter.
+        for (w, d) in [(2u32, 2u32), (3, 2), (5, 8), (17, 12), (12, 17)] {
+            let h: StdVec<u16> = (0..w * d)
+                .map(|i| ((i * 37 + i / w * 91) % 53) as u16 * 7)
+                .collect();
+            let c: StdVec<Rgb> = (0..w * d)
+                .map(|i| [(i * 13 % 256) as u8, (i * 7 % 256) as u8, (i % 256) as u8])
+                .collect();
+            for filter in [
+                HeightFilter::Subsample,
+                HeightFilter::Mean,
+                HeightFilter::Max,
+            ] {
+                let t = Terrain::new(w, d, &h, &c).unwrap();
+                let n = pyramid_points(w, d);
+                let (mut ph, mut pc) = (vec![0; n], vec![[0; 3]; n]);
+                let mut pb = vec![0; pyramid_cells(w, d)];
+                Pyramid::build(&t, filter, &mut ph, &mut pc, &mut pb).unwrap();
+                let p = Pyramid::new(t, &ph, &pc, &pb).unwrap();
+                for l in 1..p.levels() {
+                    let (fine, coarse) = (p.level(l - 1).unwrap(), p.level(l).unwrap());
+                    let at = |x: i64, y: i64| {
+                        let x = x.clamp(0, i64::from(fine.width()) - 1);
+                        let y = y.clamp(0, i64::from(fine.depth()) - 1);
+                        (y * i64::from(fine.width()) + x) as usize
+                    };
+                    for y in 0..i64::from(coarse.depth()) {
+                        for x in 0..i64::from(coarse.width()) {
+                            // (tent weight, height, color) of the 3 x 3 taps.
+                            let taps: StdVec<(u32, u16, Rgb)> = (0..9i64)
+                                .map(|t| {
+                                    let (dx, dy) = (t % 3 - 1, t / 3 - 1);
+                                    let weight = ((2 - dx.abs()) * (2 - dy.abs())) as u32;
+                                    let i = at(2 * x + dx, 2 * y + dy);
+                                    (weight, fine.heights()[i], fine.colors()[i])
+                                })
+                                .collect();
+                            let tent = |value: &dyn Fn(&(u32, u16, Rgb)) -> u32| {
+                                (taps.iter().map(|tap| tap.0 * value(tap)).sum::<u32>() + 8) >> 4
+                            };
+                            let want_h = match filter {
+                                HeightFilter::Subsample => taps[4].1,
+                                HeightFilter::Mean => tent(&|tap| u32::from(tap.1)) as u16,
+                                HeightFilter::Max => taps.iter().map(|tap| tap.1).max().unwrap(),
+                            };
+                            let want_c: [u8; 3] =
+                                core::array::from_fn(|k| tent(&|tap| u32::from(tap.2[k])) as u8);
+                            let i = (y * i64::from(coarse.width()) + x) as usize;
+                            assert_eq!(
+                                coarse.heights()[i],
+                                want_h,
+                                "{w}x{d} {filter:?} level {l} ({x}, {y})"
+                            );
+                            assert_eq!(coarse.colors()[i], want_c, "{w}x{d} level {l} ({x}, {y})");
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]
