@@ -224,7 +224,7 @@ mod tests {
     }
 
     fn camera(pitch: f32) -> Camera {
-        terracast::Camera::looking([128.0, 20.0, 170.0], 90.0, pitch)
+        Camera::looking([128.0, 20.0, 170.0], 90.0, pitch)
     }
 
     fn reference(scene: &Scene, camera: &Camera) -> Frame {

@@ -32,7 +32,7 @@ pub struct Condition {
 fn camera(eye: [f32; 3], yaw: f32, pitch: f32, hfov: f32) -> Camera {
     Camera {
         hfov_deg: hfov,
-        ..terracast::Camera::looking(eye, yaw, pitch)
+        ..Camera::looking(eye, yaw, pitch)
     }
 }
 

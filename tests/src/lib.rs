@@ -35,7 +35,7 @@ pub fn comanche(color: &str, height: &str) -> Scene {
 
 /// A camera with the contract's default field of view.
 pub fn camera(eye: [f32; 3], yaw: f32, pitch: f32) -> Camera {
-    terracast::Camera::looking(eye, yaw, pitch)
+    Camera::looking(eye, yaw, pitch)
 }
 
 /// Renders with the kernel at the given coherence and resolution.

@@ -45,7 +45,7 @@ fn camera(scene: &Scene, i: usize) -> Camera {
     } else {
         ground + 150.0
     };
-    terracast::Camera::looking([x, y, z], yaw, pitch)
+    Camera::looking([x, y, z], yaw, pitch)
 }
 
 fn fly(scene: &Scene, kernel: &KernelScene, budget: u64) -> Vec<FrameCost> {

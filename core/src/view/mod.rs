@@ -63,7 +63,7 @@ impl Camera {
             yaw_deg,
             pitch_deg,
             roll_deg: 0.0,
-            hfov_deg: 60.0,
+            hfov_deg: crate::config::DEFAULT_HFOV_DEG,
         }
     }
 }

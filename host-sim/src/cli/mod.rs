@@ -14,6 +14,7 @@ use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{load_pair, procedural, Scene};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
+use terracast::config::DEFAULT_HFOV_DEG;
 use terracast::{
     Camera, Coherence, HeightFilter, RenderOptions, Resolution, Rgb, Shading, VerticalSamples,
     View, ViewError, U8F8,
@@ -255,8 +256,6 @@ impl CameraArgs {
     }
 }
 
-/// The field of view of a camera given no --hfov (the view contract's).
-const DEFAULT_HFOV_DEG: f32 = 60.0;
 /// The side of the built-in scene given no --procedural-size.
 const DEFAULT_PROCEDURAL_SIDE: u32 = 1024;
 

@@ -94,7 +94,7 @@ pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> 
         yaw_deg: args.camera.yaw,
         pitch_deg: args.camera.pitch,
         roll_deg: args.roll,
-        hfov_deg: args.camera.hfov_or(super::DEFAULT_HFOV_DEG),
+        hfov_deg: args.camera.hfov_or(terracast::config::DEFAULT_HFOV_DEG),
     };
     let (width, height) = args.size;
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);

@@ -1,9 +1,7 @@
 //! `terracast-sim sim`: a flight on the modeled parallel machine, Table 1,
 //! and the line pool on real threads.
 
-use super::{
-    load_scene_or, parse_size, CameraArgs, SceneArgs, DEFAULT_HFOV_DEG, DEFAULT_PROCEDURAL_SIDE,
-};
+use super::{load_scene_or, parse_size, CameraArgs, SceneArgs, DEFAULT_PROCEDURAL_SIDE};
 use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use crate::sim::threads::render_threads;
@@ -12,6 +10,7 @@ use crate::sim::{
     TABLE_PITCH,
 };
 use std::path::PathBuf;
+use terracast::config::DEFAULT_HFOV_DEG;
 use terracast::{Camera, RenderOptions};
 
 /// Most pixels a run records (frames × image size), about 4 GiB of events.

@@ -124,7 +124,7 @@ mod tests {
     use super::*;
 
     fn camera(pitch: f32) -> Camera {
-        terracast::Camera::looking([512.0, 100.0, 300.0], 90.0, pitch)
+        Camera::looking([512.0, 100.0, 300.0], 90.0, pitch)
     }
 
     #[test]
