@@ -137,7 +137,7 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
     root.fill(&WHITE).map_err(|e| failed(&e))?;
     let speeds = summaries.iter().map(|s| s.mpx_per_s);
     let lo_x = speeds.clone().fold(f64::MAX, f64::min).max(1e-3) / 2.0;
-    let hi_x = speeds.fold(0.0, f64::max).max(lo_x * 4.0) * 2.0;
+    let hi_x = speeds.fold(0.0, f64::max).max(lo_x * 4.0) * 4.0;
     let qualities = summaries.iter().map(|s| s.psnr);
     let lo_y = qualities.clone().fold(f64::MAX, f64::min) - 2.0;
     let hi_y = qualities.fold(f64::MIN, f64::max) + 2.0;
@@ -169,7 +169,11 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
         .map_err(|e| failed(&e))?
         .label("Pareto front")
         .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.mix(0.5).stroke_width(2)));
-    for (i, s) in summaries.iter().enumerate() {
+    // Label boxes already drawn, in pixels: a label moves down or up in
+    // steps of its height until it overlaps none (the kernel's settings
+    // crowd around one speed).
+    let mut taken: Vec<(i32, i32, i32, i32)> = Vec::new();
+    for s in summaries {
         let color = if s.setting.starts_with("kernel") {
             RED
         } else if s.setting.starts_with("voxelspace") {
@@ -181,9 +185,19 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
         chart
             .draw_series([Circle::new(point, 5, color.filled())])
             .map_err(|e| failed(&e))?;
-        // The label beside its point, above or below by turns so that
-        // neighbours do not print over each other.
-        let offset = if i % 2 == 0 { -16 } else { 6 };
+        let (px, py) = chart.backend_coord(&point);
+        let (width, height) = (7 * s.setting.chars().count() as i32, 14);
+        let free = |dy: i32| {
+            let (x0, y0) = (px + 8, py + dy);
+            !taken
+                .iter()
+                .any(|&(a0, b0, a1, b1)| x0 < a1 && a0 < x0 + width && y0 < b1 && b0 < y0 + height)
+        };
+        let offset = (0..12)
+            .map(|k| -height / 2 + if k % 2 == 0 { 1 } else { -1 } * (k + 1) / 2 * height)
+            .find(|&dy| free(dy))
+            .unwrap_or(-height / 2);
+        taken.push((px + 8, py + offset, px + 8 + width, py + offset + height));
         chart
             .draw_series([EmptyElement::at(point)
                 + Text::new(
