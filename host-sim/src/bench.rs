@@ -155,8 +155,7 @@ pub struct BenchView {
 /// 5°, 15°, 30° and 60° (far), and from low inside the map (near).
 pub fn views(index: usize, scene: &Scene) -> Vec<BenchView> {
     let (w, d) = (scene.width as f32, scene.depth as f32);
-    let top = scene.max_height();
-    let far = [w * 0.5, d * 0.12, top + 0.04 * w.min(d)];
+    let far = scene.default_eye();
     let mut views: Vec<BenchView> = [0.0f32, 5.0, 15.0, 30.0, 60.0]
         .iter()
         .map(|&pitch| BenchView {

@@ -26,7 +26,7 @@ pub fn board_views(side: u32, top: f32) -> Vec<Camera> {
     let s = side as f32;
     let camera = terracast::Camera::looking;
     vec![
-        camera([s * 0.5, s * 0.12, top + 0.04 * s], 90.0, 12.0),
+        camera(crate::scene::south_edge_eye(side, side, top), 90.0, 12.0),
         camera([s * 0.08, s * 0.1, top + 0.01 * s], 40.0, 2.0),
         camera([s * 0.3, s * 0.3, top + 0.15 * s], 60.0, 45.0),
         camera([s * 0.5, s * 0.5, top + 0.25 * s], 0.0, 90.0),

@@ -193,8 +193,11 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
                 .iter()
                 .any(|&(a0, b0, a1, b1)| x0 < a1 && a0 < x0 + width && y0 < b1 && b0 < y0 + height)
         };
-        let offset = (0..12)
-            .map(|k| -height / 2 + if k % 2 == 0 { 1 } else { -1 } * (k + 1) / 2 * height)
+        // Centred on the point, then one label height up, one down, two
+        // up, two down, and so on (pixel y grows downward).
+        let shifts = (0..12).map(|k: i32| if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 });
+        let offset = shifts
+            .map(|shift| -height / 2 + shift * height)
             .find(|&dy| free(dy))
             .unwrap_or(-height / 2);
         taken.push((px + 8, py + offset, px + 8 + width, py + offset + height));

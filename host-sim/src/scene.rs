@@ -125,12 +125,9 @@ impl Scene {
         self.heights.iter().copied().fold(f32::MIN, f32::max)
     }
 
-    /// The commands' eye when none is given: over the middle of the map's
-    /// south edge (12 % of the way in), a little above the highest
-    /// terrain; they look toward +y.
+    /// The commands' eye when none is given (see [`south_edge_eye`]).
     pub fn default_eye(&self) -> [f32; 3] {
-        let (w, d) = (self.width as f32, self.depth as f32);
-        [w * 0.5, d * 0.12, self.max_height() + 0.04 * w.min(d)]
+        south_edge_eye(self.width, self.depth, self.max_height())
     }
 
     /// Converts to the kernel's format (heights rounded to 1/16 voxel) and
@@ -215,4 +212,13 @@ impl KernelScene {
     pub fn height_filter(&self) -> HeightFilter {
         self.filter
     }
+}
+
+/// The commands' eye over a `width` × `depth` map whose highest terrain is
+/// `top`: over the middle of its south edge (12 % of the way in), a little
+/// above the highest terrain, so that a view toward +y looks across the
+/// whole map.
+pub fn south_edge_eye(width: u32, depth: u32, top: f32) -> [f32; 3] {
+    let (w, d) = (width as f32, depth as f32);
+    [w * 0.5, d * 0.12, top + 0.04 * w.min(d)]
 }

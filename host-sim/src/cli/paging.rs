@@ -74,12 +74,15 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
 /// A view over the middle of a world: the south edge, as `render` places
 /// it on a map, when the world fits one window; its center otherwise.
 fn default_eye(world: &World) -> [f32; 3] {
-    let (w, d) = (world.width as f32, world.depth as f32);
     let top = f32::from(world.max_height) / 16.0;
     if world.width <= WINDOW_SIDE && world.depth <= WINDOW_SIDE {
-        [w * 0.5, d * 0.12, top + 0.04 * w.min(d)]
+        crate::scene::south_edge_eye(world.width, world.depth, top)
     } else {
-        [w * 0.5, d * 0.5, top + 100.0]
+        [
+            world.width as f32 * 0.5,
+            world.depth as f32 * 0.5,
+            top + 100.0,
+        ]
     }
 }
 

@@ -108,6 +108,7 @@ pub fn table(
     machine: &Machine,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Table> {
+    let options = RenderOptions::default();
     let mut fps = Vec::new();
     for (row, &pitch) in TABLE_PITCH.iter().enumerate() {
         let cameras = flight(
@@ -118,7 +119,6 @@ pub fn table(
             frames,
             speed,
         );
-        let options = RenderOptions::default();
         let traces = record_flight(scene, &cameras, size, &options, machine, |done| {
             progress(row, done)
         })?;
