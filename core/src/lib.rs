@@ -42,6 +42,7 @@
 
 mod caster;
 pub mod config;
+mod divide;
 mod pool;
 mod probe;
 mod pyramid;

@@ -35,7 +35,7 @@
 
 use super::View;
 use crate::config::COORD_FRAC_BITS;
-use crate::view::ray::div_trunc;
+use crate::divide::div_trunc;
 
 /// Fractional bits of image-plane positions in the ownership tests.
 const IMG_FRAC: u32 = 8;

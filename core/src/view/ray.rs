@@ -25,6 +25,7 @@
 
 use super::View;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, MAX_WALK_LEVEL};
+use crate::divide::{div_ceil, div_floor, div_trunc};
 use crate::surface::{Extent, Grid, Surface};
 use fixed::types::I16F16;
 
@@ -183,7 +184,7 @@ impl Plane {
         let dminor = if run == 0 {
             0
         } else {
-            (d_minor << COORD_FRAC_BITS) / run
+            div_trunc(d_minor << COORD_FRAC_BITS, run)
         };
 
         let [ex, ey, _] = view.eye.map(|v| v.to_bits());
@@ -266,11 +267,8 @@ impl Plane {
         // A color lookup needs no more than 24 bits of this: drop the low
         // bits of both until they fit the core's 32-bit divide.
         let shift = (64 - run.leading_zeros()).saturating_sub(24);
-        let per_pixel = div_trunc(
-            (self.across >> shift).clamp(-(1 << 30), 1 << 30),
-            (run >> shift).max(1),
-        );
-        ((per_pixel * offset) >> COORD_FRAC_BITS).clamp(-(1 << 14), 1 << 14)
+        let per_pixel = div_trunc(bound(self.across >> shift, 1 << 30), (run >> shift).max(1));
+        bound((per_pixel * offset) >> COORD_FRAC_BITS, 1 << 14)
     }
 }
 
@@ -292,7 +290,7 @@ impl View {
                 max_slope
             }
         } else {
-            ((d[2] << COORD_FRAC_BITS) / run).clamp(-max_slope, max_slope)
+            bound(div_trunc(d[2] << COORD_FRAC_BITS, run), max_slope)
         };
         (dz, run)
     }
@@ -383,7 +381,22 @@ impl View {
 /// every sum the caster forms with it.
 #[inline]
 fn narrow(v: i64) -> i32 {
-    v.clamp(-(1 << 20), 1 << 20) as i32
+    bound(v, 1 << 20) as i32
+}
+
+/// `v` clamped to `low..=high` (`low ≤ high`). `i64::clamp` is a call on
+/// the board (its bounds check stops it inlining); `max` and `min` are a
+/// few word compares in place.
+#[inline(always)]
+#[allow(clippy::manual_clamp)]
+fn clamp_in_place(v: i64, low: i64, high: i64) -> i64 {
+    v.max(low).min(high)
+}
+
+/// `v` clamped to `-limit..=limit` (`limit ≥ 0`), in place.
+#[inline(always)]
+fn bound(v: i64, limit: i64) -> i64 {
+    clamp_in_place(v, -limit, limit)
 }
 
 /// `v` saturated into `i32`. Values that fit are the rule: on 32-bit cores
@@ -440,7 +453,11 @@ impl Lod {
         }
         // reach = D1·|d_major|: Q16 times Q32 (taken as Q16), in range for
         // every depth and direction View accepts.
-        let reach = ((plan.level1_depth.min(1 << 40) * (run >> 16)) >> 16).clamp(1, 1 << 40);
+        let reach = clamp_in_place(
+            (plan.level1_depth.min(1 << 40) * (run >> 16)) >> 16,
+            1,
+            1 << 40,
+        );
         // A ray that ends before level 1 can begin steps on level 0 only:
         // it needs no schedule and no level weight (the division below).
         // It samples and shades exactly as with the levels it never
@@ -450,7 +467,7 @@ impl Lod {
         }
         // t goes from 0 to 1 over the level's `2^(l−1)·reach` voxels, which
         // are `reach/2` steps of `2^l`: dt = 2 / reach (Q16 over Q16).
-        let dt = ((1i64 << 33) / reach).min(1 << 24) as i32;
+        let dt = div_trunc(1i64 << 33, reach).min(1 << 24) as i32;
         Self { reach, dt, top }
     }
 }
@@ -662,7 +679,7 @@ impl Ray {
             return *at;
         }
         let aside = (i64::from(self.color_drift) * self.distance(at.k)) >> COORD_FRAC_BITS;
-        let minor = (i64::from(at.minor) + aside).clamp(0, i64::from(self.minor_max));
+        let minor = clamp_in_place(i64::from(at.minor) + aside, 0, i64::from(self.minor_max));
         Cursor {
             minor: minor as i32,
             ..*at
@@ -711,32 +728,6 @@ impl View {
     }
 }
 
-/// `a / b`, truncated, as `i64` division does; by the 32-bit divide when
-/// both fit. The quotient is the same, and on 32-bit cores a 64-bit
-/// division is a library call of a hundred instructions or more.
-#[inline]
-pub(crate) fn div_trunc(a: i64, b: i64) -> i64 {
-    match (i32::try_from(a), i32::try_from(b)) {
-        (Ok(a), Ok(b)) if b != 0 && !(a == i32::MIN && b == -1) => i64::from(a / b),
-        _ => a / b,
-    }
-}
-
-#[inline]
-fn div_floor(a: i64, b: i64) -> i64 {
-    let q = div_trunc(a, b);
-    if q * b != a && ((a < 0) != (b < 0)) {
-        q - 1
-    } else {
-        q
-    }
-}
-
-#[inline]
-fn div_ceil(a: i64, b: i64) -> i64 {
-    -div_floor(-a, b)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -761,37 +752,6 @@ mod tests {
             let clamped = v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
             assert_eq!(saturate(v), clamped, "{v}");
         }
-    }
-
-    #[test]
-    fn narrow_division_equals_wide_division() {
-        let values = [
-            0,
-            1,
-            -1,
-            7,
-            -7,
-            65_536,
-            i64::from(i32::MAX),
-            i64::from(i32::MIN),
-            1 << 40,
-            -(1 << 40),
-        ];
-        for a in values {
-            for b in values.into_iter().filter(|&b| b != 0) {
-                assert_eq!(div_trunc(a, b), a / b, "{a} / {b}");
-            }
-        }
-    }
-
-    #[test]
-    fn floor_and_ceil_division_round_toward_infinities() {
-        assert_eq!(div_floor(7, 2), 3);
-        assert_eq!(div_floor(-7, 2), -4);
-        assert_eq!(div_floor(7, -2), -4);
-        assert_eq!(div_ceil(7, 2), 4);
-        assert_eq!(div_ceil(-7, 2), -3);
-        assert_eq!(div_ceil(-8, -2), 4);
     }
 
     fn flat(side: u32, height: u16) -> (std::vec::Vec<u16>, std::vec::Vec<[u8; 3]>) {

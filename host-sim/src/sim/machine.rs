@@ -42,12 +42,14 @@
 //! of the kernel's instructions per pixel to its color fetches and steps
 //! per pixel over the eight renders of `scripts/board-check` (Cortex-M7;
 //! four views, each with the default coherence and with every ray cast from
-//! the eye; the `cost fit` line it prints) is 689 instructions a ray plus
-//! 610 a color fetch plus 262 a step, taken as i860 cycles at one
-//! instruction a cycle (both are 32-bit cores that do 64-bit division in
-//! software). A sky ray costs its 689 alone; a terrain ray, shaded from two
-//! grid lines, about 1900 before its steps. Change them to model another
-//! processor or a faster kernel.
+//! the eye; the `cost fit` line it prints) was 689 instructions a ray plus
+//! 610 a color fetch plus 262 a step while the kernel divided 64-bit values
+//! in software, taken as i860 cycles at one instruction a cycle. The board
+//! now divides them with its 32-bit hardware divide (596 + 585 + 264), but
+//! the i860 has no integer divide at all, so the software-division fit stays
+//! the model of it. A sky ray costs its 689 alone; a terrain ray, shaded
+//! from two grid lines, about 1900 before its steps. Change them to model
+//! another processor or a faster kernel.
 
 use crate::error::{Error, Result};
 use serde::Deserialize;
