@@ -548,6 +548,32 @@ pub fn summary_table(summaries: &[Summary]) -> String {
     out
 }
 
+/// Map side past which the command summarizes a scene apart: the 4096²
+/// map's far views reach the distances the pyramid's levels are built
+/// for, the smaller maps' do not.
+pub const LARGE_MAP_SIDE: u32 = 1024;
+
+/// The measures of maps up to [`LARGE_MAP_SIDE`] a side, and of larger
+/// maps (a map's larger side decides), for the command's split summaries:
+/// which setting wins depends on how far the terrain reaches. A measure of
+/// a scene not in `scenes` is in neither.
+pub fn split_by_map_size(measures: &[Measure], scenes: &[BenchScene]) -> [Vec<Measure>; 2] {
+    let side = |name: &str| {
+        scenes
+            .iter()
+            .find(|s| s.name == name)
+            .map(|s| s.scene.width.max(s.scene.depth))
+    };
+    let part = |large: bool| {
+        measures
+            .iter()
+            .filter(|m| side(&m.scene).is_some_and(|side| (side > LARGE_MAP_SIDE) == large))
+            .cloned()
+            .collect()
+    };
+    [part(false), part(true)]
+}
+
 /// At pitch 0, the kernel's default against Voxel Space over the same
 /// views, measured in this run: (speed ratio, kernel PSNR, Voxel Space
 /// PSNR), means over the views.
@@ -592,6 +618,34 @@ mod tests {
             resident_bytes: 0,
             bytes_touched: 0,
         }
+    }
+
+    #[test]
+    fn measures_split_by_the_larger_side_of_their_map() {
+        // Flat strips: only their sides matter here.
+        let scene = |name: &str, width: u32, depth: u32| {
+            let n = (width * depth) as usize;
+            let map = Scene::new(width, depth, vec![0.0; n], vec![[0; 3]; n]).unwrap();
+            BenchScene {
+                name: name.into(),
+                kernel: map.to_kernel().unwrap(),
+                scene: map,
+            }
+        };
+        let scenes = [
+            scene("long", 1024, 8),
+            scene("wide", 1025, 64),
+            scene("deep", 64, 1100),
+        ];
+        let on = |name: &str| Measure {
+            scene: name.into(),
+            ..summary("kernel", 1.0, 30.0)
+        };
+        let measures = [on("long"), on("wide"), on("deep"), on("unknown")];
+        let [small, large] = split_by_map_size(&measures, &scenes);
+        let names = |ms: &[Measure]| ms.iter().map(|m| m.scene.clone()).collect::<Vec<_>>();
+        assert_eq!(names(&small), ["long"]);
+        assert_eq!(names(&large), ["wide", "deep"]);
     }
 
     #[test]

@@ -2,8 +2,8 @@
 
 use super::parse_size;
 use crate::bench::{
-    csv, flicker, kernel_vs_voxel_space_at_pitch_0, run, summarize, summary_table, views,
-    BenchScene,
+    csv, flicker, kernel_vs_voxel_space_at_pitch_0, run, split_by_map_size, summarize,
+    summary_table, views, BenchScene, LARGE_MAP_SIDE,
 };
 use crate::chart::draw_bench;
 use crate::error::{Error, Result};
@@ -128,16 +128,11 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
     print!("{}", summary_table(&summaries));
     // The same measures split by map size: which setting wins depends on
     // how far the terrain reaches.
-    for (label, large) in [("maps up to 1024²", false), ("maps over 1024²", true)] {
-        let part: Vec<_> = measures
-            .iter()
-            .filter(|m| {
-                scenes.iter().any(|s| {
-                    s.name == m.scene && (s.scene.width.max(s.scene.depth) > 1024) == large
-                })
-            })
-            .cloned()
-            .collect();
+    let labels = [
+        format!("maps up to {LARGE_MAP_SIDE}²"),
+        format!("maps over {LARGE_MAP_SIDE}²"),
+    ];
+    for (label, part) in labels.iter().zip(split_by_map_size(&measures, &scenes)) {
         if !part.is_empty() && part.len() < measures.len() {
             println!("{label} alone ({} views):", part.len() / summaries.len());
             print!("{}", summary_table(&summarize(&part)));
