@@ -39,6 +39,9 @@ pub struct LevelStats {
     pub hits: [u64; MAX_LEVELS],
     /// First-hit bound tests (counted in the render's steps too).
     pub bound_tests: u64,
+    /// Color fetches of the shading (a terrain ray makes one or two; the
+    /// board's cost fit charges each).
+    pub color_fetches: u64,
 }
 
 /// What a render cost, for `--stats`.

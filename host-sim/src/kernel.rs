@@ -114,6 +114,7 @@ pub fn render_surface<T: Surface + ?Sized>(
             steps: probe.steps_by_level,
             hits: probe.hits_by_level,
             bound_tests: probe.bound_tests,
+            color_fetches: probe.color_fetches,
         }),
     };
     Ok((frame, stats))

@@ -82,6 +82,7 @@ pub fn stats_json(
     });
     if let Some(levels) = &stats.levels {
         value["bound_tests"] = levels.bound_tests.into();
+        value["color_fetches"] = levels.color_fetches.into();
         value["levels"] = serde_json::json!({
             "steps": &levels.steps[..levels.levels],
             "hits": &levels.hits[..levels.levels],

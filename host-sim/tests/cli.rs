@@ -81,6 +81,16 @@ fn renders_png_depth_and_stats_as_the_contract_says() {
             assert!(stats[key].as_u64().is_some(), "{method}: stats lack {key}");
         }
         assert_eq!(stats["pixels"], 32 * 24);
+        if method == "kernel" {
+            // A terrain pixel's ray shades from one or two grid lines.
+            let (colors, sky) = (&stats["color_fetches"], &stats["sky_pixels"]);
+            let terrain = 32 * 24 - sky.as_u64().unwrap();
+            let colors = colors.as_u64().expect("kernel stats count color fetches");
+            assert!(
+                (terrain..=2 * terrain).contains(&colors),
+                "{colors} color fetches for {terrain} terrain pixels"
+            );
+        }
     }
 }
 
