@@ -37,6 +37,19 @@ pub trait Grid: Copy {
     fn height(&self, index: isize) -> Option<u16>;
     /// The color at `index`; `None` outside the grid.
     fn color(&self, index: isize) -> Option<Rgb>;
+    /// The heights at `index` and `index + across`, both or `None`: the two
+    /// ends of the grid-line cell a step tests. A grid that pays per lookup
+    /// (a tile cache) can find both in one.
+    #[inline(always)]
+    fn height_pair(&self, index: isize, across: isize) -> Option<(u16, u16)> {
+        Some((self.height(index)?, self.height(index + across)?))
+    }
+    /// The colors at `index` and `index + across`, both or `None` (see
+    /// [`Grid::height_pair`]).
+    #[inline(always)]
+    fn color_pair(&self, index: isize, across: isize) -> Option<(Rgb, Rgb)> {
+        Some((self.color(index)?, self.color(index + across)?))
+    }
 }
 
 /// A terrain and its coarser levels, as the caster reads them.

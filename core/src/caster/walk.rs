@@ -106,8 +106,7 @@ impl<G: Grid> Stage<G> {
         if let Some(cell) = recent.and_then(|r| r.find(self.level, index, self.minor_stride)) {
             return Some(cell);
         }
-        let h0 = self.here.height(index)?;
-        let h1 = self.here.height(index + self.minor_stride)?;
+        let (h0, h1) = self.here.height_pair(index, self.minor_stride)?;
         probe.visit(self.level, index as usize);
         Some(Cell {
             level: self.level,
@@ -234,8 +233,7 @@ fn line_color<G: Grid>(
     let i = index(base, minor_stride, minor, level);
     let weight =
         (minor >> (COORD_FRAC_BITS - WEIGHT_BITS + u32::from(level))) & ((1 << WEIGHT_BITS) - 1);
-    let c0 = grid.color(i)?;
-    let c1 = grid.color(i + minor_stride)?;
+    let (c0, c1) = grid.color_pair(i, minor_stride)?;
     Some(lerp(c0, c1, weight as u32))
 }
 

@@ -401,5 +401,32 @@ mod tests {
         // Outside the world: nothing.
         assert_eq!(level0.height(24 * stride + 64), None);
         assert_eq!(level0.height(-1), None);
+
+        // A pair reads what its two points read, and counts the same
+        // degraded samples, whether it takes one lookup or two: both points
+        // in the missing tile, across its borders (tiles are 16 points a
+        // side), both resident, and one point outside the world.
+        let row = 24 * stride;
+        for (at, across) in [
+            (row + 20, 1),
+            (row + 20, stride),
+            (row + 15, 1),
+            (row + 31, 1),
+            (23 * stride + 40, stride),
+            (row + 40, 1),
+            (row + 63, 1),
+        ] {
+            let before = surface.degraded_samples();
+            let heights = level0.height(at).zip(level0.height(at + across));
+            let colors = level0.color(at).zip(level0.color(at + across));
+            let counted = surface.degraded_samples() - before;
+            assert_eq!(level0.height_pair(at, across), heights, "{at} {across}");
+            assert_eq!(level0.color_pair(at, across), colors, "{at} {across}");
+            assert_eq!(
+                surface.degraded_samples() - before,
+                2 * counted,
+                "{at} {across}"
+            );
+        }
     }
 }

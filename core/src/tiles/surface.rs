@@ -99,8 +99,17 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
     /// best resident coarser one, with the point's place in it.
     #[inline]
     fn point(&self, level: u8, x: u32, y: u32) -> Option<(&super::Tile<T>, usize, usize)> {
+        let (tile, coarser) = self.locate(level, x, y, 1)?;
+        let (row, column) = Self::place(x >> coarser, y >> coarser);
+        Some((tile, row, column))
+    }
+
+    /// The resident tile holding world point `(x, y)` of `level`, or the
+    /// best resident coarser one, and how many levels coarser it is. Counts
+    /// `samples` degraded samples when it is coarser.
+    #[inline]
+    fn locate(&self, level: u8, x: u32, y: u32, samples: u32) -> Option<(&super::Tile<T>, u8)> {
         let shift = T.trailing_zeros();
-        let mask = T as u32 - 1;
         let (mut level_at, mut x, mut y) = (level, x, y);
         loop {
             let key = TileKey {
@@ -111,9 +120,9 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
             if let Some((slot, tile)) = self.cache.lookup(&key) {
                 self.touch(slot);
                 if level_at != level {
-                    self.degraded.fetch_add(1, Ordering::Relaxed);
+                    self.degraded.fetch_add(samples, Ordering::Relaxed);
                 }
-                return Some((tile, (y & mask) as usize, (x & mask) as usize));
+                return Some((tile, level_at - level));
             }
             if level_at + 1 >= self.world_levels {
                 return None;
@@ -122,6 +131,32 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
             x >>= 1;
             y >>= 1;
         }
+    }
+
+    /// Row and column of point `(x, y)` of a level inside its tile.
+    #[inline(always)]
+    fn place(x: u32, y: u32) -> (usize, usize) {
+        let mask = T as u32 - 1;
+        ((y & mask) as usize, (x & mask) as usize)
+    }
+
+    /// The places of points `a` and `b` of `level` when both lie in one
+    /// tile (one lookup for both); `None` when they do not, or when that
+    /// tile and every coarser one is missing.
+    #[inline]
+    fn pair_in_one_tile(
+        &self,
+        level: u8,
+        a: (u32, u32),
+        b: (u32, u32),
+    ) -> Option<(&super::Tile<T>, [(usize, usize); 2])> {
+        let shift = T.trailing_zeros();
+        if a.0 >> shift != b.0 >> shift || a.1 >> shift != b.1 >> shift {
+            return None;
+        }
+        let (tile, coarser) = self.locate(level, a.0, a.1, 2)?;
+        let place = |(x, y): (u32, u32)| Self::place(x >> coarser, y >> coarser);
+        Some((tile, [place(a), place(b)]))
     }
 }
 
@@ -168,6 +203,27 @@ impl<const T: usize, const N: usize> Grid for TiledGrid<'_, '_, '_, T, N> {
         let (x, y) = self.at(index)?;
         let (tile, row, column) = self.surface.point(self.level, x, y)?;
         Some(tile.colors[row][column])
+    }
+    /// One cache lookup for both heights when they share a tile (nearly
+    /// always: a tile is 64 points a side).
+    #[inline]
+    fn height_pair(&self, index: isize, across: isize) -> Option<(u16, u16)> {
+        let (a, b) = (self.at(index)?, self.at(index + across)?);
+        match self.surface.pair_in_one_tile(self.level, a, b) {
+            Some((tile, [(r0, c0), (r1, c1)])) => {
+                Some((tile.heights[r0][c0], tile.heights[r1][c1]))
+            }
+            None => Some((self.height(index)?, self.height(index + across)?)),
+        }
+    }
+    /// As [`TiledGrid::height_pair`], for colors.
+    #[inline]
+    fn color_pair(&self, index: isize, across: isize) -> Option<(Rgb, Rgb)> {
+        let (a, b) = (self.at(index)?, self.at(index + across)?);
+        match self.surface.pair_in_one_tile(self.level, a, b) {
+            Some((tile, [(r0, c0), (r1, c1)])) => Some((tile.colors[r0][c0], tile.colors[r1][c1])),
+            None => Some((self.color(index)?, self.color(index + across)?)),
+        }
     }
 }
 
