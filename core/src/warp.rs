@@ -322,10 +322,6 @@ fn bilinear(frame: &[Rgb], w: i64, h: i64, x: i64, y: i64) -> Rgb {
 mod tests {
     use super::*;
 
-    fn camera(eye: [f32; 3], yaw: f32, pitch: f32) -> Camera {
-        Camera::looking(eye, yaw, pitch)
-    }
-
     /// Control points of a flat ground at height 0 seen by `camera`.
     fn ground_points(camera: &Camera, size: (u32, u32)) -> [ControlPoint; 9] {
         let basis = Basis::new(camera, size);
@@ -345,7 +341,7 @@ mod tests {
 
     #[test]
     fn the_same_camera_maps_the_display_into_the_middle_of_the_margins() {
-        let display = camera([0.0, 0.0, 50.0], 30.0, 20.0);
+        let display = Camera::looking([0.0, 0.0, 50.0], 30.0, 20.0);
         let (rendered, size) = with_margin(&display, (40, 30), 1.25);
         assert_eq!(size, (50, 37));
         let warp = Warp::fit(
@@ -366,9 +362,9 @@ mod tests {
 
     #[test]
     fn a_turned_camera_finds_its_pixels_where_the_ground_points_are() {
-        let rendered_cam = camera([0.0, 0.0, 60.0], 0.0, 30.0);
+        let rendered_cam = Camera::looking([0.0, 0.0, 60.0], 0.0, 30.0);
         let (rendered, size) = with_margin(&rendered_cam, (64, 48), 1.3);
-        let display = camera([2.0, 1.0, 60.0], 3.0, 31.0);
+        let display = Camera::looking([2.0, 1.0, 60.0], 3.0, 31.0);
         let points = ground_points(&rendered, size);
         let warp = Warp::fit(&rendered, size, &display, (64, 48), &points).unwrap();
         // Every control point's display position maps back near where it
@@ -431,9 +427,9 @@ mod tests {
 
     #[test]
     fn too_few_points_in_front_is_an_error() {
-        let rendered = camera([0.0, 0.0, 60.0], 0.0, 30.0);
+        let rendered = Camera::looking([0.0, 0.0, 60.0], 0.0, 30.0);
         let points = ground_points(&rendered, (32, 24));
-        let behind = camera([0.0, 0.0, 60.0], 180.0, -30.0);
+        let behind = Camera::looking([0.0, 0.0, 60.0], 180.0, -30.0);
         assert_eq!(
             Warp::fit(&rendered, (32, 24), &behind, (32, 24), &points),
             Err(WarpError::TooFewPoints)

@@ -28,7 +28,8 @@ impl Frame {
     }
 }
 
-/// Where a kernel render spent its steps: per pyramid level.
+/// What only a kernel render counts: steps and hits per pyramid level,
+/// first-hit bound tests, and color fetches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct LevelStats {
     /// Levels the pyramid had (entries past it are zero).

@@ -33,11 +33,6 @@ pub fn comanche(color: &str, height: &str) -> Scene {
     load_pair(&h, Some(&c), 1.0, 0).expect("Comanche maps")
 }
 
-/// A camera with the contract's default field of view.
-pub fn camera(eye: [f32; 3], yaw: f32, pitch: f32) -> Camera {
-    Camera::looking(eye, yaw, pitch)
-}
-
 /// Renders with the kernel at the given coherence and resolution.
 pub fn kernel_view(
     scene: &KernelScene,

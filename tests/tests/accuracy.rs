@@ -15,11 +15,11 @@
 //! * Far views on 4096² maps (each pair tiled 4 × 4), in
 //!   [`far_views_on_tiled_maps`].
 
-use terracast::{Coherence, HeightFilter, Resolution, U8F8};
+use terracast::{Camera, Coherence, HeightFilter, Resolution, U8F8};
 use terracast_sim::metrics::{median_relative_depth_error, psnr, sky_agreement};
 use terracast_sim::reference::Reference;
 use terracast_sim::scene::Scene;
-use terracast_tests::{camera, comanche, kernel_view, reference_view};
+use terracast_tests::{comanche, kernel_view, reference_view};
 
 const SIZE: (u32, u32) = (640, 360);
 
@@ -56,7 +56,7 @@ fn kernel_matches_reference_on_comanche_maps() {
         let reference = Reference::new(&scene);
         for (eye, yaw, pitch) in VIEWS.iter().chain(&GRAZING) {
             let grazing = GRAZING.iter().any(|v| v.0 == *eye);
-            let cam = camera(*eye, *yaw, *pitch);
+            let cam = Camera::looking(*eye, *yaw, *pitch);
             let r = reference_view(&reference, &cam, SIZE);
             let mut scores = Vec::new();
             let mut steps = Vec::new();
@@ -148,7 +148,7 @@ fn far_views_on_tiled_maps() {
         let kernel = scene.to_kernel().unwrap();
         let reference = Reference::new(&scene);
         for (eye, yaw, pitch) in FAR {
-            let cam = camera(eye, yaw, pitch);
+            let cam = Camera::looking(eye, yaw, pitch);
             let r = reference_view(&reference, &cam, SIZE);
             let [(single, single_steps), (pyramid, pyramid_steps), (half, half_steps)] =
                 [Resolution::Single, Resolution::DEFAULT, HALF].map(|resolution| {

@@ -14,9 +14,9 @@
 //!
 //! Both hold at single resolution and on the pyramid.
 
-use terracast::{Coherence, Resolution};
+use terracast::{Camera, Coherence, Resolution};
 use terracast_sim::metrics::{differing_pixels, psnr};
-use terracast_tests::{camera, comanche, kernel_view};
+use terracast_tests::{comanche, kernel_view};
 
 const SIZE: (u32, u32) = (640, 360);
 
@@ -45,7 +45,7 @@ fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
                     700.0 - 100.0 * i as f32,
                     130.0 + 20.0 * i as f32,
                 ];
-                let cam = camera(eye, yaw, pitch);
+                let cam = Camera::looking(eye, yaw, pitch);
                 let view = |c| kernel_view(&scene, &cam, SIZE, c, resolution);
                 let (off, s_off) = view(Coherence::Off);
                 let (exact, s_exact) = view(Coherence::Exact);

@@ -11,12 +11,12 @@
 //! sits on fixed rows). Set `TERRACAST_WAVE_FRAMES=DIR` to write every frame
 //! as PNG and look at them.
 
-use terracast::{Coherence, RenderOptions, Resolution};
+use terracast::{Camera, Coherence, RenderOptions, Resolution};
 use terracast_sim::frame::Frame;
 use terracast_sim::metrics::{mean_abs_difference, row_mean_abs_difference};
 use terracast_sim::output::write_png;
 use terracast_sim::reference::Reference;
-use terracast_tests::{camera, comanche, kernel_render, reference_view};
+use terracast_tests::{comanche, kernel_render, reference_view};
 
 const SIZE: (u32, u32) = (320, 180);
 const FRAMES: usize = 60;
@@ -40,7 +40,7 @@ fn level_switches_draw_no_wave() {
     let reference = Reference::new(&scene);
     let out = std::env::var_os("TERRACAST_WAVE_FRAMES").map(std::path::PathBuf::from);
     let cameras: Vec<_> = (0..FRAMES)
-        .map(|i| camera([512.0, 60.0 + i as f32, 130.0], 90.0, 4.0))
+        .map(|i| Camera::looking([512.0, 60.0 + i as f32, 130.0], 90.0, 4.0))
         .collect();
     let render_all = |resolution| -> Vec<Frame> {
         let options = RenderOptions {

@@ -5,13 +5,13 @@
 use super::{Tile, TileError, TileKey, TileSource, World};
 use core::hash::BuildHasherDefault;
 use heapless::index_map::IndexMap;
+use heapless::Vec;
 use rustc_hash::FxHasher;
 
 /// The directory's map. Fx hashes a tile key in three multiplies where FNV
 /// takes one a byte (nine); the caster looks a key up for every height
 /// pair and color pair it reads.
 type Directory<const N: usize> = IndexMap<TileKey, u16, BuildHasherDefault<FxHasher>, N>;
-use heapless::Vec;
 
 /// What the cache has done since it was made.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

@@ -2,7 +2,7 @@
 //! read through the cache, with coarser tiles standing in for missing ones.
 
 use super::footprint::{window_origin, WINDOW_SIDE};
-use super::{TileCache, TileKey, World};
+use super::{Tile, TileCache, TileKey, World};
 use crate::surface::{Extent, Grid, Surface};
 use crate::{Camera, Rgb};
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -98,7 +98,7 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
     /// The resident tile holding world point `(x, y)` of `level`, or the
     /// best resident coarser one, with the point's place in it.
     #[inline]
-    fn point(&self, level: u8, x: u32, y: u32) -> Option<(&super::Tile<T>, usize, usize)> {
+    fn point(&self, level: u8, x: u32, y: u32) -> Option<(&Tile<T>, usize, usize)> {
         let (tile, coarser) = self.locate(level, x, y, 1)?;
         let (row, column) = Self::place(x >> coarser, y >> coarser);
         Some((tile, row, column))
@@ -108,7 +108,7 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
     /// best resident coarser one, and how many levels coarser it is. Counts
     /// `samples` degraded samples when it is coarser.
     #[inline]
-    fn locate(&self, level: u8, x: u32, y: u32, samples: u32) -> Option<(&super::Tile<T>, u8)> {
+    fn locate(&self, level: u8, x: u32, y: u32, samples: u32) -> Option<(&Tile<T>, u8)> {
         let shift = T.trailing_zeros();
         let (mut level_at, mut x, mut y) = (level, x, y);
         loop {
@@ -149,7 +149,7 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
         level: u8,
         a: (u32, u32),
         b: (u32, u32),
-    ) -> Option<(&super::Tile<T>, [(usize, usize); 2])> {
+    ) -> Option<(&Tile<T>, [(usize, usize); 2])> {
         let shift = T.trailing_zeros();
         if a.0 >> shift != b.0 >> shift || a.1 >> shift != b.1 >> shift {
             return None;
@@ -185,6 +185,35 @@ impl<const T: usize, const N: usize> TiledGrid<'_, '_, '_, T, N> {
         let y = (index >> self.shift) as u32 + self.origin[1];
         (x < self.size.0 && y < self.size.1).then_some((x, y))
     }
+
+    /// `field` (a tile's heights or colors at a row and column) of the
+    /// point at window index `index`.
+    #[inline(always)]
+    fn read<V>(&self, index: isize, field: impl Fn(&Tile<T>, usize, usize) -> V) -> Option<V> {
+        let (x, y) = self.at(index)?;
+        let (tile, row, column) = self.surface.point(self.level, x, y)?;
+        Some(field(tile, row, column))
+    }
+
+    /// `field` of the points at `index` and `index + across`: one cache
+    /// lookup when they share a tile (nearly always: a tile is 64 points a
+    /// side), else one each.
+    #[inline(always)]
+    fn read_pair<V>(
+        &self,
+        index: isize,
+        across: isize,
+        field: impl Fn(&Tile<T>, usize, usize) -> V,
+    ) -> Option<(V, V)> {
+        let (a, b) = (self.at(index)?, self.at(index + across)?);
+        match self.surface.pair_in_one_tile(self.level, a, b) {
+            Some((tile, [(r0, c0), (r1, c1)])) => Some((field(tile, r0, c0), field(tile, r1, c1))),
+            None => Some((
+                self.read(index, &field)?,
+                self.read(index + across, &field)?,
+            )),
+        }
+    }
 }
 
 impl<const T: usize, const N: usize> Grid for TiledGrid<'_, '_, '_, T, N> {
@@ -194,36 +223,19 @@ impl<const T: usize, const N: usize> Grid for TiledGrid<'_, '_, '_, T, N> {
     }
     #[inline]
     fn height(&self, index: isize) -> Option<u16> {
-        let (x, y) = self.at(index)?;
-        let (tile, row, column) = self.surface.point(self.level, x, y)?;
-        Some(tile.heights[row][column])
+        self.read(index, |tile, row, column| tile.heights[row][column])
     }
     #[inline]
     fn color(&self, index: isize) -> Option<Rgb> {
-        let (x, y) = self.at(index)?;
-        let (tile, row, column) = self.surface.point(self.level, x, y)?;
-        Some(tile.colors[row][column])
+        self.read(index, |tile, row, column| tile.colors[row][column])
     }
-    /// One cache lookup for both heights when they share a tile (nearly
-    /// always: a tile is 64 points a side).
     #[inline]
     fn height_pair(&self, index: isize, across: isize) -> Option<(u16, u16)> {
-        let (a, b) = (self.at(index)?, self.at(index + across)?);
-        match self.surface.pair_in_one_tile(self.level, a, b) {
-            Some((tile, [(r0, c0), (r1, c1)])) => {
-                Some((tile.heights[r0][c0], tile.heights[r1][c1]))
-            }
-            None => Some((self.height(index)?, self.height(index + across)?)),
-        }
+        self.read_pair(index, across, |tile, row, column| tile.heights[row][column])
     }
-    /// As [`TiledGrid::height_pair`], for colors.
     #[inline]
     fn color_pair(&self, index: isize, across: isize) -> Option<(Rgb, Rgb)> {
-        let (a, b) = (self.at(index)?, self.at(index + across)?);
-        match self.surface.pair_in_one_tile(self.level, a, b) {
-            Some((tile, [(r0, c0), (r1, c1)])) => Some((tile.colors[r0][c0], tile.colors[r1][c1])),
-            None => Some((self.color(index)?, self.color(index + across)?)),
-        }
+        self.read_pair(index, across, |tile, row, column| tile.colors[row][column])
     }
 }
 

@@ -45,9 +45,7 @@ impl Camera {
         let right = DVec3::new(-sy, cy, 0.0);
         [forward, right, forward.cross(right)]
     }
-}
 
-impl Camera {
     /// A camera at `eye` heading `yaw_deg` and looking `pitch_deg` below
     /// the horizon, with the contract's defaults otherwise: no roll, a 60°
     /// field of view.
