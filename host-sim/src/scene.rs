@@ -131,7 +131,7 @@ impl Scene {
     }
 
     /// Converts to the kernel's format (heights rounded to 1/16 voxel) and
-    /// builds the pyramid with the default height filter (subsampled).
+    /// builds the pyramid with the default height filter (the wavelet).
     pub fn to_kernel(&self) -> Result<KernelScene> {
         self.to_kernel_with(HeightFilter::default())
     }

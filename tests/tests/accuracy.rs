@@ -5,13 +5,14 @@
 //!   quadrants, pitch 0°–45°) and far, grazing views (pitch 0°–5°, eye low,
 //!   looking across the whole map): PSNR ≥ 32 dB, sky/terrain agreement
 //!   ≥ 99.5 %, median relative depth error ≤ 0.5 % for both.
-//! * The pyramid against single resolution, as measured (README): on these
-//!   1024² maps it is 0–1.2 dB below single resolution (its coarse levels
-//!   step over height detail finer than their spacing), not the 1 dB the
-//!   multiresolution issue asks for on every view, and not better on the
-//!   grazing views. The test holds it to 3 dB below at worst and to fewer
-//!   steps on every grazing view, so a regression shows. Beside it: the
-//!   pyramid at pixel-to-voxel 0.5, and the mean and max height filters.
+//! * The pyramid against single resolution: the multiresolution issue
+//!   asks for no more than 1 dB below it. With the wavelet height filter
+//!   it is 0–0.8 dB below on these 1024² maps (README), and the test holds
+//!   every view to 1 dB and every grazing view to fewer steps. It is not
+//!   better on the grazing views, as the issue also asks: its coarse
+//!   levels step over height detail finer than their spacing. Beside it:
+//!   the pyramid at pixel-to-voxel 0.5, and the other height filters
+//!   (subsample, mean and max).
 //! * Far views on 4096² maps (each pair tiled 4 × 4), in
 //!   [`far_views_on_tiled_maps`].
 
@@ -51,8 +52,12 @@ fn kernel_matches_reference_on_comanche_maps() {
     for (color, height) in [("1W", "1"), ("7W", "7"), ("14", "14")] {
         let scene = comanche(color, height);
         let kernel = scene.to_kernel().unwrap();
-        let other_filters = [HeightFilter::Mean, HeightFilter::Max]
-            .map(|filter| (filter, scene.to_kernel_with(filter).unwrap()));
+        let other_filters = [
+            HeightFilter::Subsample,
+            HeightFilter::Mean,
+            HeightFilter::Max,
+        ]
+        .map(|filter| (filter, scene.to_kernel_with(filter).unwrap()));
         let reference = Reference::new(&scene);
         for (eye, yaw, pitch) in VIEWS.iter().chain(&GRAZING) {
             let grazing = GRAZING.iter().any(|v| v.0 == *eye);
@@ -101,9 +106,9 @@ fn kernel_matches_reference_on_comanche_maps() {
                 pyramid - single,
                 steps[1] as f64 / steps[0] as f64
             );
-            if pyramid < single - 3.0 {
+            if pyramid < single - 1.0 {
                 failures.push(format!(
-                    "C{color}/D{height} yaw {yaw}: pyramid {pyramid:.2} dB more than 3 dB below single {single:.2} dB"
+                    "C{color}/D{height} yaw {yaw}: pyramid {pyramid:.2} dB more than 1 dB below single {single:.2} dB"
                 ));
             }
             if grazing && steps[1] >= steps[0] {
@@ -146,6 +151,7 @@ fn far_views_on_tiled_maps() {
     for (color, height) in [("1W", "1"), ("7W", "7"), ("14", "14")] {
         let scene = tiled(&comanche(color, height), 4);
         let kernel = scene.to_kernel().unwrap();
+        let subsampled = scene.to_kernel_with(HeightFilter::Subsample).unwrap();
         let reference = Reference::new(&scene);
         for (eye, yaw, pitch) in FAR {
             let cam = Camera::looking(eye, yaw, pitch);
@@ -157,11 +163,20 @@ fn far_views_on_tiled_maps() {
                     (psnr(&k.colors, &r.colors), stats.steps)
                 });
             let steps = pyramid_steps as f64 / single_steps as f64;
+            let (k, _) = kernel_view(
+                &subsampled,
+                &cam,
+                SIZE,
+                Coherence::DEFAULT,
+                Resolution::DEFAULT,
+            );
+            let subsample = psnr(&k.colors, &r.colors);
             println!(
-                "far C{color}/D{height} x4 eye {eye:?} yaw {yaw:>5} pitch {pitch:>4}: single {single:.2} dB, pyramid {pyramid:.2} dB ({:+.2}), {steps:.2}x the steps; at pixel-to-voxel 0.5 {half:.2} dB ({:+.2}), {:.2}x the steps",
+                "far C{color}/D{height} x4 eye {eye:?} yaw {yaw:>5} pitch {pitch:>4}: single {single:.2} dB, pyramid {pyramid:.2} dB ({:+.2}), {steps:.2}x the steps; at pixel-to-voxel 0.5 {half:.2} dB ({:+.2}), {:.2}x the steps; subsampled heights {subsample:.2} dB ({:+.2})",
                 pyramid - single,
                 half - single,
-                half_steps as f64 / single_steps as f64
+                half_steps as f64 / single_steps as f64,
+                subsample - single
             );
             if pyramid < single - 3.0 || steps >= 0.5 {
                 failures.push(format!("C{color} yaw {yaw}"));

@@ -123,7 +123,10 @@ pub enum ResolutionArg {
 /// How the pyramid's coarse heights are filtered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum HeightFilterArg {
-    /// The finer point at the coarse point's position (the default).
+    /// The LeGall 5/3 wavelet's low-pass of the 5 x 5 finer points (the
+    /// default).
+    Wavelet,
+    /// The finer point at the coarse point's position.
     Subsample,
     /// Tent-weighted mean of the nine finer points.
     Mean,
@@ -134,6 +137,7 @@ pub enum HeightFilterArg {
 impl From<HeightFilter> for HeightFilterArg {
     fn from(filter: HeightFilter) -> Self {
         match filter {
+            HeightFilter::Wavelet => Self::Wavelet,
             HeightFilter::Subsample => Self::Subsample,
             HeightFilter::Mean => Self::Mean,
             HeightFilter::Max => Self::Max,
@@ -153,6 +157,7 @@ impl HeightFilterArg {
 impl From<HeightFilterArg> for HeightFilter {
     fn from(arg: HeightFilterArg) -> Self {
         match arg {
+            HeightFilterArg::Wavelet => Self::Wavelet,
             HeightFilterArg::Subsample => Self::Subsample,
             HeightFilterArg::Mean => Self::Mean,
             HeightFilterArg::Max => Self::Max,
@@ -303,7 +308,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 1.0, value_name = "RATIO")]
     pixel_to_voxel: f32,
     /// Kernel: how the pyramid's coarse heights are made [default:
-    /// subsample; with --terrain, the filter the file was packed with].
+    /// wavelet; with --terrain, the filter the file was packed with].
     #[arg(long, value_enum)]
     height_filter: Option<HeightFilterArg>,
     /// Kernel: how rays cast from the eye find their first hit.

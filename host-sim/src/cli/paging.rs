@@ -30,7 +30,7 @@ pub(super) struct PackArgs {
     )]
     height_scale: f32,
     /// How the pyramid's coarse heights are made.
-    #[arg(long, value_enum, default_value_t = super::HeightFilterArg::Subsample)]
+    #[arg(long, value_enum, default_value_t = super::HeightFilterArg::Wavelet)]
     height_filter: super::HeightFilterArg,
     /// Seed of the coloring's texture (without --color).
     #[arg(long, default_value_t = 1, value_name = "N")]

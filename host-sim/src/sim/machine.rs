@@ -45,7 +45,7 @@
 //! the eye; the `cost fit` line it prints) was 689 instructions a ray plus
 //! 610 a color fetch plus 262 a step while the kernel divided 64-bit values
 //! in software, taken as i860 cycles at one instruction a cycle. The board
-//! now divides them with its 32-bit hardware divide (596 + 585 + 264), but
+//! now divides them with its 32-bit hardware divide (594 + 586 + 264), but
 //! the i860 has no integer divide at all, so the software-division fit stays
 //! the model of it. A sky ray costs its 689 alone; a terrain ray, shaded
 //! from two grid lines, about 1900 before its steps. Change them to model

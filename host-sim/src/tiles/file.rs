@@ -12,7 +12,7 @@
 //! | 4, 4 | width, depth of level 0 in points |
 //! | 4 | levels |
 //! | 2 | highest height, U12.4 |
-//! | 1 | height filter: 0 mean, 1 max, 2 subsample |
+//! | 1 | height filter: 0 mean, 1 max, 2 subsample, 3 wavelet |
 //! | 1 | reserved, 0 |
 //! | 8 | tile count |
 //! | 4 | CRC-32 of the 40 bytes before it |
@@ -38,6 +38,27 @@ const MAGIC: &[u8; 8] = b"TCTILES\0";
 const HEADER_BYTES: u64 = 44;
 /// Bytes of one tile record.
 pub(crate) const RECORD_BYTES: usize = TILE * TILE * 7;
+
+/// The header's byte for a height filter.
+fn filter_code(filter: HeightFilter) -> u8 {
+    match filter {
+        HeightFilter::Mean => 0,
+        HeightFilter::Max => 1,
+        HeightFilter::Subsample => 2,
+        HeightFilter::Wavelet => 3,
+    }
+}
+
+/// The height filter a header's byte names, if any.
+fn filter_from_code(code: u8) -> Option<HeightFilter> {
+    match code {
+        0 => Some(HeightFilter::Mean),
+        1 => Some(HeightFilter::Max),
+        2 => Some(HeightFilter::Subsample),
+        3 => Some(HeightFilter::Wavelet),
+        _ => None,
+    }
+}
 
 /// What the header says.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -74,11 +95,7 @@ impl Header {
         b[20..24].copy_from_slice(&self.world.depth.to_le_bytes());
         b[24..28].copy_from_slice(&u32::from(self.levels).to_le_bytes());
         b[28..30].copy_from_slice(&self.world.max_height.to_le_bytes());
-        b[30] = match self.filter {
-            HeightFilter::Mean => 0,
-            HeightFilter::Max => 1,
-            HeightFilter::Subsample => 2,
-        };
+        b[30] = filter_code(self.filter);
         b[32..40].copy_from_slice(&self.tiles.to_le_bytes());
         let crc = crc32fast::hash(&b[..40]);
         b[40..44].copy_from_slice(&crc.to_le_bytes());
@@ -159,16 +176,8 @@ impl TilesFile {
         let max_height = u16::from_le_bytes([b[28], b[29]]);
         let world = World::new(u32_at(16), u32_at(20), max_height)
             .ok_or_else(|| fail("impossible map size in the header"))?;
-        let filter = match b[30] {
-            0 => HeightFilter::Mean,
-            1 => HeightFilter::Max,
-            2 => HeightFilter::Subsample,
-            other => {
-                return Err(fail(&format!(
-                    "unknown height filter {other} in the header"
-                )))
-            }
-        };
+        let filter = filter_from_code(b[30])
+            .ok_or_else(|| fail(&format!("unknown height filter {} in the header", b[30])))?;
         let header = Header::new(world, filter);
         let tiles = u64::from_le_bytes(b[32..40].try_into().unwrap_or_default());
         if tiles != header.tiles || u32_at(24) != u32::from(header.levels) {
@@ -308,5 +317,26 @@ impl TilesWriter {
             self.file.write_all(&c.to_le_bytes()).map_err(io)?;
         }
         self.file.flush().map_err(io)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_height_filter_has_its_own_header_byte() {
+        let filters = [
+            HeightFilter::Wavelet,
+            HeightFilter::Subsample,
+            HeightFilter::Mean,
+            HeightFilter::Max,
+        ];
+        for filter in filters {
+            assert_eq!(filter_from_code(filter_code(filter)), Some(filter));
+        }
+        // Files packed before the wavelet keep their bytes.
+        assert_eq!(filter_code(HeightFilter::Subsample), 2);
+        assert_eq!(filter_from_code(4), None);
     }
 }

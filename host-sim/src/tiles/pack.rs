@@ -17,6 +17,7 @@ use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 use terracast::tiles::{Tile, TileKey, World};
+use terracast::{wavelet_height, WAVELET_LOW_PASS};
 use terracast::{HeightFilter, Rgb, Terrain};
 
 /// What to pack.
@@ -512,7 +513,7 @@ impl Builder {
                 if y >= coarse.depth {
                     break;
                 }
-                let needs = (2 * y + 1).min(fine.depth - 1);
+                let needs = (2 * y + 2).min(fine.depth - 1);
                 if needs >= fine.received {
                     break;
                 }
@@ -531,23 +532,28 @@ impl Builder {
         Ok(())
     }
 
-    /// Coarse row `y` of level `level + 1`, from level `level`.
+    /// Coarse row `y` of level `level + 1`, from level `level`: as the
+    /// kernel's `Pyramid::build`.
     fn coarse_row(&self, level: usize, y: u32) -> (Vec<u16>, Vec<Rgb>) {
         let fine = &self.levels[level];
         let width = self.levels[level + 1].width;
-        let rows: [&(Vec<u16>, Vec<Rgb>); 3] = core::array::from_fn(|dy| {
-            let r = (2 * i64::from(y) + dy as i64 - 1).clamp(0, i64::from(fine.depth) - 1);
+        // Finer rows 2y − 2 to 2y + 2 (the wavelet's); the tents use the
+        // middle three.
+        let rows: [&(Vec<u16>, Vec<Rgb>); 5] = core::array::from_fn(|dy| {
+            let r = (2 * i64::from(y) + dy as i64 - 2).clamp(0, i64::from(fine.depth) - 1);
             &fine.points[&(r as u32)]
         });
+        let column =
+            |x: u32, dx: i64| (2 * i64::from(x) + dx).clamp(0, i64::from(fine.width) - 1) as usize;
         let mut heights = Vec::with_capacity(width as usize);
         let mut colors = Vec::with_capacity(width as usize);
         for x in 0..width {
             let (mut h_sum, mut h_max) = (0u32, 0u16);
             let mut c_sum = [0u32; 3];
-            for (row, weights) in rows.iter().zip(TENT) {
+            for (row, weights) in rows[1..4].iter().zip(TENT) {
                 for (dx, w) in weights.into_iter().enumerate() {
-                    let fx = (2 * i64::from(x) + dx as i64 - 1).clamp(0, i64::from(fine.width) - 1);
-                    let (h, c) = (row.0[fx as usize], row.1[fx as usize]);
+                    let fx = column(x, dx as i64 - 1);
+                    let (h, c) = (row.0[fx], row.1[fx]);
                     h_sum += w * u32::from(h);
                     h_max = h_max.max(h);
                     for (s, v) in c_sum.iter_mut().zip(c) {
@@ -557,9 +563,20 @@ impl Builder {
             }
             let center = (2 * x).min(fine.width - 1) as usize;
             heights.push(match self.filter {
-                HeightFilter::Subsample => rows[1].0[center],
+                HeightFilter::Subsample => rows[2].0[center],
                 HeightFilter::Mean => ((h_sum + 8) >> 4) as u16,
                 HeightFilter::Max => h_max,
+                HeightFilter::Wavelet => {
+                    let (mut sum, mut lowest, mut highest) = (0i32, i32::MAX, 0i32);
+                    for (row, row_weight) in rows.iter().zip(WAVELET_LOW_PASS) {
+                        for (dx, weight) in WAVELET_LOW_PASS.into_iter().enumerate() {
+                            let h = i32::from(row.0[column(x, dx as i64 - 2)]);
+                            (lowest, highest) = (lowest.min(h), highest.max(h));
+                            sum += row_weight * weight * h;
+                        }
+                    }
+                    wavelet_height(sum, lowest, highest)
+                }
             });
             colors.push(c_sum.map(|s| ((s + 8) >> 4) as u8));
         }
@@ -655,13 +672,13 @@ impl Builder {
         let coarser = self.levels.get(level + 1).map(|c| c.bounded);
         let l = &mut self.levels[level];
         // Rows still read: the strip being gathered, the coarse filter
-        // (2y − 1 up), this level's next bound row (levels 1 and up), and
+        // (2y − 2 up), this level's next bound row (levels 1 and up), and
         // the next level's bounds (level 0's points, other levels' bounds:
         // 2j up).
         let mut keep = l.strips * TILE as u32;
         if let Some(child_bounded) = coarser {
             keep = keep
-                .min((2 * l.coarsened).saturating_sub(1))
+                .min((2 * l.coarsened).saturating_sub(2))
                 .min(child_bounded.saturating_mul(2));
         }
         if level > 0 {
