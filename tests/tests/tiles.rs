@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use terracast::tiles::{cut_tile, Tile, TileError, TileKey, TileSource, World};
-use terracast::{Camera, RenderOptions};
+use terracast::{Camera, HeightFilter, RenderOptions};
 use terracast_sim::kernel::render_kernel;
 use terracast_sim::scene::{load_pair, procedural};
 use terracast_sim::tiles::{
@@ -19,12 +19,12 @@ fn temp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-fn pack_input(height: &Path, color: Option<&Path>, scale: f32) -> PackInput {
+fn pack_input(height: &Path, color: Option<&Path>, scale: f32, filter: HeightFilter) -> PackInput {
     PackInput {
         height: height.to_path_buf(),
         color: color.map(Path::to_path_buf),
         height_scale: scale,
-        filter: terracast::HeightFilter::default(),
+        filter,
         seed: 1,
     }
 }
@@ -61,13 +61,20 @@ fn views(w: f32, d: f32, top: f32) -> Vec<Camera> {
     .collect()
 }
 
-/// Packs the maps, then checks every tile against the pyramid in memory and
-/// every view against the render from the maps.
-fn packed_equals_maps(height: &Path, color: Option<&Path>, scale: f32, name: &str) {
+/// Packs the maps with `filter`, then checks every tile against the pyramid
+/// in memory and every view against the render from the maps.
+fn packed_equals_maps(
+    height: &Path,
+    color: Option<&Path>,
+    scale: f32,
+    filter: HeightFilter,
+    name: &str,
+) {
     let out = temp(name);
-    let summary = pack(&pack_input(height, color, scale), &out, &mut |_, _| {}).unwrap();
+    let input = pack_input(height, color, scale, filter);
+    let summary = pack(&input, &out, &mut |_, _| {}).unwrap();
     let scene = load_pair(height, color, scale, 1).unwrap();
-    let kernel = scene.to_kernel().unwrap();
+    let kernel = scene.to_kernel_with(filter).unwrap();
     let pyramid = kernel.pyramid().unwrap();
     let mut file = TilesFile::open(&out).unwrap();
     let world = file.world();
@@ -104,7 +111,7 @@ fn packed_equals_maps(height: &Path, color: Option<&Path>, scale: f32, name: &st
         assert!(tiled.resident_bytes > 0 && tiled.tiles_loaded as usize == tiled.footprint_tiles);
     }
     println!(
-        "{name}: {}x{}, {} levels, {} tiles, {} bytes: every tile and view identical",
+        "{name}: {}x{}, {} levels, {} tiles, {} bytes, {filter:?} heights: every tile and view identical",
         summary.width, summary.depth, summary.levels, summary.tiles, summary.bytes
     );
 }
@@ -112,9 +119,18 @@ fn packed_equals_maps(height: &Path, color: Option<&Path>, scale: f32, name: &st
 #[test]
 fn packed_files_render_as_their_maps_bit_for_bit() {
     let (height, color) = odd_sized_maps();
-    packed_equals_maps(&height, Some(&color), 1.0 / 16.0, "odd.tiles");
+    // Every height filter: the pack streams each with its own code.
+    for filter in [
+        HeightFilter::Wavelet,
+        HeightFilter::Subsample,
+        HeightFilter::Mean,
+        HeightFilter::Max,
+    ] {
+        packed_equals_maps(&height, Some(&color), 1.0 / 16.0, filter, "odd.tiles");
+    }
     // Without a color map, colored by height and slope as `render` does.
-    packed_equals_maps(&height, None, 1.0 / 16.0, "odd-gray.tiles");
+    let default = HeightFilter::default();
+    packed_equals_maps(&height, None, 1.0 / 16.0, default, "odd-gray.tiles");
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
     let comanche = data.join("comanche");
     if comanche.join("D7.png").exists() {
@@ -122,12 +138,14 @@ fn packed_files_render_as_their_maps_bit_for_bit() {
             &comanche.join("D7.png"),
             Some(&comanche.join("C7W.png")),
             1.0,
+            default,
             "c7w.tiles",
         );
         packed_equals_maps(
             &data.join("srtm/N44W072_3arcsec.hgt"),
             None,
             1.0 / 8.0,
+            default,
             "srtm.tiles",
         );
     } else {
@@ -147,9 +165,13 @@ fn pack_holds_a_few_strips_of_rows_however_tall_the_map() {
         let path = temp(&format!("tall-{depth}.png"));
         heights.save(&path).unwrap();
         let out = temp(&format!("tall-{depth}.tiles"));
-        pack(&pack_input(&path, None, 1.0 / 16.0), &out, &mut |_, _| {})
-            .unwrap()
-            .rows_held_at_most
+        pack(
+            &pack_input(&path, None, 1.0 / 16.0, HeightFilter::default()),
+            &out,
+            &mut |_, _| {},
+        )
+        .unwrap()
+        .rows_held_at_most
     };
     let (short, tall) = (held(300), held(3000));
     println!("rows held at most: {short} for 300 rows, {tall} for 3000");
@@ -163,7 +185,7 @@ fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
     let (height, color) = odd_sized_maps();
     let out = temp("damaged.tiles");
     pack(
-        &pack_input(&height, Some(&color), 1.0 / 16.0),
+        &pack_input(&height, Some(&color), 1.0 / 16.0, HeightFilter::default()),
         &out,
         &mut |_, _| {},
     )
