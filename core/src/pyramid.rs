@@ -412,17 +412,12 @@ fn downsample(
         let last = side.saturating_sub(1);
         core::array::from_fn(|i| (2 * v + i).saturating_sub(2).min(last))
     };
-    let middle = |taps: [usize; 5]| [taps[1], taps[2], taps[3]];
     for y in 0..coarse.depth as usize {
         // The finer rows, sliced once a coarse row.
         let rows = taps(y, fd);
         let color_rows = middle(rows).map(|r| fine_c.get(r * fw..(r + 1) * fw).unwrap_or(&[]));
         let wide_height_rows = rows.map(|r| fine_h.get(r * fw..(r + 1) * fw).unwrap_or(&[]));
-        let height_rows = [
-            wide_height_rows[1],
-            wide_height_rows[2],
-            wide_height_rows[3],
-        ];
+        let height_rows = middle(wide_height_rows);
         let out_row = y * coarse.width as usize;
         for x in 0..coarse.width as usize {
             let wide_columns = taps(x, fw);
@@ -476,16 +471,25 @@ fn downsample(
     }
 }
 
+/// The middle three of five taps: the tents' of the wavelet's.
+fn middle<T: Copy>(five: [T; 5]) -> [T; 3] {
+    [five[1], five[2], five[3]]
+}
+
 /// The LeGall 5/3 wavelet's low-pass along each axis ([`HeightFilter::Wavelet`]).
 pub const WAVELET_LOW_PASS: [i32; 5] = [-1, 2, 6, 2, -1];
 
 /// A [`HeightFilter::Wavelet`] height from the [`WAVELET_LOW_PASS`]-weighted sum
 /// of its 5 × 5 finer points (weights summing to 64) and their lowest and
 /// highest: rounded, and kept within them, so that no coarse point rings
-/// past a cliff's top or foot or leaves the terrain's range.
+/// past a cliff's top or foot or leaves the terrain's range. (`lowest` is
+/// taken to be at most `highest`; if not, `highest` wins.)
 #[inline]
 pub fn wavelet_height(weighted_sum: i32, lowest: i32, highest: i32) -> u16 {
-    ((weighted_sum + 32) >> 6).clamp(lowest, highest) as u16
+    ((weighted_sum + 32) >> 6)
+        .max(lowest)
+        .min(highest)
+        .clamp(0, i32::from(u16::MAX)) as u16
 }
 
 /// Fills the bound cells of every level (see the module notes):
