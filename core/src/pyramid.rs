@@ -418,6 +418,17 @@ fn downsample(
         let color_rows = middle(rows).map(|r| fine_c.get(r * fw..(r + 1) * fw).unwrap_or(&[]));
         let wide_height_rows = rows.map(|r| fine_h.get(r * fw..(r + 1) * fw).unwrap_or(&[]));
         let height_rows = middle(wide_height_rows);
+        // The wavelet's five rows of one finer column: weighted sum,
+        // lowest and highest. The window of five columns moves two a
+        // coarse point, so three carry over from the point before.
+        let column_stats = |column: usize| {
+            let mut stats = ColumnStats::EMPTY;
+            for (row, weight) in wide_height_rows.iter().zip(WAVELET_LOW_PASS) {
+                stats.add(weight, row.get(column).copied().unwrap_or(0));
+            }
+            stats
+        };
+        let mut window = [ColumnStats::EMPTY; 5];
         let out_row = y * coarse.width as usize;
         for x in 0..coarse.width as usize {
             let wide_columns = taps(x, fw);
@@ -436,18 +447,26 @@ fn downsample(
             };
             let h = match filter {
                 HeightFilter::Wavelet => {
-                    // Separable, in words: at most 12 · 12 · 65535 in size.
-                    let (mut sum, mut lowest, mut highest) = (0i32, i32::MAX, 0i32);
-                    for (row, row_weight) in wide_height_rows.iter().zip(WAVELET_LOW_PASS) {
-                        let mut across = 0i32;
-                        for (&column, weight) in wide_columns.iter().zip(WAVELET_LOW_PASS) {
-                            let h = i32::from(row.get(column).copied().unwrap_or(0));
-                            (lowest, highest) = (lowest.min(h), highest.max(h));
-                            across += weight * h;
-                        }
-                        sum += row_weight * across;
+                    // Columns 2x − 2 to 2x + 2 (clamped). Past the first
+                    // point, the first three are the point before's last
+                    // three: the same finer columns, clamped alike.
+                    if x == 0 {
+                        window = wide_columns.map(column_stats);
+                    } else {
+                        window = [
+                            window[2],
+                            window[3],
+                            window[4],
+                            column_stats(wide_columns[3]),
+                            column_stats(wide_columns[4]),
+                        ];
                     }
-                    wavelet_height(sum, lowest, highest)
+                    // In words: at most 12 · 12 · 65535 in size.
+                    let mut all = ColumnStats::EMPTY;
+                    for (column, weight) in window.iter().zip(WAVELET_LOW_PASS) {
+                        all.add_weighted(weight, column);
+                    }
+                    wavelet_height(all.sum, all.lowest, all.highest)
                 }
                 HeightFilter::Subsample => height(1, 1),
                 HeightFilter::Mean => {
@@ -468,6 +487,36 @@ fn downsample(
                 *out_c = c_sum.map(|s| ((s + 8) >> 4) as u8);
             }
         }
+    }
+}
+
+/// A weighted sum of heights, with the lowest and highest of them.
+#[derive(Debug, Clone, Copy)]
+struct ColumnStats {
+    sum: i32,
+    lowest: i32,
+    highest: i32,
+}
+
+impl ColumnStats {
+    const EMPTY: Self = Self {
+        sum: 0,
+        lowest: i32::MAX,
+        highest: i32::MIN,
+    };
+
+    fn add(&mut self, weight: i32, height: u16) {
+        let h = i32::from(height);
+        self.sum += weight * h;
+        self.lowest = self.lowest.min(h);
+        self.highest = self.highest.max(h);
+    }
+
+    /// Adds `other`'s sum times `weight`, and its range.
+    fn add_weighted(&mut self, weight: i32, other: &Self) {
+        self.sum += weight * other.sum;
+        self.lowest = self.lowest.min(other.lowest);
+        self.highest = self.highest.max(other.highest);
     }
 }
 
