@@ -64,8 +64,8 @@ pub use fixed::types::U8F8;
 pub use pool::{LinePool, Task, Wait};
 pub use probe::{CountingProbe, NoProbe, Probe, MAX_COLOR_FETCHES_A_RAY};
 pub use pyramid::{
-    level_count, level_side, pyramid_bytes, pyramid_cells, pyramid_points, wavelet_height,
-    HeightFilter, Pyramid, PyramidError, MAX_LEVELS, WAVELET_LOW_PASS,
+    level_count, level_side, pyramid_bytes, pyramid_cells, pyramid_points, wavelet_row,
+    HeightFilter, Pyramid, PyramidError, MAX_LEVELS,
 };
 pub use sink::{Framebuffer, FramebufferError, Sample, Sink};
 pub use surface::{Extent, Grid, Surface};

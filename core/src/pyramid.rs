@@ -418,19 +418,13 @@ fn downsample(
         let color_rows = middle(rows).map(|r| fine_c.get(r * fw..(r + 1) * fw).unwrap_or(&[]));
         let wide_height_rows = rows.map(|r| fine_h.get(r * fw..(r + 1) * fw).unwrap_or(&[]));
         let height_rows = middle(wide_height_rows);
-        // The wavelet's five rows of one finer column: weighted sum,
-        // lowest and highest. The window of five columns moves two a
-        // coarse point, so three carry over from the point before.
-        let column_stats = |column: usize| {
-            let mut stats = ColumnStats::EMPTY;
-            for (row, weight) in wide_height_rows.iter().zip(WAVELET_LOW_PASS) {
-                stats.add(weight, row.get(column).copied().unwrap_or(0));
+        let (out_row, width) = (y * coarse.width as usize, coarse.width as usize);
+        if filter == HeightFilter::Wavelet {
+            if let Some(out) = out_h.get_mut(out_row..out_row + width) {
+                wavelet_row(wide_height_rows, fw, out);
             }
-            stats
-        };
-        let mut window = [ColumnStats::EMPTY; 5];
-        let out_row = y * coarse.width as usize;
-        for x in 0..coarse.width as usize {
+        }
+        for x in 0..width {
             let wide_columns = taps(x, fw);
             let columns = middle(wide_columns);
             let mut c_sum = [0u32; 3];
@@ -446,29 +440,9 @@ fn downsample(
                 height_rows[row].get(columns[column]).copied().unwrap_or(0)
             };
             let h = match filter {
-                HeightFilter::Wavelet => {
-                    // Columns 2x − 2 to 2x + 2 (clamped). Past the first
-                    // point, the first three are the point before's last
-                    // three: the same finer columns, clamped alike.
-                    if x == 0 {
-                        window = wide_columns.map(column_stats);
-                    } else {
-                        window = [
-                            window[2],
-                            window[3],
-                            window[4],
-                            column_stats(wide_columns[3]),
-                            column_stats(wide_columns[4]),
-                        ];
-                    }
-                    // In words: at most 12 · 12 · 65535 in size.
-                    let mut all = ColumnStats::EMPTY;
-                    for (column, weight) in window.iter().zip(WAVELET_LOW_PASS) {
-                        all.add_weighted(weight, column);
-                    }
-                    wavelet_height(all.sum, all.lowest, all.highest)
-                }
-                HeightFilter::Subsample => height(1, 1),
+                // The whole row was made above.
+                HeightFilter::Wavelet => None,
+                HeightFilter::Subsample => Some(height(1, 1)),
                 HeightFilter::Mean => {
                     let mut sum = 0u32;
                     for (row, row_weight) in [1u32, 2, 1].into_iter().enumerate() {
@@ -476,14 +450,14 @@ fn downsample(
                             sum += row_weight * weight * u32::from(height(row, column));
                         }
                     }
-                    ((sum + 8) >> 4) as u16
+                    Some(((sum + 8) >> 4) as u16)
                 }
-                HeightFilter::Max => (0..9).map(|t| height(t / 3, t % 3)).max().unwrap_or(0),
+                HeightFilter::Max => (0..9).map(|t| height(t / 3, t % 3)).max(),
             };
-            if let (Some(out_h), Some(out_c)) =
-                (out_h.get_mut(out_row + x), out_c.get_mut(out_row + x))
-            {
+            if let (Some(out_h), Some(h)) = (out_h.get_mut(out_row + x), h) {
                 *out_h = h;
+            }
+            if let Some(out_c) = out_c.get_mut(out_row + x) {
                 *out_c = c_sum.map(|s| ((s + 8) >> 4) as u8);
             }
         }
@@ -526,7 +500,46 @@ fn middle<T: Copy>(five: [T; 5]) -> [T; 3] {
 }
 
 /// The LeGall 5/3 wavelet's low-pass along each axis ([`HeightFilter::Wavelet`]).
-pub const WAVELET_LOW_PASS: [i32; 5] = [-1, 2, 6, 2, -1];
+const WAVELET_LOW_PASS: [i32; 5] = [-1, 2, 6, 2, -1];
+
+/// One coarse row of [`HeightFilter::Wavelet`] heights, `out.len()` points,
+/// from the five finer rows `2y − 2` to `2y + 2` (clamped into the map, as
+/// [`Pyramid::build`] and a streaming packer both have them) of a level
+/// `fine_width` points wide. A point a row lacks reads as 0.
+///
+/// Each finer column's five rows are summed once: the window of five
+/// columns moves two a coarse point, so three carry over.
+pub fn wavelet_row(rows: [&[u16]; 5], fine_width: usize, out: &mut [u16]) {
+    let last = fine_width.saturating_sub(1);
+    let column = |c: usize| {
+        let mut stats = ColumnStats::EMPTY;
+        for (row, weight) in rows.iter().zip(WAVELET_LOW_PASS) {
+            stats.add(weight, row.get(c.min(last)).copied().unwrap_or(0));
+        }
+        stats
+    };
+    // Columns 2x − 2 to 2x + 2: past the first point, the first three are
+    // the point before's last three (the same finer columns, clamped
+    // alike).
+    let mut window = [0, 0, 0, 1, 2].map(column);
+    for (x, out) in out.iter_mut().enumerate() {
+        if x > 0 {
+            window = [
+                window[2],
+                window[3],
+                window[4],
+                column(2 * x + 1),
+                column(2 * x + 2),
+            ];
+        }
+        // In words: at most 12 · 12 · 65535 in size.
+        let mut all = ColumnStats::EMPTY;
+        for (stats, weight) in window.iter().zip(WAVELET_LOW_PASS) {
+            all.add_weighted(weight, stats);
+        }
+        *out = wavelet_height(all.sum, all.lowest, all.highest);
+    }
+}
 
 /// A [`HeightFilter::Wavelet`] height from the [`WAVELET_LOW_PASS`]-weighted sum
 /// of its 5 × 5 finer points (weights summing to 64) and their lowest and
@@ -534,7 +547,7 @@ pub const WAVELET_LOW_PASS: [i32; 5] = [-1, 2, 6, 2, -1];
 /// past a cliff's top or foot or leaves the terrain's range. (`lowest` is
 /// taken to be at most `highest`; if not, `highest` wins.)
 #[inline]
-pub fn wavelet_height(weighted_sum: i32, lowest: i32, highest: i32) -> u16 {
+fn wavelet_height(weighted_sum: i32, lowest: i32, highest: i32) -> u16 {
     ((weighted_sum + 32) >> 6)
         .max(lowest)
         .min(highest)

@@ -17,7 +17,7 @@ use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 use terracast::tiles::{Tile, TileKey, World};
-use terracast::{wavelet_height, WAVELET_LOW_PASS};
+use terracast::wavelet_row;
 use terracast::{HeightFilter, Rgb, Terrain};
 
 /// What to pack.
@@ -545,6 +545,14 @@ impl Builder {
         });
         let column =
             |x: u32, dx: i64| (2 * i64::from(x) + dx).clamp(0, i64::from(fine.width) - 1) as usize;
+        let mut wavelet = vec![0; width as usize];
+        if self.filter == HeightFilter::Wavelet {
+            wavelet_row(
+                rows.map(|r| r.0.as_slice()),
+                fine.width as usize,
+                &mut wavelet,
+            );
+        }
         let mut heights = Vec::with_capacity(width as usize);
         let mut colors = Vec::with_capacity(width as usize);
         for x in 0..width {
@@ -566,17 +574,7 @@ impl Builder {
                 HeightFilter::Subsample => rows[2].0[center],
                 HeightFilter::Mean => ((h_sum + 8) >> 4) as u16,
                 HeightFilter::Max => h_max,
-                HeightFilter::Wavelet => {
-                    let (mut sum, mut lowest, mut highest) = (0i32, i32::MAX, 0i32);
-                    for (row, row_weight) in rows.iter().zip(WAVELET_LOW_PASS) {
-                        for (dx, weight) in WAVELET_LOW_PASS.into_iter().enumerate() {
-                            let h = i32::from(row.0[column(x, dx as i64 - 2)]);
-                            (lowest, highest) = (lowest.min(h), highest.max(h));
-                            sum += row_weight * weight * h;
-                        }
-                    }
-                    wavelet_height(sum, lowest, highest)
-                }
+                HeightFilter::Wavelet => wavelet[x as usize],
             });
             colors.push(c_sum.map(|s| ((s + 8) >> 4) as u8));
         }
