@@ -425,8 +425,7 @@ fn downsample(
             }
         }
         for x in 0..width {
-            let wide_columns = taps(x, fw);
-            let columns = middle(wide_columns);
+            let columns = middle(taps(x, fw));
             let mut c_sum = [0u32; 3];
             for (row, row_weight) in color_rows.iter().zip([1u32, 2, 1]) {
                 for (&column, weight) in columns.iter().zip([1u32, 2, 1]) {
