@@ -80,6 +80,11 @@ pub enum HeightFilter {
     Max,
 }
 
+impl HeightFilter {
+    /// Every filter, the default first.
+    pub const ALL: [Self; 4] = [Self::Wavelet, Self::Subsample, Self::Mean, Self::Max];
+}
+
 /// Points per side of level `level` of a map side `side` (0 for level 0 of
 /// a degenerate side).
 pub const fn level_side(side: u32, level: u32) -> u32 {
@@ -493,7 +498,7 @@ impl ColumnStats {
     }
 }
 
-/// The middle three of five taps: the tents' of the wavelet's.
+/// The middle three of five taps: a tent's, of the wavelet's.
 fn middle<T: Copy>(five: [T; 5]) -> [T; 3] {
     [five[1], five[2], five[3]]
 }
@@ -651,13 +656,6 @@ mod tests {
         (h, c)
     }
 
-    const ALL_FILTERS: [HeightFilter; 4] = [
-        HeightFilter::Wavelet,
-        HeightFilter::Subsample,
-        HeightFilter::Mean,
-        HeightFilter::Max,
-    ];
-
     fn built(side: u32, h: &[u16], c: &[Rgb], filter: HeightFilter) -> [StdVec<u16>; 2] {
         let t = Terrain::new(side, side, h, c).unwrap();
         let mut ph = vec![0; pyramid_points(side, side)];
@@ -774,7 +772,7 @@ mod tests {
             let c: StdVec<Rgb> = (0..w * d)
                 .map(|i| [(i * 13 % 256) as u8, (i * 7 % 256) as u8, (i % 256) as u8])
                 .collect();
-            for filter in ALL_FILTERS {
+            for filter in HeightFilter::ALL {
                 let t = Terrain::new(w, d, &h, &c).unwrap();
                 let n = pyramid_points(w, d);
                 let (mut ph, mut pc) = (vec![0; n], vec![[0; 3]; n]);
@@ -840,7 +838,7 @@ mod tests {
     #[test]
     fn bounds_cover_every_level_surface() {
         let (h, c) = map(17, |x, y| ((x * 37 + y * 91) % 53) as u16 * 7);
-        for filter in ALL_FILTERS {
+        for filter in HeightFilter::ALL {
             let t = Terrain::new(17, 17, &h, &c).unwrap();
             let n = pyramid_points(17, 17);
             let (mut ph, mut pc) = (vec![0; n], vec![[0; 3]; n]);

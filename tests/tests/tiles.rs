@@ -120,12 +120,7 @@ fn packed_equals_maps(
 fn packed_files_render_as_their_maps_bit_for_bit() {
     let (height, color) = odd_sized_maps();
     // Every height filter: the pack streams each with its own code.
-    for filter in [
-        HeightFilter::Wavelet,
-        HeightFilter::Subsample,
-        HeightFilter::Mean,
-        HeightFilter::Max,
-    ] {
+    for filter in HeightFilter::ALL {
         packed_equals_maps(&height, Some(&color), 1.0 / 16.0, filter, "odd.tiles");
     }
     // Without a color map, colored by height and slope as `render` does.

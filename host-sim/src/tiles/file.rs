@@ -326,13 +326,7 @@ mod tests {
 
     #[test]
     fn every_height_filter_has_its_own_header_byte() {
-        let filters = [
-            HeightFilter::Wavelet,
-            HeightFilter::Subsample,
-            HeightFilter::Mean,
-            HeightFilter::Max,
-        ];
-        for filter in filters {
+        for filter in HeightFilter::ALL {
             assert_eq!(filter_from_code(filter_code(filter)), Some(filter));
         }
         // Files packed before the wavelet keep their bytes.

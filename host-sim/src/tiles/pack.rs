@@ -545,8 +545,9 @@ impl Builder {
         });
         let column =
             |x: u32, dx: i64| (2 * i64::from(x) + dx).clamp(0, i64::from(fine.width) - 1) as usize;
-        let mut wavelet = vec![0; width as usize];
+        let mut wavelet = Vec::new();
         if self.filter == HeightFilter::Wavelet {
+            wavelet = vec![0; width as usize];
             wavelet_row(
                 rows.map(|r| r.0.as_slice()),
                 fine.width as usize,
