@@ -14,7 +14,9 @@
 //! resumed ray that starts below the
 //! surface retraces backwards to the last sample above it (Qu et al. §4);
 //! the hit is refined between that sample and the first one below by the
-//! ratio of their clearances, and the color blended across both grid lines.
+//! ratio of their clearances, and the color blended across both grid lines
+//! (on a coarse level, the finer level's part of the soft transition is read
+//! at the finer level's own grid lines, one of them halfway along the step).
 
 mod budget;
 mod first_hit;
@@ -24,7 +26,7 @@ pub use budget::{FrameCost, Governor};
 
 use crate::probe::Probe;
 use crate::sink::{Sample, Sink};
-use crate::surface::Surface;
+use crate::surface::{Grid, Surface};
 use crate::view::ray::{Clip, Cursor, Lod, LodPlan, Plane, Ray, RayKey};
 use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
@@ -536,15 +538,20 @@ fn shade<T: Surface + ?Sized, P: Probe>(
 ) -> Sample {
     let (position, before) = crossing(ray, &hit, below, above);
     let stage = Stage::new(surface, ray, hit.level);
+    let before = before.map(|(k, t)| (ray.cursor(surface, k), t));
     let color = if options.shading == Shading::Nearest {
         stage.nearest_color(&ray.color_cursor(&hit), probe)
+    } else if let Some(color) = before
+        .as_ref()
+        .and_then(|(before, t)| within_step(ray, &stage, before, &hit, *t, probe))
+    {
+        Some(color)
     } else {
         stage
             .color(&ray.color_cursor(&hit), probe)
             .or_else(|| stage.color(&hit, probe))
             .map(|on_hit_line| match before {
-                Some((k, t)) => {
-                    let before = ray.cursor(surface, k);
+                Some((before, t)) => {
                     let before_stage = Stage::new(surface, ray, before.level);
                     match before_stage.color(&ray.color_cursor(&before), probe) {
                         Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
@@ -559,6 +566,39 @@ fn shade<T: Surface + ?Sized, P: Probe>(
     };
     probe.hit(hit.level);
     Sample { color, ..position }
+}
+
+/// The color of a hit between two visited samples one step apart on a
+/// level `≥ 1`, with the finer level read at its own grid lines (see
+/// [`Stage::color_within_step`]); `None` for other hits.
+fn within_step<G: Grid, P: Probe>(
+    ray: &Ray,
+    stage: &Stage<G>,
+    before: &Cursor,
+    hit: &Cursor,
+    f: u32,
+    probe: &mut P,
+) -> Option<Rgb> {
+    let level = hit.level;
+    if level == 0 || before.level != level || hit.k - before.k != 1 << level {
+        return None;
+    }
+    // The finer level's grid line halfway: its index and minor coordinate
+    // are linear in the sample number, so exactly the means of the two
+    // samples' (the step spans two of its lines; the sums are even).
+    let mid = Cursor {
+        k: before.k + (1 << (level - 1)),
+        base_below: before.base_below + (hit.base_below - before.base_below) / 2,
+        minor: before.minor + (hit.minor - before.minor) / 2,
+        ..*before
+    };
+    stage.color_within_step(
+        &ray.color_cursor(before),
+        &ray.color_cursor(&mid),
+        &ray.color_cursor(hit),
+        f,
+        probe,
+    )
 }
 
 /// Where a ray crossed the surface: the distance and height of the hit,
@@ -651,6 +691,51 @@ mod tests {
         );
         let subvoxel = terrain_pixels(shaded(Shading::Subvoxel));
         assert!(subvoxel.iter().any(|c| c[0] > 20 && c[0] < 235));
+    }
+
+    /// On a level `≥ 1` a step spans two grid lines of the level below. The
+    /// soft transition reads that level at the line halfway too: a stripe
+    /// there, invisible to the coarser level and to the two lines the step
+    /// joins, shows through where the ray crosses near it, by the finer
+    /// level's weight.
+    #[test]
+    fn the_finer_level_is_read_at_its_own_line_within_a_coarse_step() {
+        use crate::pyramid::{pyramid_cells, pyramid_points};
+        use crate::view::ray::T_ONE;
+        use crate::{Camera, Pyramid, Terrain};
+        use std::vec;
+        // Flat, black, with white on every odd x: the grid lines of level 0
+        // that level 1 (whose colors are left black) does not have.
+        let heights = vec![0u16; 64 * 64];
+        let colors: vec::Vec<Rgb> = (0..64 * 64).map(|i| [(i % 2 * 255) as u8; 3]).collect();
+        let terrain = Terrain::new(64, 64, &heights, &colors).unwrap();
+        let n = pyramid_points(64, 64);
+        let (ph, pc, pb) = (vec![0; n], vec![[0; 3]; n], vec![0; pyramid_cells(64, 64)]);
+        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
+        // Along +x, from low over the west edge; level 1 begins 14 voxels
+        // out (pixel-to-voxel ratio 4).
+        let view = View::new(&Camera::looking([0.5, 30.2, 3.0], 0.0, 0.0), 64, 8).unwrap();
+        let plan = LodPlan::new(&view, 4 << 8, pyramid.top());
+        let ray = view.pixel_ray(&terrain.extent(), &plan, 32, 48);
+        assert!(ray.key.x_major && ray.key.forward);
+        let mut k = ray.start;
+        while ray.cursor(&pyramid, k).level == 0 || !ray.on_level_grid(k, 1) {
+            k += 1;
+        }
+        let (before, hit) = (ray.cursor(&pyramid, k), ray.cursor(&pyramid, k + 2));
+        assert_eq!((before.level, hit.level), (1, 1));
+        assert!(hit.t < T_ONE / 2, "the finer level must still weigh");
+        let stage = Stage::new(&pyramid, &ray, 1);
+        let shade_at = |f| within_step(&ray, &stage, &before, &hit, f, &mut crate::NoProbe);
+        // On the two lines the step joins, both levels are black.
+        assert_eq!(shade_at(0), Some([0; 3]));
+        assert_eq!(shade_at(256), Some([0; 3]));
+        // Halfway the finer level's white line shows, by its weight.
+        let [r, g, b] = shade_at(128).unwrap();
+        assert!(r > 128 && r == g && g == b, "{r}");
+        // The colors on the two lines alone, blended, would be black.
+        let line = |at: &Cursor| stage.color(at, &mut crate::NoProbe).unwrap();
+        assert_eq!(lerp(line(&before), line(&hit), 128), [0; 3]);
     }
 
     #[test]

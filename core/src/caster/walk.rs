@@ -180,6 +180,57 @@ impl<G: Grid> Stage<G> {
         );
         Some(color)
     }
+
+    /// The color where a ray crossed the surface between two visited
+    /// samples of this level one step apart, `before` and `hit`, `f`/256 of
+    /// the way to `hit` (a level `≥ 1`). This level's colors on the two
+    /// grid lines are blended by `f`. The level below has a grid line
+    /// halfway, at `mid`: its colors are blended on the two of its own
+    /// lines around the crossing, so the finer part of the soft transition
+    /// is read at the finer spacing along the ray too, not only across it.
+    /// The two parts are blended by the level weight at the crossing.
+    ///
+    /// `None` when a lookup falls outside the map (the caller falls back to
+    /// the colors on the two lines alone).
+    pub fn color_within_step<P: Probe>(
+        &self,
+        before: &Cursor,
+        mid: &Cursor,
+        hit: &Cursor,
+        f: u32,
+        probe: &mut P,
+    ) -> Option<Rgb> {
+        let level = self.level;
+        let below_level = level.checked_sub(1)?;
+        let here_at =
+            |at: &Cursor| line_color(&self.here, at.base, self.minor_stride, at.minor, level);
+        let below_at = |at: &Cursor| {
+            line_color(
+                &self.below,
+                at.base_below,
+                self.minor_stride_below,
+                at.minor,
+                below_level,
+            )
+        };
+        let here = lerp(here_at(before)?, here_at(hit)?, f);
+        let (near, far, g) = if f < 128 {
+            (before, mid, 2 * f)
+        } else {
+            (mid, hit, 2 * f - 256)
+        };
+        let below = lerp(below_at(near)?, below_at(far)?, g);
+        let weight = |at: &Cursor| at.t.clamp(0, T_ONE) >> (COORD_FRAC_BITS - WEIGHT_BITS);
+        let (t0, t1) = (weight(before), weight(hit));
+        let t = (t0 + (((t1 - t0) * f as i32) >> WEIGHT_BITS)) as u32;
+        for at in [before, hit] {
+            probe.color(
+                level,
+                index(at.base, self.minor_stride, at.minor, level) as usize,
+            );
+        }
+        Some(lerp(below, here, t))
+    }
 }
 
 /// The index of a sample's grid-line start on level `level`.
