@@ -26,7 +26,7 @@ pub use budget::{FrameCost, Governor};
 
 use crate::probe::Probe;
 use crate::sink::{Sample, Sink};
-use crate::surface::{Grid, Surface};
+use crate::surface::Surface;
 use crate::view::ray::{Clip, Cursor, Lod, LodPlan, Plane, Ray, RayKey};
 use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
@@ -543,7 +543,7 @@ fn shade<T: Surface + ?Sized, P: Probe>(
         stage.nearest_color(&ray.color_cursor(&hit), probe)
     } else if let Some(color) = before
         .as_ref()
-        .and_then(|(before, t)| within_step(ray, &stage, before, &hit, *t, probe))
+        .and_then(|(before, t)| stage.color_within_step(ray, before, &hit, *t, probe))
     {
         Some(color)
     } else {
@@ -566,39 +566,6 @@ fn shade<T: Surface + ?Sized, P: Probe>(
     };
     probe.hit(hit.level);
     Sample { color, ..position }
-}
-
-/// The color of a hit between two visited samples one step apart on a
-/// level `≥ 1`, with the finer level read at its own grid lines (see
-/// [`Stage::color_within_step`]); `None` for other hits.
-fn within_step<G: Grid, P: Probe>(
-    ray: &Ray,
-    stage: &Stage<G>,
-    before: &Cursor,
-    hit: &Cursor,
-    f: u32,
-    probe: &mut P,
-) -> Option<Rgb> {
-    let level = hit.level;
-    if level == 0 || before.level != level || hit.k - before.k != 1 << level {
-        return None;
-    }
-    // The finer level's grid line halfway: its index and minor coordinate
-    // are linear in the sample number, so exactly the means of the two
-    // samples' (the step spans two of its lines; the sums are even).
-    let mid = Cursor {
-        k: before.k + (1 << (level - 1)),
-        base_below: before.base_below + (hit.base_below - before.base_below) / 2,
-        minor: before.minor + (hit.minor - before.minor) / 2,
-        ..*before
-    };
-    stage.color_within_step(
-        &ray.color_cursor(before),
-        &ray.color_cursor(&mid),
-        &ray.color_cursor(hit),
-        f,
-        probe,
-    )
 }
 
 /// Where a ray crossed the surface: the distance and height of the hit,
@@ -726,7 +693,7 @@ mod tests {
         assert_eq!((before.level, hit.level), (1, 1));
         assert!(hit.t < T_ONE / 2, "the finer level must still weigh");
         let stage = Stage::new(&pyramid, &ray, 1);
-        let shade_at = |f| within_step(&ray, &stage, &before, &hit, f, &mut crate::NoProbe);
+        let shade_at = |f| stage.color_within_step(&ray, &before, &hit, f, &mut crate::NoProbe);
         // On the two lines the step joins, both levels are black.
         assert_eq!(shade_at(0), Some([0; 3]));
         assert_eq!(shade_at(256), Some([0; 3]));

@@ -182,26 +182,46 @@ impl<G: Grid> Stage<G> {
     }
 
     /// The color where a ray crossed the surface between two visited
-    /// samples of this level one step apart, `before` and `hit`, `f`/256 of
-    /// the way to `hit` (a level `≥ 1`). This level's colors on the two
-    /// grid lines are blended by `f`. The level below has a grid line
-    /// halfway, at `mid`: its colors are blended on the two of its own
-    /// lines around the crossing, so the finer part of the soft transition
-    /// is read at the finer spacing along the ray too, not only across it.
-    /// The two parts are blended by the level weight at the crossing.
+    /// samples one step apart on this level, `before` and `hit`, `f`/256 of
+    /// the way to `hit` (a hit on this stage's level); `None` unless
+    /// `before` is on this level too, a level `≥ 1`, one step back, and
+    /// every lookup is inside the map (the caller then blends the colors on
+    /// the two grid lines alone).
     ///
-    /// `None` when a lookup falls outside the map (the caller falls back to
-    /// the colors on the two lines alone).
+    /// This level's colors on the two grid lines are blended by `f`. The
+    /// step spans two grid lines of the level below, and its colors are
+    /// blended on the two of them around the crossing (one is the line
+    /// halfway), so the finer part of the soft transition is read at the
+    /// finer spacing along the ray too, not only across it. The two parts
+    /// are blended by the level weight at the crossing.
     pub fn color_within_step<P: Probe>(
         &self,
+        ray: &Ray,
         before: &Cursor,
-        mid: &Cursor,
         hit: &Cursor,
         f: u32,
         probe: &mut P,
     ) -> Option<Rgb> {
         let level = self.level;
-        let below_level = level.checked_sub(1)?;
+        let one_step = hit.k - before.k == 1 << level;
+        if level == 0 || before.level != level || !one_step {
+            return None;
+        }
+        let below_level = level - 1;
+        // The finer grid line halfway: its index and minor coordinate are
+        // linear in the sample number, so exactly the means of the two
+        // samples' (the sums are even).
+        let mid = Cursor {
+            k: before.k + (1 << below_level),
+            base_below: before.base_below + (hit.base_below - before.base_below) / 2,
+            minor: before.minor + (hit.minor - before.minor) / 2,
+            ..*before
+        };
+        let (before, mid, hit) = (
+            &ray.color_cursor(before),
+            &ray.color_cursor(&mid),
+            &ray.color_cursor(hit),
+        );
         let here_at =
             |at: &Cursor| line_color(&self.here, at.base, self.minor_stride, at.minor, level);
         let below_at = |at: &Cursor| {
