@@ -340,6 +340,14 @@ impl<'a> Surface for Pyramid<'a> {
         *Pyramid::base(self)
     }
     #[inline(always)]
+    fn stride(&self, level: u8) -> Option<isize> {
+        // Read through the reference: a copy of the level's slices would
+        // cost more than the width.
+        self.levels
+            .get(usize::from(level))
+            .map(|t| t.width() as isize)
+    }
+    #[inline(always)]
     fn top(&self) -> u8 {
         Pyramid::top(self)
     }

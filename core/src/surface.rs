@@ -63,6 +63,12 @@ pub trait Surface {
     fn grid(&self, level: u8) -> Option<Self::Grid<'_>>;
     /// Level 0, which every surface has.
     fn base(&self) -> Self::Grid<'_>;
+    /// Level `level`'s row stride ([`Grid::stride`]), if the surface has
+    /// the level: what locating a sample needs, without making the grid.
+    #[inline(always)]
+    fn stride(&self, level: u8) -> Option<isize> {
+        self.grid(level).map(|grid| grid.stride())
+    }
     /// The highest level (0 for a single resolution).
     fn top(&self) -> u8;
     /// Level 0's size and the highest height.

@@ -458,6 +458,7 @@ fn cast<T: Surface + ?Sized, P: Probe>(
             at,
             clearance,
             above,
+            stage,
         } => {
             // A first sample already below: find the one above it.
             let (at, clearance, above) = match above {
@@ -465,7 +466,16 @@ fn cast<T: Surface + ?Sized, P: Probe>(
                 None => retrace(surface, ray, at, clearance, allowance, recent, probe),
             };
             (
-                shade(surface, ray, at, clearance, above, options, probe),
+                shade(
+                    surface,
+                    ray,
+                    Some(stage),
+                    at,
+                    clearance,
+                    above,
+                    options,
+                    probe,
+                ),
                 at.k,
             )
         }
@@ -527,9 +537,11 @@ fn retrace<T: Surface + ?Sized, P: Probe>(
 /// Colors a hit: the color where the hit sample's grid line is crossed and
 /// (when known) where the previous visited sample's is, blended by where
 /// between them the ray crossed the surface.
-fn shade<T: Surface + ?Sized, P: Probe>(
-    surface: &T,
+#[allow(clippy::too_many_arguments)]
+fn shade<'s, T: Surface + ?Sized, P: Probe>(
+    surface: &'s T,
     ray: &Ray,
+    walked: Option<Stage<T::Grid<'s>>>,
     hit: Cursor,
     below: i32,
     above: Option<(i32, i32)>,
@@ -537,8 +549,9 @@ fn shade<T: Surface + ?Sized, P: Probe>(
     probe: &mut P,
 ) -> Sample {
     let (position, before) = crossing(ray, &hit, below, above);
-    let stage = Stage::new(surface, ray, hit.level);
-    let before = before.map(|(k, t)| (ray.cursor(surface, k), t));
+    // The walk's last stage, unless a retrace left its level.
+    let stage = Stage::on_level(walked, surface, ray, hit.level);
+    let before = before.map(|(k, t)| (ray.cursor_before(surface, &hit, k), t));
     let color = if options.shading == Shading::Nearest {
         stage.nearest_color(&ray.color_cursor(&hit), probe)
     } else if let Some(color) = before
@@ -552,7 +565,14 @@ fn shade<T: Surface + ?Sized, P: Probe>(
             .or_else(|| stage.color(&hit, probe))
             .map(|on_hit_line| match before {
                 Some((before, t)) => {
-                    let before_stage = Stage::new(surface, ray, before.level);
+                    // Mostly on the hit's level: its stage is at hand.
+                    let other_level;
+                    let before_stage = if before.level == hit.level {
+                        &stage
+                    } else {
+                        other_level = Stage::new(surface, ray, before.level);
+                        &other_level
+                    };
                     match before_stage.color(&ray.color_cursor(&before), probe) {
                         Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
                         None => on_hit_line,

@@ -82,6 +82,18 @@ impl<G: Grid> Stage<G> {
         }
     }
 
+    /// `stage` when it is `level`'s (a walk's, at hand), else a new one.
+    #[inline]
+    pub fn on_level<'s, T>(stage: Option<Self>, surface: &'s T, ray: &Ray, level: u8) -> Self
+    where
+        T: Surface<Grid<'s> = G> + ?Sized,
+    {
+        match stage {
+            Some(stage) if stage.level == level => stage,
+            _ => Self::new(surface, ray, level),
+        }
+    }
+
     /// Samples per step.
     #[inline(always)]
     pub fn stride(&self) -> i32 {
@@ -317,13 +329,15 @@ pub(crate) fn lerp(a: Rgb, b: Rgb, t: u32) -> Rgb {
 
 /// The outcome of a walk along one ray.
 #[derive(Debug, Clone, Copy)]
-pub(crate) enum Walk {
-    /// The ray is at or below the surface at `at`. `above` is the visited
-    /// sample before it and its clearance, when the walk visited it.
+pub(crate) enum Walk<G> {
+    /// The ray is at or below the surface at `at`, found on `stage`.
+    /// `above` is the visited sample before it and its clearance, when the
+    /// walk visited it.
     Hit {
         at: Cursor,
         clearance: i32,
         above: Option<(i32, i32)>,
+        stage: Stage<G>,
     },
     /// The ray stopped above the surface: it was above at every sample it
     /// visited, up to `last`.
@@ -334,14 +348,14 @@ pub(crate) enum Walk {
 /// or the last visited sample not past `end`. The first sample is tested
 /// against the `recent` cells; a hit's cell is left there for the next ray.
 #[inline]
-pub(crate) fn walk<T: Surface + ?Sized, P: Probe>(
-    surface: &T,
+pub(crate) fn walk<'s, T: Surface + ?Sized, P: Probe>(
+    surface: &'s T,
     ray: &Ray,
     mut at: Cursor,
     end: i32,
     recent: &mut Recent,
     probe: &mut P,
-) -> Walk {
+) -> Walk<T::Grid<'s>> {
     let mut last: Option<(i32, i32)> = None;
     let mut first = Some(&*recent);
     loop {
@@ -376,6 +390,7 @@ pub(crate) fn walk<T: Surface + ?Sized, P: Probe>(
                     at,
                     clearance,
                     above: last,
+                    stage,
                 };
             }
             Run::Missing => {

@@ -26,7 +26,7 @@
 use super::View;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, MAX_WALK_LEVEL};
 use crate::divide::{div_ceil, div_floor, div_trunc};
-use crate::surface::{Extent, Grid, Surface};
+use crate::surface::{Extent, Surface};
 use fixed::types::I16F16;
 
 const ONE: i64 = 1 << COORD_FRAC_BITS;
@@ -645,14 +645,29 @@ impl Ray {
         self.cursor_on(surface, k, level)
     }
 
+    /// The position of sample `k` before `hit` (a sample this ray visited,
+    /// `k < hit.k`), as [`Ray::cursor`] has it. Levels never fall along a
+    /// ray, so behind a hit on level 0 (other than one tested on level 0
+    /// only for being the ray's end at a map edge) it is on level 0 too,
+    /// and its level need not be worked out: most hits are shaded this way.
+    #[inline]
+    pub fn cursor_before<T: Surface + ?Sized>(&self, surface: &T, hit: &Cursor, k: i32) -> Cursor {
+        if hit.level == 0 && !(self.edge_end && hit.k == self.end) {
+            self.cursor_on(surface, k, 0)
+        } else {
+            self.cursor(surface, k)
+        }
+    }
+
     /// The position of sample `k` on `level`, whatever the schedule says.
     #[inline]
     fn cursor_on<T: Surface + ?Sized>(&self, surface: &T, k: i32, level: u8) -> Cursor {
         let major = self.major_at(k);
         let base_on = |level: u8| -> isize {
-            let stride = match surface.grid(level) {
-                Some(g) if !self.key.x_major => g.stride(),
-                _ => 1,
+            let stride = if self.key.x_major {
+                1
+            } else {
+                surface.stride(level).unwrap_or(1)
             };
             (major >> level) as isize * stride
         };
@@ -864,6 +879,59 @@ mod tests {
         let long = ray_with_levels(true, 0.3);
         assert_eq!(long.lod.top, 4);
         assert!(long.lod.dt > 0);
+    }
+
+    /// `cursor_before` skips working out the level behind a level-0 hit;
+    /// it must locate every visited sample as `cursor` does, on every
+    /// level, along both axes, at the map's edge and away from it.
+    #[test]
+    fn the_sample_before_a_hit_is_where_the_schedule_puts_it() {
+        use crate::pyramid::{pyramid_cells, pyramid_points};
+        let (h, c) = flat(64, 1000);
+        let terrain = Terrain::new(64, 64, &h, &c).unwrap();
+        let n = pyramid_points(64, 64);
+        let (ph, pc) = (std::vec![0; n], std::vec![[0; 3]; n]);
+        let pb = std::vec![0; pyramid_cells(64, 64)];
+        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
+        let plan = LodPlan {
+            level1_depth: 3 << 16,
+            top: 4,
+        };
+        let same = |a: &Cursor, b: &Cursor| {
+            (a.k, a.level, a.base, a.base_below, a.minor, a.z, a.t)
+                == (b.k, b.level, b.base, b.base_below, b.minor, b.z, b.t)
+        };
+        for (eye, yaw) in [([0.3, 31.5], 0.0), ([31.5, 0.3], 90.0), ([63.2, 20.0], 190.0)] {
+            let cam = Camera::looking([eye[0], eye[1], 3.0], yaw, 0.0);
+            let view = View::new(&cam, 64, 1).unwrap();
+            let full = view.pixel_ray(&terrain.extent(), &plan, 32, 0);
+            for (end, edge_end) in [(full.end, true), (full.end, false), (40, false), (9, false)] {
+                let mut ray = Ray {
+                    end,
+                    edge_end,
+                    ..full
+                };
+                ray.schedule();
+                let mut k = ray.start;
+                let mut checked = 0;
+                while k <= ray.end {
+                    let hit = ray.cursor(&pyramid, k);
+                    let before = ray.previous_visited(k);
+                    if before >= ray.start {
+                        let expected = ray.cursor(&pyramid, before);
+                        let found = ray.cursor_before(&pyramid, &hit, before);
+                        assert!(same(&found, &expected), "yaw {yaw} end {end} k {k}");
+                        checked += 1;
+                    }
+                    k = if k == ray.end {
+                        k + 1
+                    } else {
+                        ray.next_visited(k + 1)
+                    };
+                }
+                assert!(checked > 4, "yaw {yaw} end {end}: {checked} samples");
+            }
+        }
     }
 
     #[test]
