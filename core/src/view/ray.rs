@@ -393,10 +393,19 @@ fn clamp_in_place(v: i64, low: i64, high: i64) -> i64 {
     v.max(low).min(high)
 }
 
-/// `v` clamped to `-limit..=limit` (`limit ≥ 0`), in place.
+/// `v` clamped to `-limit..=limit` (`0 ≤ limit < 2^62`), in place. Values
+/// within the limit are the rule: one unsigned compare of `v + limit`
+/// finds them, where a clamp compares against both ends (on 32-bit cores
+/// each a 64-bit compare).
 #[inline(always)]
 fn bound(v: i64, limit: i64) -> i64 {
-    clamp_in_place(v, -limit, limit)
+    if (v.wrapping_add(limit) as u64) <= (2 * limit) as u64 {
+        v
+    } else if v < 0 {
+        -limit
+    } else {
+        limit
+    }
 }
 
 /// `v` saturated into `i32`. Values that fit are the rule: on 32-bit cores
@@ -769,6 +778,19 @@ mod tests {
         }
     }
 
+    #[test]
+    fn bound_equals_a_clamp() {
+        for limit in [0, 1, 1 << 14, 1 << 20, 1 << 29, (1 << 62) - 1] {
+            let edges = [0, limit, -limit, 2 * limit, -2 * limit, i64::MIN, i64::MAX];
+            for v in edges
+                .into_iter()
+                .flat_map(|e| [e.saturating_sub(1), e, e.saturating_add(1)])
+            {
+                assert_eq!(bound(v, limit), v.clamp(-limit, limit), "{v} {limit}");
+            }
+        }
+    }
+
     fn flat(side: u32, height: u16) -> (std::vec::Vec<u16>, std::vec::Vec<[u8; 3]>) {
         let n = (side * side) as usize;
         (std::vec![height; n], std::vec![[0; 3]; n])
@@ -901,7 +923,11 @@ mod tests {
             (a.k, a.level, a.base, a.base_below, a.minor, a.z, a.t)
                 == (b.k, b.level, b.base, b.base_below, b.minor, b.z, b.t)
         };
-        for (eye, yaw) in [([0.3, 31.5], 0.0), ([31.5, 0.3], 90.0), ([63.2, 20.0], 190.0)] {
+        for (eye, yaw) in [
+            ([0.3, 31.5], 0.0),
+            ([31.5, 0.3], 90.0),
+            ([63.2, 20.0], 190.0),
+        ] {
             let cam = Camera::looking([eye[0], eye[1], 3.0], yaw, 0.0);
             let view = View::new(&cam, 64, 1).unwrap();
             let full = view.pixel_ray(&terrain.extent(), &plan, 32, 0);
