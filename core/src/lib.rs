@@ -46,6 +46,7 @@ mod divide;
 mod pool;
 mod probe;
 mod pyramid;
+pub mod roughness;
 mod sink;
 mod surface;
 mod terrain;

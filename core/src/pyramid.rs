@@ -52,6 +52,7 @@
 //! a pyramid built on the host in flash and wrap it with [`Pyramid::new`]).
 
 use crate::config::{MAX_LEVEL, MAX_MAP_SIDE};
+use crate::roughness::RoughnessSum;
 use crate::surface::{Extent, Surface};
 use crate::terrain::Terrain;
 use crate::Rgb;
@@ -181,6 +182,9 @@ pub struct Pyramid<'a> {
     levels: Vec<Terrain<'a>, MAX_LEVELS>,
     /// `bounds[b - 1]`: the bound cells of level `b`.
     bounds: Vec<&'a [u16], MAX_LEVELS>,
+    /// Level 0's roughness ([`crate::roughness`]), measured when the
+    /// coarser levels were added; 0 for a flat pyramid.
+    roughness: u8,
 }
 
 impl<'a> Pyramid<'a> {
@@ -193,6 +197,7 @@ impl<'a> Pyramid<'a> {
         Self {
             levels,
             bounds: Vec::new(),
+            roughness: 0,
         }
     }
 
@@ -223,7 +228,21 @@ impl<'a> Pyramid<'a> {
             let _ = pyramid.levels.push(coarse);
             let _ = pyramid.bounds.push(b);
         }
+        if pyramid.levels.len() > 1 {
+            let mut sum = RoughnessSum::default();
+            sum.add_grid(terrain.heights(), width as usize);
+            pyramid.roughness = sum.roughness();
+        }
         Ok(pyramid)
+    }
+
+    /// Level 0's roughness ([`RoughnessSum::roughness`]): how far the
+    /// coarse levels scale the pixel-to-voxel ratio down (see
+    /// [`crate::roughness`]). Measured by [`Pyramid::new`], 0 for a flat
+    /// pyramid.
+    #[inline]
+    pub fn roughness(&self) -> u8 {
+        self.roughness
     }
 
     /// Fills `heights`, `colors` and `bounds` with the coarser levels of
@@ -338,6 +357,10 @@ impl<'a> Surface for Pyramid<'a> {
     #[inline(always)]
     fn base(&self) -> Terrain<'_> {
         *Pyramid::base(self)
+    }
+    #[inline(always)]
+    fn roughness(&self) -> u8 {
+        self.roughness
     }
     #[inline(always)]
     fn stride(&self, level: u8) -> Option<isize> {

@@ -63,6 +63,13 @@ pub trait Surface {
     fn grid(&self, level: u8) -> Option<Self::Grid<'_>>;
     /// Level 0, which every surface has.
     fn base(&self) -> Self::Grid<'_>;
+    /// Level 0's roughness ([`crate::roughness::RoughnessSum::roughness`]),
+    /// which scales the pixel-to-voxel ratio down on rugged terrain; 0
+    /// when unknown (the ratio is then used as given).
+    #[inline(always)]
+    fn roughness(&self) -> u8 {
+        0
+    }
     /// Level `level`'s row stride ([`Grid::stride`]), if the surface has
     /// the level: what locating a sample needs, without making the grid.
     #[inline(always)]

@@ -135,8 +135,11 @@ fn a_wall_at_a_level_switch_is_never_skipped() {
             eye: [0.5, 80.0, 6.0],
             ..Camera::default()
         };
+        // The wall makes the map rough: the terrain fit would keep the
+        // switch out of the frame.
         let options = RenderOptions {
             coherence: Coherence::Exact,
+            terrain_fit: false,
             ..RenderOptions::default()
         };
         let (_, distances, probe) = frame(&pyramid, &camera, (32, 24), &options);
@@ -155,4 +158,54 @@ fn a_wall_at_a_level_switch_is_never_skipped() {
             );
         }
     }
+}
+
+/// The terrain fit: on a rugged map the pyramid's levels begin farther
+/// out by the fit's factor, exactly as a ratio scaled by hand would place
+/// them; on a smooth map nothing changes.
+#[test]
+fn the_terrain_fit_scales_the_ratio_on_rugged_maps_only() {
+    let camera = Camera::looking([5.0, 128.0, 70.0], 10.0, 8.0);
+    let fit_off = |resolution| RenderOptions {
+        resolution,
+        terrain_fit: false,
+        ..RenderOptions::default()
+    };
+    // Ridges one voxel high on every other grid line, on a gentle slope:
+    // each point is a voxel off the line between its neighbours, so the
+    // roughness is 1 voxel per voxel (64/64) and the fit a quarter.
+    let rugged = Map::new(257, |x, y| 20.0 + (x % 2) as f32 + 0.3 * y as f32);
+    let pyramid = rugged.pyramid();
+    let roughness = pyramid.roughness();
+    assert_eq!(roughness, 64);
+    let fit = terracast::roughness::terrain_fit(roughness);
+    assert_eq!(fit, 1 << 14);
+    let (fitted, _, fitted_probe) = frame(&pyramid, &camera, (96, 64), &RenderOptions::default());
+    let (given, _, given_probe) = frame(&pyramid, &camera, (96, 64), &fit_off(Resolution::DEFAULT));
+    let quarter = Resolution::Multi {
+        pixel_to_voxel: U8F8::from_num(0.25),
+    };
+    let (scaled, _, _) = frame(&pyramid, &camera, (96, 64), &fit_off(quarter));
+    assert!(fitted == scaled, "the fit is not the ratio scaled by it");
+    assert!(fitted != given);
+    // Levels begin later: more level-0 steps, fewer on the coarse levels.
+    assert!(fitted_probe.steps_by_level[0] > given_probe.steps_by_level[0]);
+    assert!(
+        fitted_probe.steps_by_level[1..].iter().sum::<u64>()
+            < given_probe.steps_by_level[1..].iter().sum::<u64>()
+    );
+    assert_eq!(
+        RenderOptions::default().level_bias(roughness),
+        fit as f32 / 65536.0
+    );
+
+    let smooth = Map::new(257, |x, y| 40.0 + 0.2 * x as f32 + 0.1 * y as f32);
+    let pyramid = smooth.pyramid();
+    assert_eq!(
+        terracast::roughness::terrain_fit(pyramid.roughness()),
+        1 << 16
+    );
+    let (fitted, _, _) = frame(&pyramid, &camera, (96, 64), &RenderOptions::default());
+    let (given, _, _) = frame(&pyramid, &camera, (96, 64), &fit_off(Resolution::DEFAULT));
+    assert!(fitted == given);
 }

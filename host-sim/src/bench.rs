@@ -57,6 +57,13 @@ pub fn settings() -> Vec<Setting> {
     vec![
         kernel("kernel", default),
         kernel(
+            "kernel without terrain fit",
+            RenderOptions {
+                terrain_fit: false,
+                ..default
+            },
+        ),
+        kernel(
             "kernel coherence off",
             RenderOptions {
                 coherence: Coherence::Off,

@@ -43,6 +43,11 @@ pub struct LevelStats {
     /// Color fetches of the shading (a terrain ray makes one or two; the
     /// board's cost fit charges each).
     pub color_fetches: u64,
+    /// The surface's roughness (`terracast::roughness`, 1/64 units).
+    pub roughness: u8,
+    /// The factor the terrain fit scaled the pixel-to-voxel ratio by, Q16
+    /// (1 when it was off, or at single resolution).
+    pub terrain_fit: u32,
 }
 
 /// What a render cost, for `--stats`.

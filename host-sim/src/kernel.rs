@@ -115,6 +115,8 @@ pub fn render_surface<T: Surface + ?Sized>(
             hits: probe.hits_by_level,
             bound_tests: probe.bound_tests,
             color_fetches: probe.color_fetches,
+            roughness: surface.roughness(),
+            terrain_fit: options.fit_for(surface.roughness()),
         }),
     };
     Ok((frame, stats))

@@ -16,19 +16,30 @@
 //! * Far views on 4096² maps (each pair tiled 4 × 4), in
 //!   [`far_views_on_tiled_maps`].
 
-use terracast::{Camera, Coherence, HeightFilter, Resolution, U8F8};
+use terracast::{Camera, Coherence, HeightFilter, RenderOptions, Resolution, U8F8};
 use terracast_sim::metrics::{median_relative_depth_error, psnr, sky_agreement};
 use terracast_sim::reference::Reference;
 use terracast_sim::scene::Scene;
-use terracast_tests::{comanche, kernel_view, reference_view};
+use terracast_tests::{comanche, kernel_render, kernel_view, reference_view};
 
 const SIZE: (u32, u32) = (640, 360);
 
 /// The pyramid switching a level later: where a voxel of the finer level
-/// gets narrower than half a pixel.
+/// gets narrower than half a pixel (scaled by the terrain fit, as every
+/// ratio is unless it is off).
 const HALF: Resolution = Resolution::Multi {
     pixel_to_voxel: U8F8::from_bits(128),
 };
+
+/// The pyramid at `resolution` with the terrain fit off: the ratio as
+/// given, whatever the terrain.
+fn without_fit(resolution: Resolution) -> RenderOptions {
+    RenderOptions {
+        resolution,
+        terrain_fit: false,
+        ..RenderOptions::default()
+    }
+}
 
 /// (eye, yaw, pitch) per view; yaws cover all four quadrants, and both
 /// x-major and y-major rays.
@@ -90,6 +101,12 @@ fn kernel_matches_reference_on_comanche_maps() {
                 scores[2] - single,
                 steps[2] as f64 / steps[0] as f64
             );
+            let (k, stats) = kernel_render(&kernel, &cam, SIZE, &without_fit(Resolution::DEFAULT));
+            println!(
+                "  pyramid without the terrain fit - single: {:+.2} dB, {:.2}x the steps",
+                psnr(&k.colors, &r.colors) - single,
+                stats.steps as f64 / steps[0] as f64
+            );
             // The other height filters, for the README's comparison.
             for (filter, levels) in &other_filters {
                 let (m, _) =
@@ -110,9 +127,12 @@ fn kernel_matches_reference_on_comanche_maps() {
                     "C{color}/D{height} yaw {yaw}: pyramid {pyramid:.2} dB more than 1 dB below single {single:.2} dB"
                 ));
             }
-            if grazing && steps[1] >= steps[0] {
+            // On rugged maps the terrain fit may keep every level beyond a
+            // 1024² map's reach: the pyramid then steps as single
+            // resolution does, never more.
+            if grazing && steps[1] > steps[0] {
                 failures.push(format!(
-                    "grazing C{color}/D{height} yaw {yaw}: pyramid saves no steps"
+                    "grazing C{color}/D{height} yaw {yaw}: pyramid takes more steps"
                 ));
             }
         }
@@ -155,13 +175,19 @@ fn far_views_on_tiled_maps() {
         for (eye, yaw, pitch) in FAR {
             let cam = Camera::looking(eye, yaw, pitch);
             let r = reference_view(&reference, &cam, SIZE);
-            let [(single, single_steps), (pyramid, pyramid_steps), (half, half_steps)] =
-                [Resolution::Single, Resolution::DEFAULT, HALF].map(|resolution| {
+            let [(single, single_steps), (pyramid, pyramid_steps)] =
+                [Resolution::Single, Resolution::DEFAULT].map(|resolution| {
                     let (k, stats) =
                         kernel_view(&kernel, &cam, SIZE, Coherence::DEFAULT, resolution);
                     (psnr(&k.colors, &r.colors), stats.steps)
                 });
+            let [(unfitted, unfitted_steps), (half, half_steps)] =
+                [Resolution::DEFAULT, HALF].map(|resolution| {
+                    let (k, stats) = kernel_render(&kernel, &cam, SIZE, &without_fit(resolution));
+                    (psnr(&k.colors, &r.colors), stats.steps)
+                });
             let steps = pyramid_steps as f64 / single_steps as f64;
+            let unfitted_share = unfitted_steps as f64 / single_steps as f64;
             let (k, _) = kernel_view(
                 &subsampled,
                 &cam,
@@ -171,13 +197,16 @@ fn far_views_on_tiled_maps() {
             );
             let subsample = psnr(&k.colors, &r.colors);
             println!(
-                "far C{color}/D{height} x4 eye {eye:?} yaw {yaw:>5} pitch {pitch:>4}: single {single:.2} dB, pyramid {pyramid:.2} dB ({:+.2}), {steps:.2}x the steps; at pixel-to-voxel 0.5 {half:.2} dB ({:+.2}), {:.2}x the steps; subsampled heights {subsample:.2} dB ({:+.2})",
+                "far C{color}/D{height} x4 eye {eye:?} yaw {yaw:>5} pitch {pitch:>4}: single {single:.2} dB, pyramid {pyramid:.2} dB ({:+.2}), {steps:.2}x the steps; without the terrain fit {unfitted:.2} dB ({:+.2}), {unfitted_share:.2}x the steps; at pixel-to-voxel 0.5 without it {half:.2} dB ({:+.2}), {:.2}x the steps; subsampled heights {subsample:.2} dB ({:+.2})",
                 pyramid - single,
+                unfitted - single,
                 half - single,
                 half_steps as f64 / single_steps as f64,
                 subsample - single
             );
-            if pyramid < single - 3.0 || steps >= 0.5 {
+            // The fit may keep more of the view on level 0 on rugged maps,
+            // but never all of it this far out.
+            if pyramid < single - 3.0 || steps >= 0.8 || unfitted_share >= 0.5 {
                 failures.push(format!("C{color} yaw {yaw}"));
             }
         }

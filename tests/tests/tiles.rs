@@ -79,6 +79,8 @@ fn packed_equals_maps(
     let mut file = TilesFile::open(&out).unwrap();
     let world = file.world();
     assert_eq!((world.width, world.depth), (scene.width, scene.depth));
+    // The packer measured the roughness on the rows the pyramid does.
+    assert_eq!(world.roughness, pyramid.roughness(), "{name}");
     let (mut from_file, mut cut) = (Box::new(Tile::<TILE>::EMPTY), Box::new(Tile::EMPTY));
     let mut tiles = 0;
     for level in 0..world.levels() {

@@ -25,6 +25,7 @@ pub(crate) mod walk;
 pub use budget::{FrameCost, Governor};
 
 use crate::probe::Probe;
+use crate::roughness::terrain_fit;
 use crate::sink::{Sample, Sink};
 use crate::surface::Surface;
 use crate::view::ray::{Clip, Cursor, Lod, LodPlan, Plane, Ray, RayKey};
@@ -142,8 +143,39 @@ pub struct RenderOptions {
     pub vertical_samples: VerticalSamples,
     /// How hits are colored.
     pub shading: Shading,
+    /// On the pyramid, scale the pixel-to-voxel ratio down by the
+    /// terrain's roughness ([`crate::roughness::terrain_fit`]), so that a
+    /// coarse level's silhouettes are within a quarter pixel where it
+    /// begins. No effect on smooth maps, nor on surfaces whose roughness
+    /// is unknown.
+    pub terrain_fit: bool,
     /// Color of rays that leave the terrain.
     pub sky: Rgb,
+}
+
+impl RenderOptions {
+    /// The pixel-to-voxel ratio the caster switches levels by on a surface
+    /// of `roughness` ([`crate::Surface::roughness`]): the one set, scaled
+    /// by the terrain fit when it is on; 1 at single resolution. A tile
+    /// footprint ([`crate::tiles::FootprintView`]) takes this one.
+    pub fn level_bias(&self, roughness: u8) -> f32 {
+        match self.resolution {
+            Resolution::Single => 1.0,
+            Resolution::Multi { pixel_to_voxel } => {
+                pixel_to_voxel.to_num::<f32>() * self.fit_for(roughness) as f32 / 65536.0
+            }
+        }
+    }
+
+    /// The factor (Q16, at most 1) the ratio is scaled by on a surface of
+    /// `roughness`: [`crate::roughness::terrain_fit`] when the fit is on
+    /// and the pyramid in use, else 1.
+    pub fn fit_for(&self, roughness: u8) -> u32 {
+        match self.resolution {
+            Resolution::Multi { .. } if self.terrain_fit => terrain_fit(roughness),
+            _ => 1 << 16,
+        }
+    }
 }
 
 impl Default for RenderOptions {
@@ -154,6 +186,7 @@ impl Default for RenderOptions {
             hierarchical_first_hit: true,
             vertical_samples: VerticalSamples::One,
             shading: Shading::Subvoxel,
+            terrain_fit: true,
             sky: DEFAULT_SKY,
         }
     }
@@ -174,9 +207,12 @@ impl Frame {
     fn new<T: Surface + ?Sized>(surface: &T, view: &View, options: &RenderOptions) -> Self {
         let lod = match options.resolution {
             Resolution::Single => LodPlan::SINGLE,
-            Resolution::Multi { pixel_to_voxel } => {
-                LodPlan::new(view, pixel_to_voxel.to_bits(), surface.top())
-            }
+            Resolution::Multi { pixel_to_voxel } => LodPlan::new(
+                view,
+                pixel_to_voxel.to_bits(),
+                options.fit_for(surface.roughness()),
+                surface.top(),
+            ),
         };
         let (resume, same_schedule) = match options.coherence {
             Coherence::Off => (false, false),
@@ -702,7 +738,7 @@ mod tests {
         // Along +x, from low over the west edge; level 1 begins 14 voxels
         // out (pixel-to-voxel ratio 4).
         let view = View::new(&Camera::looking([0.5, 30.2, 3.0], 0.0, 0.0), 64, 8).unwrap();
-        let plan = LodPlan::new(&view, 4 << 8, pyramid.top());
+        let plan = LodPlan::new(&view, 4 << 8, 1 << 16, pyramid.top());
         let ray = view.pixel_ray(&terrain.extent(), &plan, 32, 48);
         assert!(ray.key.x_major && ray.key.forward);
         let mut k = ray.start;

@@ -514,7 +514,7 @@ mod tests {
             };
             let view = View::new(&camera, 64, 8).unwrap();
             // Level 1 begins 14 voxels out (pixel-to-voxel ratio 4).
-            let plan = LodPlan::new(&view, 4 << 8, pyramid.top());
+            let plan = LodPlan::new(&view, 4 << 8, 1 << 16, pyramid.top());
             for column in [0, 20, 63] {
                 let ray = view.pixel_ray(&terrain.extent(), &plan, column, 48);
                 let mut levels_seen = 0u8;

@@ -82,7 +82,9 @@ pub struct FootprintView {
     pub width: u32,
     /// Image size in pixels.
     pub height: u32,
-    /// The level bias the frame renders at (its pixel-to-voxel ratio).
+    /// The level bias the frame renders at: its pixel-to-voxel ratio as
+    /// the caster uses it ([`crate::RenderOptions::level_bias`], which
+    /// takes the terrain fit in).
     pub pixel_to_voxel: f32,
     /// Degrees added to each side of the field of view: 0 for the frame
     /// itself, more for an extended footprint to prefetch.

@@ -66,6 +66,8 @@ pub struct World {
     pub depth: u32,
     /// The highest height (U12.4) on any level.
     pub max_height: u16,
+    /// Level 0's roughness ([`crate::roughness`]); 0 when unknown.
+    pub roughness: u8,
 }
 
 impl World {
@@ -82,7 +84,13 @@ impl World {
             width,
             depth,
             max_height,
+            roughness: 0,
         })
+    }
+
+    /// The same world with level 0's roughness known.
+    pub const fn with_roughness(self, roughness: u8) -> Self {
+        Self { roughness, ..self }
     }
 
     /// Number of levels, level 0 included: up to both sides being 2, as a
@@ -243,7 +251,9 @@ mod tests {
     impl TileSource<16> for Cut<'_> {
         fn world(&self) -> World {
             let e = crate::Surface::extent(self.0);
-            World::new(e.width, e.depth, e.max_height).unwrap()
+            World::new(e.width, e.depth, e.max_height)
+                .unwrap()
+                .with_roughness(self.0.roughness())
         }
         fn load(&mut self, key: TileKey, tile: &mut Tile<16>) -> Result<usize, TileError> {
             cut_tile(self.0, key, tile)
@@ -316,11 +326,12 @@ mod tests {
         ] {
             let camera = Camera::looking(eye, yaw, pitch);
             let mut needed = heapless::Vec::<TileKey, 512>::new();
+            let options = RenderOptions::default();
             let frame = FootprintView {
                 camera,
                 width: 64,
                 height: 48,
-                pixel_to_voxel: 1.0,
+                pixel_to_voxel: options.level_bias(source.world().roughness),
                 widen_deg: 0.0,
             };
             footprint::<16, 512>(&source.world(), &frame, &mut needed).unwrap();
@@ -340,7 +351,6 @@ mod tests {
                 );
                 (pixels, probe.steps)
             };
-            let options = RenderOptions::default();
             let from_tiles = draw(&|f, p| render(&surface, &view, &options, f, p));
             let from_pyramid = draw(&|f, p| render(&pyramid, &view, &options, f, p));
             let differ = from_tiles

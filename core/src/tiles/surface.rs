@@ -274,6 +274,9 @@ impl<'c, 'a, const T: usize, const N: usize> Surface for TiledSurface<'c, 'a, T,
     fn has_bounds(&self) -> bool {
         self.top > 0
     }
+    fn roughness(&self) -> u8 {
+        self.world().roughness
+    }
     #[inline]
     fn bound(&self, level: u8, x: i64, y: i64) -> Option<(u16, usize)> {
         if level == 0 || level > self.top || x < 0 || y < 0 {

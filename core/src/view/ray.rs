@@ -53,11 +53,12 @@ pub(crate) struct LodPlan {
 
 impl LodPlan {
     /// Levels up to `top`, switching by `pixel_to_voxel` (U8.8; 0 counts as
-    /// 1/256).
-    pub fn new(view: &View, pixel_to_voxel: u16, top: u8) -> Self {
-        let ratio = i64::from(pixel_to_voxel.max(1));
+    /// 1/256) scaled by `fit` (Q16, at most 1; see
+    /// [`crate::roughness::terrain_fit`]).
+    pub fn new(view: &View, pixel_to_voxel: u16, fit: u32, top: u8) -> Self {
+        let ratio = i64::from(pixel_to_voxel.max(1)) * i64::from(fit.clamp(1, 1 << 16));
         Self {
-            level1_depth: (view.focal << 8) / ratio,
+            level1_depth: (view.focal << 24) / ratio,
             top: top.min(MAX_WALK_LEVEL as u8),
         }
     }

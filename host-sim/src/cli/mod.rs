@@ -165,6 +165,16 @@ impl From<HeightFilterArg> for HeightFilter {
     }
 }
 
+/// Whether the kernel scales its pixel-to-voxel ratio by the terrain's
+/// roughness.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TerrainFitArg {
+    /// Scale it down on rugged terrain (no change on smooth maps).
+    On,
+    /// Use the ratio as given.
+    Off,
+}
+
 /// How the kernel colors a hit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ShadingArg {
@@ -307,6 +317,11 @@ struct RenderArgs {
     /// and blurrier.
     #[arg(long, default_value_t = 1.0, value_name = "RATIO")]
     pixel_to_voxel: f32,
+    /// Kernel: scale the pixel-to-voxel ratio down by the terrain's
+    /// roughness, so that coarse levels begin where their silhouettes are
+    /// within a quarter pixel (`on`), or use it as given (`off`).
+    #[arg(long, value_enum, default_value_t = TerrainFitArg::On)]
+    terrain_fit: TerrainFitArg,
     /// Kernel: how the pyramid's coarse heights are made [default:
     /// wavelet; with --terrain, the filter the file was packed with].
     #[arg(long, value_enum)]
@@ -566,6 +581,7 @@ fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
             ShadingArg::Subvoxel => Shading::Subvoxel,
             ShadingArg::Nearest => Shading::Nearest,
         },
+        terrain_fit: args.terrain_fit == TerrainFitArg::On,
         sky,
     })
 }

@@ -13,7 +13,7 @@
 //! | 4 | levels |
 //! | 2 | highest height, U12.4 |
 //! | 1 | height filter: 0 mean, 1 max, 2 subsample, 3 wavelet |
-//! | 1 | reserved, 0 |
+//! | 1 | roughness of level 0 (`terracast::roughness`), 0 if unknown |
 //! | 8 | tile count |
 //! | 4 | CRC-32 of the 40 bytes before it |
 //! | 4 × count | CRC-32 of each tile record |
@@ -96,6 +96,7 @@ impl Header {
         b[24..28].copy_from_slice(&u32::from(self.levels).to_le_bytes());
         b[28..30].copy_from_slice(&self.world.max_height.to_le_bytes());
         b[30] = filter_code(self.filter);
+        b[31] = self.world.roughness;
         b[32..40].copy_from_slice(&self.tiles.to_le_bytes());
         let crc = crc32fast::hash(&b[..40]);
         b[40..44].copy_from_slice(&crc.to_le_bytes());
@@ -175,7 +176,8 @@ impl TilesFile {
         }
         let max_height = u16::from_le_bytes([b[28], b[29]]);
         let world = World::new(u32_at(16), u32_at(20), max_height)
-            .ok_or_else(|| fail("impossible map size in the header"))?;
+            .ok_or_else(|| fail("impossible map size in the header"))?
+            .with_roughness(b[31]);
         let filter = filter_from_code(b[30])
             .ok_or_else(|| fail(&format!("unknown height filter {} in the header", b[30])))?;
         let header = Header::new(world, filter);
@@ -308,9 +310,10 @@ impl TilesWriter {
     }
 
     /// Writes the header (with the final highest height) and the checksums.
-    pub fn finish(mut self, max_height: u16) -> Result<()> {
+    pub fn finish(mut self, max_height: u16, roughness: u8) -> Result<()> {
         let io = |e: std::io::Error| Error::new(format!("cannot finish the tiled file: {e}"));
         self.header.world.max_height = max_height;
+        self.header.world.roughness = roughness;
         self.file.seek(SeekFrom::Start(0)).map_err(io)?;
         self.file.write_all(&self.header.bytes()).map_err(io)?;
         for c in &self.checksums {

@@ -16,6 +16,7 @@ use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
+use terracast::roughness::{RoughnessSum, ROUGHNESS_ROW_STEP};
 use terracast::tiles::{Tile, TileKey, World};
 use terracast::wavelet_row;
 use terracast::{HeightFilter, Rgb, Terrain};
@@ -117,6 +118,8 @@ pub fn pack(
     let header = Header::new(world, input.filter);
     let mut builder = Builder::new(world, input.filter, TilesWriter::create(out, header)?);
     let mut max_height = 0u16;
+    // Measured on the rows a pyramid of the same map measures.
+    let mut roughness = RoughnessSum::default();
     let mut held: Option<Vec<u16>> = None;
     for y in 0..depth {
         let row = heights.next()?;
@@ -133,6 +136,9 @@ pub fn pack(
             })
             .collect::<Result<Vec<u16>>>()?;
         max_height = max_height.max(quantized.iter().copied().max().unwrap_or(0));
+        if y % ROUGHNESS_ROW_STEP == 0 {
+            roughness.add_row(&quantized);
+        }
         // Colors by height lag a row (they need the row after): the row
         // they color now is the one held back.
         match (colors.row(y, row)?, held.take()) {
@@ -151,7 +157,7 @@ pub fn pack(
         builder.push(0, depth - 1, last, row_colors)?;
     }
     let rows_held_at_most = builder.rows_held_at_most;
-    builder.finish(max_height)?;
+    builder.finish(max_height, roughness.roughness())?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
     Ok(PackSummary {
         width,
@@ -688,7 +694,7 @@ impl Builder {
         l.bounds = l.bounds.split_off(&keep);
     }
 
-    fn finish(self, max_height: u16) -> Result<()> {
+    fn finish(self, max_height: u16, roughness: u8) -> Result<()> {
         for level in &self.levels {
             if level.strips * (TILE as u32) < level.depth {
                 return Err(Error::new(format!(
@@ -697,6 +703,6 @@ impl Builder {
                 )));
             }
         }
-        self.writer.finish(max_height)
+        self.writer.finish(max_height, roughness)
     }
 }

@@ -13,7 +13,7 @@ use serde::Serialize;
 use terracast::tiles::{
     footprint_under, FootprintView, Tile, TileCache, TileKey, TileSource, TiledSurface,
 };
-use terracast::{Camera, RenderOptions, Resolution};
+use terracast::{Camera, RenderOptions};
 
 /// Footprint list capacity: far more than a 32 MiB cache holds.
 const FOOTPRINT: usize = 16_384;
@@ -40,13 +40,6 @@ pub struct TiledRender {
     pub degraded_samples: u32,
     /// Bytes the source read.
     pub bytes_read: u64,
-}
-
-fn level_bias(options: &RenderOptions) -> f32 {
-    match options.resolution {
-        Resolution::Multi { pixel_to_voxel } => pixel_to_voxel.to_num(),
-        Resolution::Single => 1.0,
-    }
 }
 
 /// Adds the footprint of `camera` to `keys`, cut to the terrain height
@@ -136,7 +129,7 @@ pub fn render_tiled<S: TileSource<TILE>>(
         source,
         camera,
         (width, height),
-        level_bias(options),
+        options.level_bias(world.roughness),
         &mut needed,
     )?;
     let surface = TiledSurface::around(&cache, camera.eye);
@@ -312,7 +305,7 @@ pub fn page_flight<S: TileSource<TILE>>(
         return Err(Error::new("--fps must be a positive number"));
     }
     let world = source.world();
-    let bias = level_bias(&options.options);
+    let bias = options.options.level_bias(world.roughness);
     let mut slots = new_slots();
     let mut cache = TileCache::<TILE, SLOTS>::new(world, &mut slots);
     let (mut needed, mut ahead) = (Box::new(Keys::new()), Box::new(Keys::new()));
