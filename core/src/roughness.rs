@@ -9,7 +9,7 @@
 //! the level begins. On a smooth map that is well below a pixel; on rugged
 //! real terrain it is not, and the coarse levels then cost more accuracy
 //! at silhouettes than their colors gain against aliasing (README,
-//! "Levels and the terrain's roughness"). Keeping that error within
+//! "Accuracy against the exact reference"). Keeping that error within
 //! [`TERRAIN_FIT_PIXELS`] takes `ratio ≤ TERRAIN_FIT_PIXELS / E`, with
 //! `E = max_l e_l / 2^(l−1)`: this module's roughness.
 //!

@@ -5,14 +5,15 @@
 //!   quadrants, pitch 0°–45°) and far, grazing views (pitch 0°–5°, eye low,
 //!   looking across the whole map): PSNR ≥ 32 dB, sky/terrain agreement
 //!   ≥ 99.5 %, median relative depth error ≤ 0.5 % for both.
-//! * The pyramid against single resolution: the multiresolution issue
-//!   asks for no more than 1 dB below it. It is 0.69 dB below to 0.11 dB
-//!   above on these 1024² maps (README), and the test holds every view to
-//!   1 dB and every grazing view to fewer steps. It is better on one
-//!   grazing view of nine, not on all as the issue also asks: its coarse
-//!   levels step over height detail finer than their spacing. Beside it:
-//!   the pyramid at pixel-to-voxel 0.5, and the other height filters
-//!   (subsample, mean and max).
+//! * The pyramid (with the terrain fit, the default) against single
+//!   resolution: the multiresolution issue asks for no more than 1 dB
+//!   below it. It is 0.66 dB below to 0.10 dB above on these 1024² maps
+//!   (README), and the test holds every view to 1 dB and no grazing view
+//!   to more steps. It is better on two grazing views of nine, not on all
+//!   as the issue also asks: this close a voxel is still a third of a
+//!   pixel wide or more, and single resolution hardly aliases. Beside it:
+//!   the pyramid without the fit, at pixel-to-voxel 0.5, and with the
+//!   other height filters (subsample, mean and max).
 //! * Far views on 4096² maps (each pair tiled 4 × 4), in
 //!   [`far_views_on_tiled_maps`].
 
@@ -158,7 +159,8 @@ fn tiled(scene: &Scene, n: u32) -> Scene {
 /// Far views across 4096² maps (each Comanche pair tiled 4 × 4): terrain
 /// out to 4000 voxels, where a voxel is a seventh of a pixel and single
 /// resolution undersamples. Reported in the README; the test holds the
-/// pyramid to 3 dB below single resolution and to under half its steps.
+/// pyramid to 3 dB below single resolution and to under 0.8 of its steps
+/// (under half without the terrain fit).
 #[test]
 fn far_views_on_tiled_maps() {
     const FAR: [([f32; 3], f32, f32); 3] = [
