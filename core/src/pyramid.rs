@@ -203,12 +203,34 @@ impl<'a> Pyramid<'a> {
 
     /// Wraps storage that [`Pyramid::build`] filled for this terrain (on
     /// this machine or another: a board can keep it in flash). Longer
-    /// storage is fine; only the prefix is used.
+    /// storage is fine; only the prefix is used. Measures the terrain's
+    /// roughness (a pass over a quarter of its rows; see
+    /// [`Pyramid::with_roughness`] to skip it when it is known).
     pub fn new(
         terrain: Terrain<'a>,
         heights: &'a [u16],
         colors: &'a [Rgb],
         bounds: &'a [u16],
+    ) -> Result<Self, PyramidError> {
+        let mut pyramid = Self::with_roughness(terrain, heights, colors, bounds, 0)?;
+        if pyramid.levels.len() > 1 {
+            let mut sum = RoughnessSum::default();
+            sum.add_grid(terrain.heights(), terrain.width() as usize);
+            pyramid.roughness = sum.roughness();
+        }
+        Ok(pyramid)
+    }
+
+    /// [`Pyramid::new`] with the roughness given, not measured: the value
+    /// an earlier [`Pyramid::roughness`] of the same terrain returned (a
+    /// host that wraps its storage for every frame keeps it), or one
+    /// stored with the pyramid.
+    pub fn with_roughness(
+        terrain: Terrain<'a>,
+        heights: &'a [u16],
+        colors: &'a [Rgb],
+        bounds: &'a [u16],
+        roughness: u8,
     ) -> Result<Self, PyramidError> {
         let (width, depth) = (terrain.width(), terrain.depth());
         check_storage(width, depth, heights.len(), colors.len(), bounds.len())?;
@@ -229,9 +251,7 @@ impl<'a> Pyramid<'a> {
             let _ = pyramid.bounds.push(b);
         }
         if pyramid.levels.len() > 1 {
-            let mut sum = RoughnessSum::default();
-            sum.add_grid(terrain.heights(), width as usize);
-            pyramid.roughness = sum.roughness();
+            pyramid.roughness = roughness;
         }
         Ok(pyramid)
     }

@@ -187,6 +187,15 @@ fn the_terrain_fit_scales_the_ratio_on_rugged_maps_only() {
     };
     let (scaled, _, _) = frame(&pyramid, &camera, (96, 64), &fit_off(quarter));
     assert!(fitted == scaled, "the fit is not the ratio scaled by it");
+    // Wrapped with its roughness known, the pyramid renders the same; with
+    // 0 (unknown) the ratio is used as given.
+    let terrain = Terrain::new(257, 257, &rugged.heights, &rugged.colors).unwrap();
+    let (h, c, b) = &rugged.coarse;
+    let known = Pyramid::with_roughness(terrain, h, c, b, roughness).unwrap();
+    let unknown = Pyramid::with_roughness(terrain, h, c, b, 0).unwrap();
+    let options = RenderOptions::default();
+    assert!(frame(&known, &camera, (96, 64), &options).0 == fitted);
+    assert!(frame(&unknown, &camera, (96, 64), &options).0 == given);
     assert!(fitted != given);
     // Levels begin later: more level-0 steps, fewer on the coarse levels.
     assert!(fitted_probe.steps_by_level[0] > given_probe.steps_by_level[0]);

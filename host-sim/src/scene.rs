@@ -40,6 +40,10 @@ pub struct KernelScene {
     coarse_heights: Vec<u16>,
     coarse_colors: Vec<Rgb>,
     bounds: Vec<u16>,
+    /// The terrain's roughness, measured once here rather than by every
+    /// `Pyramid::new` (a pass over a quarter of the rows: on a 4096² map
+    /// about as long as a 320 × 240 render).
+    roughness: u8,
 }
 
 /// Loads a height map and its color map (colored by height and slope when
@@ -163,6 +167,7 @@ impl Scene {
             coarse_heights: vec![0; pyramid_points(w, d)],
             coarse_colors: vec![[0; 3]; pyramid_points(w, d)],
             bounds: vec![0; pyramid_cells(w, d)],
+            roughness: 0,
         };
         let terrain = Terrain::new(w, d, &scene.heights, &scene.colors)
             .map_err(|e| Error::new(format!("terrain rejected by the kernel: {e}")))?;
@@ -174,6 +179,14 @@ impl Scene {
             &mut scene.bounds,
         )
         .map_err(|e| Error::new(format!("pyramid not built: {e}")))?;
+        scene.roughness = Pyramid::new(
+            terrain,
+            &scene.coarse_heights,
+            &scene.coarse_colors,
+            &scene.bounds,
+        )
+        .map_err(|e| Error::new(format!("pyramid rejected by the kernel: {e}")))?
+        .roughness();
         Ok(scene)
     }
 }
@@ -187,11 +200,12 @@ impl KernelScene {
 
     /// The terrain and its coarser levels.
     pub fn pyramid(&self) -> Result<Pyramid<'_>> {
-        Pyramid::new(
+        Pyramid::with_roughness(
             self.terrain()?,
             &self.coarse_heights,
             &self.coarse_colors,
             &self.bounds,
+            self.roughness,
         )
         .map_err(|e| Error::new(format!("pyramid rejected by the kernel: {e}")))
     }
