@@ -68,7 +68,9 @@ pub enum Resolution {
     /// at an even step, where a voxel of its level gets narrower than
     /// `1 / pixel_to_voxel` pixels, and blends the colors of adjacent
     /// levels by depth so the switch is invisible. A higher ratio
-    /// switches sooner: fewer steps, a blurrier far field.
+    /// switches sooner: fewer steps, a blurrier far field. With
+    /// [`RenderOptions::terrain_fit`] the ratio is scaled down on rugged
+    /// terrain first.
     Multi {
         /// The pixel-to-voxel ratio (1 = switch where a voxel is one pixel
         /// wide).

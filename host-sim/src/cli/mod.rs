@@ -314,7 +314,7 @@ struct RenderArgs {
     resolution: ResolutionArg,
     /// Kernel: the pixel-to-voxel ratio of the level switch. A level is left
     /// where its voxels get narrower than 1/RATIO pixels: higher is faster
-    /// and blurrier.
+    /// and blurrier. Scaled down on rugged terrain by --terrain-fit.
     #[arg(long, default_value_t = 1.0, value_name = "RATIO")]
     pixel_to_voxel: f32,
     /// Kernel: scale the pixel-to-voxel ratio down by the terrain's
