@@ -32,8 +32,9 @@ pub const ROUGHNESS_ROW_STEP: u32 = 4;
 pub const TERRAIN_FIT_PIXELS: f32 = 0.25;
 
 /// Sums of squared interpolation errors, row by row (see the module
-/// notes). Feed it level 0's rows `0, ROUGHNESS_ROW_STEP, 2·…` in any
-/// order, then read [`RoughnessSum::roughness`].
+/// notes). Feed it level 0's rows in any order, each with its number
+/// ([`RoughnessSum::add_row_at`] keeps the sampled ones), or a whole grid
+/// ([`RoughnessSum::add_grid`]), then read [`RoughnessSum::roughness`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct RoughnessSum {
     /// Per level: the sum of `(2h(x) − h(x − s) − h(x + s))²` (U12.4
@@ -44,7 +45,7 @@ pub struct RoughnessSum {
 }
 
 impl RoughnessSum {
-    /// Adds one row of U12.4 heights.
+    /// Adds one row of U12.4 heights, sampled or not.
     pub fn add_row(&mut self, row: &[u16]) {
         for (level, (squares, terms)) in self.squares.iter_mut().zip(&mut self.terms).enumerate() {
             let s = 1usize << level;
@@ -58,17 +59,23 @@ impl RoughnessSum {
         }
     }
 
-    /// Adds the rows a pyramid measures of a `width`-point-wide grid of
+    /// Adds row `y` of U12.4 heights if it is one the measure samples
+    /// (every [`ROUGHNESS_ROW_STEP`]-th): what a caller streaming every
+    /// row calls.
+    pub fn add_row_at(&mut self, y: u32, row: &[u16]) {
+        if y % ROUGHNESS_ROW_STEP == 0 {
+            self.add_row(row);
+        }
+    }
+
+    /// Adds the rows the measure samples of a `width`-point-wide grid of
     /// heights stored row by row.
     pub fn add_grid(&mut self, heights: &[u16], width: usize) {
         if width == 0 {
             return;
         }
-        for row in heights
-            .chunks_exact(width)
-            .step_by(ROUGHNESS_ROW_STEP as usize)
-        {
-            self.add_row(row);
+        for (y, row) in (0..).zip(heights.chunks_exact(width)) {
+            self.add_row_at(y, row);
         }
     }
 

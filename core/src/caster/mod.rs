@@ -504,16 +504,7 @@ fn cast<T: Surface + ?Sized, P: Probe>(
                 None => retrace(surface, ray, at, clearance, allowance, recent, probe),
             };
             (
-                shade(
-                    surface,
-                    ray,
-                    Some(stage),
-                    at,
-                    clearance,
-                    above,
-                    options,
-                    probe,
-                ),
+                shade(surface, ray, stage, at, clearance, above, options, probe),
                 at.k,
             )
         }
@@ -579,7 +570,7 @@ fn retrace<T: Surface + ?Sized, P: Probe>(
 fn shade<'s, T: Surface + ?Sized, P: Probe>(
     surface: &'s T,
     ray: &Ray,
-    walked: Option<Stage<T::Grid<'s>>>,
+    walked: Stage<T::Grid<'s>>,
     hit: Cursor,
     below: i32,
     above: Option<(i32, i32)>,
@@ -588,7 +579,7 @@ fn shade<'s, T: Surface + ?Sized, P: Probe>(
 ) -> Sample {
     let (position, before) = crossing(ray, &hit, below, above);
     // The walk's last stage, unless a retrace left its level.
-    let stage = Stage::on_level(walked, surface, ray, hit.level);
+    let stage = walked.on_level(surface, ray, hit.level);
     let before = before.map(|(k, t)| (ray.cursor_before(surface, &hit, k), t));
     let color = if options.shading == Shading::Nearest {
         stage.nearest_color(&ray.color_cursor(&hit), probe)

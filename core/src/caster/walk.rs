@@ -82,15 +82,16 @@ impl<G: Grid> Stage<G> {
         }
     }
 
-    /// `stage` when it is `level`'s (a walk's, at hand), else a new one.
+    /// This stage when it is `level`'s (a walk's, at hand), else a new one.
     #[inline]
-    pub fn on_level<'s, T>(stage: Option<Self>, surface: &'s T, ray: &Ray, level: u8) -> Self
+    pub fn on_level<'s, T>(self, surface: &'s T, ray: &Ray, level: u8) -> Self
     where
         T: Surface<Grid<'s> = G> + ?Sized,
     {
-        match stage {
-            Some(stage) if stage.level == level => stage,
-            _ => Self::new(surface, ray, level),
+        if self.level == level {
+            self
+        } else {
+            Self::new(surface, ray, level)
         }
     }
 

@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
-use terracast::roughness::{RoughnessSum, ROUGHNESS_ROW_STEP};
+use terracast::roughness::RoughnessSum;
 use terracast::tiles::{Tile, TileKey, World};
 use terracast::wavelet_row;
 use terracast::{HeightFilter, Rgb, Terrain};
@@ -136,9 +136,7 @@ pub fn pack(
             })
             .collect::<Result<Vec<u16>>>()?;
         max_height = max_height.max(quantized.iter().copied().max().unwrap_or(0));
-        if y % ROUGHNESS_ROW_STEP == 0 {
-            roughness.add_row(&quantized);
-        }
+        roughness.add_row_at(y, &quantized);
         // Colors by height lag a row (they need the row after): the row
         // they color now is the one held back.
         match (colors.row(y, row)?, held.take()) {
