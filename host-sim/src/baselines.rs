@@ -81,6 +81,9 @@ pub fn voxel_space_touching(
         // The slice: from the left edge of the view to the right, z ahead.
         let (cx, cy) = (ex + z * cos_yaw, ey + z * sin_yaw);
         let (rx, ry) = (-sin_yaw * z, cos_yaw * z);
+        // Screen rows per unit of height at this slice, once a slice (as
+        // in Macke's code: one division a slice, not one a sample).
+        let rows_per_height = focal / z;
         for (i, &a) in spread.iter().enumerate() {
             let (x, y) = (cx + a * rx, cy + a * ry);
             if x < 0.0 || y < 0.0 || x >= map_w as f64 || y >= map_d as f64 {
@@ -89,7 +92,7 @@ pub fn voxel_space_touching(
             samples += 1;
             let voxel = y as usize * map_w + x as usize;
             touch(voxel);
-            let top = horizon + (ez - f64::from(scene.heights[voxel])) * focal / z;
+            let top = horizon + (ez - f64::from(scene.heights[voxel])) * rows_per_height;
             let bottom = y_buffer[i];
             if top < bottom {
                 let first = top.max(0.0).ceil() as usize;
