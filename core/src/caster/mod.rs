@@ -663,6 +663,19 @@ fn crossing_fraction(above: i32, below: i32) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::{Framebuffer, Pyramid};
+
+    /// A 24 × 18 render at single resolution with `options` otherwise.
+    fn small_image(pyramid: &Pyramid, view: &View, options: RenderOptions) -> [Rgb; 24 * 18] {
+        let mut pixels = [[0u8; 3]; 24 * 18];
+        let mut frame = Framebuffer::new(&mut pixels, 24, 18).unwrap();
+        let options = RenderOptions {
+            resolution: Resolution::Single,
+            ..options
+        };
+        render(pyramid, view, &options, &mut frame, &mut crate::NoProbe);
+        pixels
+    }
 
     #[test]
     fn crossing_fraction_is_proportional_and_bounded() {
@@ -675,7 +688,7 @@ mod tests {
 
     #[test]
     fn nearest_shading_shows_only_voxel_colors_and_subvoxel_blends_them() {
-        use crate::{Camera, Framebuffer, Pyramid, Terrain};
+        use crate::{Camera, Terrain};
         // A flat 16 x 16 map of black and white stripes across x.
         let heights = [0u16; 256];
         let colors: [Rgb; 256] = core::array::from_fn(|i| [(i % 2 * 255) as u8; 3]);
@@ -684,15 +697,11 @@ mod tests {
         let camera = Camera::looking([1.3, 2.1, 6.0], 70.0, 40.0);
         let view = View::new(&camera, 24, 18).unwrap();
         let shaded = |shading| {
-            let mut pixels = [[0u8; 3]; 24 * 18];
-            let mut frame = Framebuffer::new(&mut pixels, 24, 18).unwrap();
             let options = RenderOptions {
                 shading,
-                resolution: Resolution::Single,
                 ..RenderOptions::default()
             };
-            render(&pyramid, &view, &options, &mut frame, &mut crate::NoProbe);
-            pixels
+            small_image(&pyramid, &view, options)
         };
         let terrain_pixels = |p: [Rgb; 432]| {
             p.into_iter()
@@ -718,7 +727,7 @@ mod tests {
     fn the_finer_level_is_read_at_its_own_line_within_a_coarse_step() {
         use crate::pyramid::{pyramid_cells, pyramid_points};
         use crate::view::ray::T_ONE;
-        use crate::{Camera, Pyramid, Terrain};
+        use crate::{Camera, Terrain};
         use std::vec;
         // Flat, black, with white on every odd x: the grid lines of level 0
         // that level 1 (whose colors are left black) does not have.
@@ -756,7 +765,7 @@ mod tests {
 
     #[test]
     fn rays_above_a_line_that_left_the_terrain_see_the_same_sky_without_their_set_up() {
-        use crate::{Camera, Framebuffer, Pyramid, Terrain};
+        use crate::{Camera, Terrain};
         // Ridges across a 32 x 32 map, seen from low and far: most lines
         // leave the terrain part way up. At single resolution every ray's
         // schedule is the same, so Exact resumes exactly where AcrossLevels
@@ -775,15 +784,11 @@ mod tests {
             let camera = Camera::looking(eye, yaw, pitch);
             let view = View::new(&camera, 24, 18).unwrap();
             let image = |coherence| {
-                let mut pixels = [[0u8; 3]; 24 * 18];
-                let mut frame = Framebuffer::new(&mut pixels, 24, 18).unwrap();
                 let options = RenderOptions {
                     coherence,
-                    resolution: Resolution::Single,
                     ..RenderOptions::default()
                 };
-                render(&pyramid, &view, &options, &mut frame, &mut crate::NoProbe);
-                pixels
+                small_image(&pyramid, &view, options)
             };
             let skipping = image(Coherence::AcrossLevels);
             assert!(skipping.contains(&DEFAULT_SKY), "{eye:?}: no sky");
