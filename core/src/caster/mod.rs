@@ -580,35 +580,37 @@ fn shade<'s, T: Surface + ?Sized, P: Probe>(
     let (position, before) = crossing(ray, &hit, below, above);
     // The walk's last stage, unless a retrace left its level.
     let stage = walked.on_level(surface, ray, hit.level);
-    let before = before.map(|(k, t)| (ray.cursor_before(surface, &hit, k), t));
     let color = if options.shading == Shading::Nearest {
         stage.nearest_color(&ray.color_cursor(&hit), probe)
-    } else if let Some(color) = before
-        .as_ref()
-        .and_then(|(before, t)| stage.color_within_step(ray, before, &hit, *t, probe))
-    {
-        Some(color)
     } else {
-        stage
-            .color(&ray.color_cursor(&hit), probe)
-            .or_else(|| stage.color(&hit, probe))
-            .map(|on_hit_line| match before {
-                Some((before, t)) => {
-                    // Mostly on the hit's level: its stage is at hand.
-                    let other_level;
-                    let before_stage = if before.level == hit.level {
-                        &stage
-                    } else {
-                        other_level = Stage::new(surface, ray, before.level);
-                        &other_level
-                    };
-                    match before_stage.color(&ray.color_cursor(&before), probe) {
-                        Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
-                        None => on_hit_line,
+        // Where the sample before the crossing lies: subvoxel colors only.
+        let before = before.map(|(k, t)| (ray.cursor_before(surface, &hit, k), t));
+        match before
+            .as_ref()
+            .and_then(|(before, t)| stage.color_within_step(ray, before, &hit, *t, probe))
+        {
+            Some(color) => Some(color),
+            None => stage
+                .color(&ray.color_cursor(&hit), probe)
+                .or_else(|| stage.color(&hit, probe))
+                .map(|on_hit_line| match before {
+                    Some((before, t)) => {
+                        // Mostly on the hit's level: its stage is at hand.
+                        let other_level;
+                        let before_stage = if before.level == hit.level {
+                            &stage
+                        } else {
+                            other_level = Stage::new(surface, ray, before.level);
+                            &other_level
+                        };
+                        match before_stage.color(&ray.color_cursor(&before), probe) {
+                            Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
+                            None => on_hit_line,
+                        }
                     }
-                }
-                None => on_hit_line,
-            })
+                    None => on_hit_line,
+                }),
+        }
     };
     let Some(color) = color else {
         return sky(options);
