@@ -21,7 +21,8 @@ pub trait Probe {
         let _ = (level, cell);
     }
     /// The colors of voxel `voxel` of level `level` and its minor-axis
-    /// neighbour were fetched to shade a pixel (and the level below's). At
+    /// neighbour were fetched to shade a pixel (and the level below's), or,
+    /// past the color reach, the four around the crossing on `level`. At
     /// most [`MAX_COLOR_FETCHES_A_RAY`] a ray.
     #[inline(always)]
     fn color(&mut self, level: u8, voxel: usize) {
@@ -38,7 +39,8 @@ pub trait Probe {
 }
 
 /// The most color fetches ([`Probe::color`]) the caster makes for one ray:
-/// a hit is shaded from its own grid line and the one before it, a ray cut
+/// a hit is shaded from its own grid line and the one before it (near the
+/// eye) or from two levels around the crossing (farther out), a ray cut
 /// short from the grid line under it, and a sky ray from none. (A fetch
 /// that finds no color, outside the map, is not reported.) A cost model
 /// can reserve this much shading a ray before the frame is rendered.

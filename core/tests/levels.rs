@@ -160,9 +160,10 @@ fn a_wall_at_a_level_switch_is_never_skipped() {
     }
 }
 
-/// The terrain fit: on a rugged map the pyramid's levels begin farther
-/// out by the fit's factor, exactly as a ratio scaled by hand would place
-/// them; on a smooth map nothing changes.
+/// The terrain fit: on a rugged map the pyramid's height levels begin
+/// farther out by the fit's factor, exactly as a ratio scaled by hand would
+/// place them (colors keep the ratio as given); on a smooth map nothing
+/// changes.
 #[test]
 fn the_terrain_fit_scales_the_ratio_on_rugged_maps_only() {
     let camera = Camera::looking([5.0, 128.0, 70.0], 10.0, 8.0);
@@ -180,13 +181,19 @@ fn the_terrain_fit_scales_the_ratio_on_rugged_maps_only() {
     assert_eq!(roughness, 64);
     let fit = terracast::roughness::terrain_fit(roughness);
     assert_eq!(fit, 1 << 14);
-    let (fitted, _, fitted_probe) = frame(&pyramid, &camera, (96, 64), &RenderOptions::default());
+    let (fitted, fitted_depths, fitted_probe) =
+        frame(&pyramid, &camera, (96, 64), &RenderOptions::default());
     let (given, _, given_probe) = frame(&pyramid, &camera, (96, 64), &fit_off(Resolution::DEFAULT));
     let quarter = Resolution::Multi {
         pixel_to_voxel: U8F8::from_num(0.25),
     };
-    let (scaled, _, _) = frame(&pyramid, &camera, (96, 64), &fit_off(quarter));
-    assert!(fitted == scaled, "the fit is not the ratio scaled by it");
+    let (scaled, scaled_depths, scaled_probe) =
+        frame(&pyramid, &camera, (96, 64), &fit_off(quarter));
+    assert!(
+        fitted_depths == scaled_depths && fitted_probe.steps == scaled_probe.steps,
+        "the fit's heights are not the ratio scaled by it"
+    );
+    assert!(fitted != scaled, "the fit moved the color levels too");
     // Wrapped with its roughness known, the pyramid renders the same; with
     // 0 (unknown) the ratio is used as given.
     let terrain = Terrain::new(257, 257, &rugged.heights, &rugged.colors).unwrap();

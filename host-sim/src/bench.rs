@@ -273,8 +273,10 @@ impl Probe for TouchProbe {
 /// Terrain bytes a frame reads, by method:
 /// - kernel: each visit reads two U12.4 heights (the voxel and its
 ///   neighbour across the minor grid line), each shading two RGB colors
-///   and as many on the level below (past level 0), each bound test one
-///   u16; distinct (level, index) pairs, neighbours counted with each;
+///   and as many on the level below (past level 0; a fetch past the color
+///   reach reads four on one level, counted the same, so six bytes short
+///   on level 0), each bound test one u16; distinct (level, index) pairs,
+///   neighbours counted with each;
 /// - Voxel Space: an f32 height and an RGB color for each distinct voxel;
 /// - march: the four corners (f32 height and RGB color) of each distinct
 ///   cell sampled.

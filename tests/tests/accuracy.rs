@@ -7,9 +7,9 @@
 //!   ≥ 99.5 %, median relative depth error ≤ 0.5 % for both.
 //! * The pyramid (with the terrain fit, the default) against single
 //!   resolution: the multiresolution issue asks for no more than 1 dB
-//!   below it. It is 0.66 dB below to 0.10 dB above on these 1024² maps
+//!   below it. It is 0.62 dB below to 0.15 dB above on these 1024² maps
 //!   (README), and the test holds every view to 1 dB and no grazing view
-//!   to more steps. It is better on two grazing views of nine, not on all
+//!   to more steps. It is better on five grazing views of nine, not on all
 //!   as the issue also asks: this close a voxel is still a third of a
 //!   pixel wide or more, and single resolution hardly aliases. Beside it:
 //!   the pyramid without the fit, at pixel-to-voxel 0.5, and with the
@@ -159,8 +159,8 @@ fn tiled(scene: &Scene, n: u32) -> Scene {
 /// Far views across 4096² maps (each Comanche pair tiled 4 × 4): terrain
 /// out to 4000 voxels, where a voxel is a seventh of a pixel and single
 /// resolution undersamples. Reported in the README; the test holds the
-/// pyramid to 3 dB below single resolution and to under 0.8 of its steps
-/// (under half without the terrain fit).
+/// pyramid to a higher PSNR than single resolution and to under 0.8 of its
+/// steps (under half without the terrain fit).
 #[test]
 fn far_views_on_tiled_maps() {
     const FAR: [([f32; 3], f32, f32); 3] = [
@@ -207,8 +207,10 @@ fn far_views_on_tiled_maps() {
                 subsample - single
             );
             // The fit may keep more of the view on level 0 on rugged maps,
-            // but never all of it this far out.
-            if pyramid < single - 3.0 || steps >= 0.8 || unfitted_share >= 0.5 {
+            // but never all of it this far out. Here single resolution
+            // aliases, and the pyramid must beat it (the multiresolution
+            // issue's bar).
+            if pyramid <= single || steps >= 0.8 || unfitted_share >= 0.5 {
                 failures.push(format!("C{color} yaw {yaw}"));
             }
         }

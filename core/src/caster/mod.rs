@@ -14,12 +14,13 @@
 //! resumed ray that starts below the
 //! surface retraces backwards to the last sample above it (Qu et al. §4);
 //! the hit is refined between that sample and the first one below by the
-//! ratio of their clearances, and the color blended across both grid lines
-//! (on a coarse level, the finer level's part of the soft transition is read
-//! at the finer level's own grid lines, one of them halfway along the step).
+//! ratio of their clearances. Near the eye the color is level 0's, blended
+//! across both grid lines; farther out it comes from the levels the pixel's
+//! footprint brackets, on a schedule of its own ([`footprint_color`]).
 
 mod budget;
 mod first_hit;
+mod footprint_color;
 pub(crate) mod walk;
 
 pub use budget::{FrameCost, Governor};
@@ -33,6 +34,7 @@ use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
 use first_hit::first_hit;
 use fixed::types::U8F8;
+use footprint_color::footprint_color;
 use walk::{lerp, walk, Recent, Stage, Walk};
 
 /// How each ray of an image line may use the ray before it.
@@ -121,8 +123,9 @@ impl VerticalSamples {
 pub enum Shading {
     /// The two voxels across the grid line blended by the fraction of the
     /// minor coordinate (a shift and a mask), on the grid lines before and
-    /// after the crossing, blended by where it lies, and the adjacent
-    /// levels blended by depth (the soft transition).
+    /// after the crossing, blended by where it lies; past the color reach,
+    /// bilinear on the two levels the pixel's footprint brackets, blended
+    /// by depth (the soft transition; see `footprint_color`).
     Subvoxel,
     /// The voxel nearest the hit sample, on its level: no blend. Cheaper
     /// and blockier: the baseline the subvoxel weights are measured
@@ -145,10 +148,11 @@ pub struct RenderOptions {
     pub vertical_samples: VerticalSamples,
     /// How hits are colored.
     pub shading: Shading,
-    /// On the pyramid, scale the pixel-to-voxel ratio down by the
-    /// terrain's roughness ([`crate::roughness::terrain_fit`]), so that a
-    /// coarse level's silhouettes are within a quarter pixel where it
-    /// begins. No effect on smooth maps, nor on surfaces whose roughness
+    /// On the pyramid, scale the pixel-to-voxel ratio the height levels
+    /// switch by down by the terrain's roughness
+    /// ([`crate::roughness::terrain_fit`]), so that a coarse level's
+    /// silhouettes are within a quarter pixel where it begins. Colors
+    /// switch by the ratio as given. No effect on smooth maps, nor on surfaces whose roughness
     /// is unknown.
     pub terrain_fit: bool,
     /// Color of rays that leave the terrain.
@@ -583,34 +587,41 @@ fn shade<'s, T: Surface + ?Sized, P: Probe>(
     let color = if options.shading == Shading::Nearest {
         stage.nearest_color(&ray.color_cursor(&hit), probe)
     } else {
-        // Where the sample before the crossing lies: subvoxel colors only.
-        let before = before.map(|(k, t)| (ray.cursor_before(surface, &hit, k), t));
-        match before
-            .as_ref()
-            .and_then(|(before, t)| stage.color_within_step(ray, before, &hit, *t, probe))
-        {
-            Some(color) => Some(color),
-            None => stage
+        // Most hits are near the eye, on level 0 (the crossing is no
+        // farther than the hit sample): their colors need no coarse level,
+        // and the far hits' work (not inlined) stays out of their way.
+        let near = hit.level == 0 && ray.distance(hit.k) < ray.color_reach;
+        let far = if near {
+            None
+        } else {
+            let f = before.map_or(0, |(_, f)| f);
+            footprint_color(surface, ray, &hit, below, above, f, probe)
+        };
+        far.or_else(|| {
+            // Level 0 is fine enough: its colors on the hit's grid line and
+            // (when known) the one before, blended by where the ray crossed.
+            let on_hit_line = stage
                 .color(&ray.color_cursor(&hit), probe)
-                .or_else(|| stage.color(&hit, probe))
-                .map(|on_hit_line| match before {
-                    Some((before, t)) => {
-                        // Mostly on the hit's level: its stage is at hand.
-                        let other_level;
-                        let before_stage = if before.level == hit.level {
-                            &stage
-                        } else {
-                            other_level = Stage::new(surface, ray, before.level);
-                            &other_level
-                        };
-                        match before_stage.color(&ray.color_cursor(&before), probe) {
-                            Some(on_line_before) => lerp(on_line_before, on_hit_line, t),
-                            None => on_hit_line,
-                        }
-                    }
+                .or_else(|| stage.color(&hit, probe))?;
+            let Some((k, f)) = before else {
+                return Some(on_hit_line);
+            };
+            let before = ray.cursor_before(surface, &hit, k);
+            // Mostly on the hit's level: its stage is at hand.
+            let other_level;
+            let before_stage = if before.level == hit.level {
+                &stage
+            } else {
+                other_level = Stage::new(surface, ray, before.level);
+                &other_level
+            };
+            Some(
+                match before_stage.color(&ray.color_cursor(&before), probe) {
+                    Some(on_line_before) => lerp(on_line_before, on_hit_line, f),
                     None => on_hit_line,
-                }),
-        }
+                },
+            )
+        })
     };
     let Some(color) = color else {
         return sky(options);
@@ -720,49 +731,51 @@ mod tests {
         assert!(subvoxel.iter().any(|c| c[0] > 20 && c[0] < 235));
     }
 
-    /// On a level `≥ 1` a step spans two grid lines of the level below. The
-    /// soft transition reads that level at the line halfway too: a stripe
-    /// there, invisible to the coarser level and to the two lines the step
-    /// joins, shows through where the ray crosses near it, by the finer
-    /// level's weight.
+    /// Colors follow the pixel's footprint, not the level the heights are
+    /// stepped on: with the height levels pushed past the map (a small
+    /// terrain fit), a far hit on level 0 is shaded from the coarse
+    /// levels, blended in from the color reach on.
     #[test]
-    fn the_finer_level_is_read_at_its_own_line_within_a_coarse_step() {
+    fn far_hits_take_the_footprints_colors_while_heights_stay_on_level_0() {
         use crate::pyramid::{pyramid_cells, pyramid_points};
-        use crate::view::ray::T_ONE;
         use crate::{Camera, Terrain};
         use std::vec;
-        // Flat, black, with white on every odd x: the grid lines of level 0
-        // that level 1 (whose colors are left black) does not have.
+        // Flat; level 0 black with white on every odd x, the coarse levels
+        // (their storage filled by hand) gray.
         let heights = vec![0u16; 64 * 64];
         let colors: vec::Vec<Rgb> = (0..64 * 64).map(|i| [(i % 2 * 255) as u8; 3]).collect();
         let terrain = Terrain::new(64, 64, &heights, &colors).unwrap();
         let n = pyramid_points(64, 64);
-        let (ph, pc, pb) = (vec![0; n], vec![[0; 3]; n], vec![0; pyramid_cells(64, 64)]);
+        let (ph, pc, pb) = (
+            vec![0; n],
+            vec![[128; 3]; n],
+            vec![0; pyramid_cells(64, 64)],
+        );
         let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
-        // Along +x, from low over the west edge; level 1 begins 14 voxels
-        // out (pixel-to-voxel ratio 4).
         let view = View::new(&Camera::looking([0.5, 30.2, 3.0], 0.0, 0.0), 64, 8).unwrap();
-        let plan = LodPlan::new(&view, 4 << 8, 1 << 16, pyramid.top());
+        // Colors reach level 1 14 voxels out (ratio 4); heights 16 times
+        // farther, past the map.
+        let plan = LodPlan::new(&view, 4 << 8, 1 << 12, pyramid.top());
         let ray = view.pixel_ray(&terrain.extent(), &plan, 32, 48);
-        assert!(ray.key.x_major && ray.key.forward);
-        let mut k = ray.start;
-        while ray.cursor(&pyramid, k).level == 0 || !ray.on_level_grid(k, 1) {
-            k += 1;
+        let (mut near, mut blended, mut far) = (0, 0, 0);
+        for k in ray.start..=ray.end {
+            let hit = ray.cursor(&pyramid, k);
+            assert_eq!(hit.level, 0);
+            let color = footprint_color(&pyramid, &ray, &hit, -1, None, 0, &mut crate::NoProbe);
+            let distance = ray.distance(k);
+            if distance < ray.color_reach {
+                assert_eq!(color, None, "level 0 alone, at sample {k}");
+                near += 1;
+            } else if distance >= 2 * ray.color_reach {
+                assert_eq!(color, Some([128; 3]), "coarse levels only, at sample {k}");
+                far += 1;
+            } else {
+                let [r, g, b] = color.unwrap();
+                assert!(r == g && g == b && r != 0 && r != 128 && r != 255, "{r}");
+                blended += 1;
+            }
         }
-        let (before, hit) = (ray.cursor(&pyramid, k), ray.cursor(&pyramid, k + 2));
-        assert_eq!((before.level, hit.level), (1, 1));
-        assert!(hit.t < T_ONE / 2, "the finer level must still weigh");
-        let stage = Stage::new(&pyramid, &ray, 1);
-        let shade_at = |f| stage.color_within_step(&ray, &before, &hit, f, &mut crate::NoProbe);
-        // On the two lines the step joins, both levels are black.
-        assert_eq!(shade_at(0), Some([0; 3]));
-        assert_eq!(shade_at(256), Some([0; 3]));
-        // Halfway the finer level's white line shows, by its weight.
-        let [r, g, b] = shade_at(128).unwrap();
-        assert!(r > 128 && r == g && g == b, "{r}");
-        // The colors on the two lines alone, blended, would be black.
-        let line = |at: &Cursor| stage.color(at, &mut crate::NoProbe).unwrap();
-        assert_eq!(lerp(line(&before), line(&hit), 128), [0; 3]);
+        assert!(near > 0 && blended > 0 && far > 0, "{near} {blended} {far}");
     }
 
     #[test]

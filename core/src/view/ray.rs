@@ -49,17 +49,24 @@ pub(crate) struct LodPlan {
     level1_depth: i64,
     /// Highest level the frame may use.
     top: u8,
+    /// Depth where colors begin to come from level 1, Q16: the ratio as
+    /// given, not scaled by the terrain fit (colors have no height error
+    /// to keep small; see [`Ray::color_reach`]).
+    color_level1_depth: i64,
 }
 
 impl LodPlan {
     /// Levels up to `top`, switching by `pixel_to_voxel` (U8.8; 0 counts as
     /// 1/256) scaled by `fit` (Q16, at most 1; see
-    /// [`crate::roughness::terrain_fit`]).
+    /// [`crate::roughness::terrain_fit`]; colors switch by the ratio
+    /// alone).
     pub fn new(view: &View, pixel_to_voxel: u16, fit: u32, top: u8) -> Self {
-        let ratio = i64::from(pixel_to_voxel.max(1)) * i64::from(fit.clamp(1, 1 << 16));
+        let pixel_to_voxel = i64::from(pixel_to_voxel.max(1));
+        let ratio = pixel_to_voxel * i64::from(fit.clamp(1, 1 << 16));
         Self {
             level1_depth: (view.focal << 24) / ratio,
             top: top.min(MAX_WALK_LEVEL as u8),
+            color_level1_depth: (view.focal << 8) / pixel_to_voxel,
         }
     }
 
@@ -67,6 +74,7 @@ impl LodPlan {
     pub const SINGLE: Self = Self {
         level1_depth: i64::MAX,
         top: 0,
+        color_level1_depth: i64::MAX,
     };
 }
 
@@ -114,6 +122,17 @@ pub(crate) struct Ray {
     /// that far aside.
     pub color_drift: i32,
     pub lod: Lod,
+    /// Major-axis distance where colors begin to come from level 1, Q16
+    /// (`i64::MAX` at single resolution): level `l` is blended in from
+    /// `reach << (l − 1)`. Colors have their own schedule, by the ratio as
+    /// given: a coarse level's heights are off by the terrain's detail,
+    /// which the terrain fit keeps in check by moving the height levels
+    /// out; its colors are the same photo, low-passed, which is what a
+    /// pixel as wide as a voxel of that level should show.
+    pub color_reach: i64,
+    /// The highest level colors may come from: the frame's, whatever this
+    /// ray's heights may use.
+    pub color_top: u8,
     /// The level schedule, worked out once per ray because the caster asks
     /// for it several times a ray: `begins[l]` is the first sample of level
     /// `l` (`begins[0] = first`), known for `l < known`, which covers every
@@ -372,6 +391,11 @@ impl View {
             minor_max: minor_max.clamp(0, i64::from(i32::MAX)) as i32,
             color_drift: 0,
             lod: Lod::new(plan, run, dz, delta0, end),
+            color_reach: match plan.color_level1_depth {
+                i64::MAX => i64::MAX,
+                depth => clamp_in_place((depth.min(1 << 40) * (run >> 16)) >> 16, 1, 1 << 40),
+            },
+            color_top: plan.top,
             begins: [i32::MAX; LEVEL_SLOTS],
             known: 1,
         }
@@ -711,6 +735,34 @@ impl Ray {
         }
     }
 
+    /// The distance from the eye along the major axis, Q16, of the point
+    /// `k`/256 samples from sample 0 (never negative).
+    #[inline]
+    pub fn distance_q8(&self, k: i64) -> i64 {
+        (self.delta0 + (k << (COORD_FRAC_BITS - 8))).max(0)
+    }
+
+    /// The world position (x, y), Q16, of the point `k`/256 samples from
+    /// sample 0, `distance` ([`Ray::distance_q8`]) from the eye, its minor
+    /// coordinate moved by the color drift as [`Ray::color_cursor`] moves
+    /// it: where a crossing's color is looked up.
+    #[inline]
+    pub fn color_point(&self, k: i64, distance: i64) -> [i64; 2] {
+        let along = k << (COORD_FRAC_BITS - 8);
+        let major =
+            (self.major0 << COORD_FRAC_BITS) + if self.key.forward { along } else { -along };
+        let mut minor = self.minor0 + ((k * i64::from(self.dminor.to_bits())) >> 8);
+        if self.color_drift != 0 {
+            minor += (i64::from(self.color_drift) * distance) >> COORD_FRAC_BITS;
+        }
+        let minor = clamp_in_place(minor, 0, i64::from(self.minor_max));
+        if self.key.x_major {
+            [major, minor]
+        } else {
+            [minor, major]
+        }
+    }
+
     /// Minor coordinate and height at sample `k`, Q16, without narrowing.
     #[inline]
     pub fn position(&self, k: i32) -> (i64, i64) {
@@ -833,6 +885,7 @@ mod tests {
         let plan = LodPlan {
             level1_depth: 3 << 16,
             top: 4,
+            color_level1_depth: i64::MAX,
         };
         view.pixel_ray(&terrain.extent(), &plan, 32, 0)
     }
@@ -893,6 +946,7 @@ mod tests {
         let plan = LodPlan {
             level1_depth: 20 << 16,
             top: 4,
+            color_level1_depth: i64::MAX,
         };
         let short = view.pixel_ray(&terrain.extent(), &plan, 32, 0);
         assert!((3..=8).contains(&short.end), "end {}", short.end);
@@ -919,6 +973,7 @@ mod tests {
         let plan = LodPlan {
             level1_depth: 3 << 16,
             top: 4,
+            color_level1_depth: i64::MAX,
         };
         let same = |a: &Cursor, b: &Cursor| {
             (a.k, a.level, a.base, a.base_below, a.minor, a.z, a.t)
