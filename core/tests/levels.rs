@@ -174,21 +174,21 @@ fn the_terrain_fit_scales_the_ratio_on_rugged_maps_only() {
     };
     // Ridges one voxel high on every other grid line, on a gentle slope:
     // each point is a voxel off the line between its neighbours, so the
-    // roughness is 1 voxel per voxel (64/64) and the fit a quarter.
+    // roughness is 1 voxel per voxel (64/64) and the fit an eighth.
     let rugged = Map::new(257, |x, y| 20.0 + (x % 2) as f32 + 0.3 * y as f32);
     let pyramid = rugged.pyramid();
     let roughness = pyramid.roughness();
     assert_eq!(roughness, 64);
     let fit = terracast::roughness::terrain_fit(roughness);
-    assert_eq!(fit, 1 << 14);
+    assert_eq!(fit, 1 << 13);
     let (fitted, fitted_depths, fitted_probe) =
         frame(&pyramid, &camera, (96, 64), &RenderOptions::default());
     let (given, _, given_probe) = frame(&pyramid, &camera, (96, 64), &fit_off(Resolution::DEFAULT));
-    let quarter = Resolution::Multi {
-        pixel_to_voxel: U8F8::from_num(0.25),
+    let eighth = Resolution::Multi {
+        pixel_to_voxel: U8F8::from_num(0.125),
     };
     let (scaled, scaled_depths, scaled_probe) =
-        frame(&pyramid, &camera, (96, 64), &fit_off(quarter));
+        frame(&pyramid, &camera, (96, 64), &fit_off(eighth));
     assert!(
         fitted_depths == scaled_depths && fitted_probe.steps == scaled_probe.steps,
         "the fit's heights are not the ratio scaled by it"

@@ -7,11 +7,12 @@
 //!   ≥ 99.5 %, median relative depth error ≤ 0.5 % for both.
 //! * The pyramid (with the terrain fit, the default) against single
 //!   resolution: the multiresolution issue asks for no more than 1 dB
-//!   below it. It is 0.62 dB below to 0.15 dB above on these 1024² maps
-//!   (README), and the test holds every view to 1 dB and no grazing view
-//!   to more steps. It is better on five grazing views of nine, not on all
-//!   as the issue also asks: this close a voxel is still a third of a
-//!   pixel wide or more, and single resolution hardly aliases. Beside it:
+//!   below it, and better on far, grazing views. On these 1024² maps the
+//!   fit keeps the heights on level 0 (no coarse height level begins inside
+//!   them at 640 × 360), the colors take the coarse levels past 554
+//!   voxels, and the pyramid is 0 to 0.08 dB above single resolution
+//!   (README). The test holds every view to 1 dB below at most, and each
+//!   grazing view to a higher PSNR and no more steps. Beside it:
 //!   the pyramid without the fit, at pixel-to-voxel 0.5, and with the
 //!   other height filters (subsample, mean and max).
 //! * Far views on 4096² maps (each pair tiled 4 × 4), in
@@ -136,6 +137,13 @@ fn kernel_matches_reference_on_comanche_maps() {
                     "grazing C{color}/D{height} yaw {yaw}: pyramid takes more steps"
                 ));
             }
+            // The issue's bar on far, grazing views: better than single
+            // resolution (here by its colors alone; see the far views).
+            if grazing && pyramid <= single {
+                failures.push(format!(
+                    "grazing C{color}/D{height} yaw {yaw}: pyramid {pyramid:.3} dB not above single {single:.3} dB"
+                ));
+            }
         }
     }
     assert!(
@@ -159,8 +167,8 @@ fn tiled(scene: &Scene, n: u32) -> Scene {
 /// Far views across 4096² maps (each Comanche pair tiled 4 × 4): terrain
 /// out to 4000 voxels, where a voxel is a seventh of a pixel and single
 /// resolution undersamples. Reported in the README; the test holds the
-/// pyramid to a higher PSNR than single resolution and to under 0.8 of its
-/// steps (under half without the terrain fit).
+/// pyramid to a higher PSNR than single resolution and to fewer steps
+/// (under half without the terrain fit).
 #[test]
 fn far_views_on_tiled_maps() {
     const FAR: [([f32; 3], f32, f32); 3] = [
@@ -206,11 +214,11 @@ fn far_views_on_tiled_maps() {
                 half_steps as f64 / single_steps as f64,
                 subsample - single
             );
-            // The fit may keep more of the view on level 0 on rugged maps,
+            // The fit may keep most of the view on level 0 on rugged maps,
             // but never all of it this far out. Here single resolution
             // aliases, and the pyramid must beat it (the multiresolution
             // issue's bar).
-            if pyramid <= single || steps >= 0.8 || unfitted_share >= 0.5 {
+            if pyramid <= single || steps >= 1.0 || unfitted_share >= 0.5 {
                 failures.push(format!("C{color} yaw {yaw}"));
             }
         }

@@ -151,7 +151,7 @@ pub struct RenderOptions {
     /// On the pyramid, scale the pixel-to-voxel ratio the height levels
     /// switch by down by the terrain's roughness
     /// ([`crate::roughness::terrain_fit`]), so that a coarse level's
-    /// silhouettes are within a quarter pixel where it begins. Colors
+    /// silhouettes are within an eighth of a pixel (RMS) where it begins. Colors
     /// switch by the ratio as given. No effect on smooth maps, nor on surfaces whose roughness
     /// is unknown.
     pub terrain_fit: bool,

@@ -314,12 +314,14 @@ struct RenderArgs {
     resolution: ResolutionArg,
     /// Kernel: the pixel-to-voxel ratio of the level switch. A level is left
     /// where its voxels get narrower than 1/RATIO pixels: higher is faster
-    /// and blurrier. Scaled down on rugged terrain by --terrain-fit.
+    /// and blurrier. Colors switch by it as given; heights by it scaled
+    /// down on rugged terrain by --terrain-fit.
     #[arg(long, default_value_t = 1.0, value_name = "RATIO")]
     pixel_to_voxel: f32,
-    /// Kernel: scale the pixel-to-voxel ratio down by the terrain's
-    /// roughness, so that coarse levels begin where their silhouettes are
-    /// within a quarter pixel (`on`), or use it as given (`off`).
+    /// Kernel: scale the pixel-to-voxel ratio of the height levels down by
+    /// the terrain's roughness, so that coarse levels begin where their
+    /// silhouettes are within an eighth of a pixel, RMS (`on`), or use it
+    /// as given (`off`).
     #[arg(long, value_enum, default_value_t = TerrainFitArg::On)]
     terrain_fit: TerrainFitArg,
     /// Kernel: how the pyramid's coarse heights are made [default:
