@@ -67,17 +67,15 @@ pub(crate) fn footprint_color<T: Surface + ?Sized, P: Probe>(
         _ => return None,
     };
     let point = ray.color_point(k, distance);
-    // Weight 0 or 1 reads one level only.
-    let finer = if t < 1 << WEIGHT_BITS {
-        Some(bilinear(surface, level - 1, point, probe)?)
-    } else {
-        None
-    };
-    let coarser = if t > 0 {
-        Some(bilinear(surface, level, point, probe)?)
-    } else {
-        None
-    };
+    // Weight 0 or 1 reads one level only. A level that finds no color (at
+    // the map's edge) leaves the other's: once a fetch is reported, the
+    // caller must not make two more (`MAX_COLOR_FETCHES_A_RAY`).
+    let finer = (t < 1 << WEIGHT_BITS)
+        .then(|| bilinear(surface, level - 1, point, probe))
+        .flatten();
+    let coarser = (t > 0)
+        .then(|| bilinear(surface, level, point, probe))
+        .flatten();
     match (finer, coarser) {
         (Some(finer), Some(coarser)) => Some(lerp(finer, coarser, t)),
         (Some(color), None) | (None, Some(color)) => Some(color),
