@@ -108,7 +108,7 @@ fn narrower_side(distance: i64, steps: i32, above: Option<(i32, i32)>, below: i3
 /// into level `l` by `t`/256, from 0 at `reach << (l − 1)` to 1 at
 /// `reach << l`; past level `top`'s end, `(top, 256)`. `None` before
 /// `reach` (level 0 alone) and when there is no level 1.
-pub(crate) fn color_level(width: i64, reach: i64, top: u8) -> Option<(u8, u32)> {
+fn color_level(width: i64, reach: i64, top: u8) -> Option<(u8, u32)> {
     if width < reach || top == 0 {
         return None;
     }
