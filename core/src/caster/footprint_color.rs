@@ -24,6 +24,7 @@
 //! slope's colors over many rows of pixels. By the narrower side nothing
 //! the pixel resolves is blurred.
 
+use super::fraction_256;
 use super::walk::lerp;
 use crate::config::{COORD_FRAC_BITS, WEIGHT_BITS};
 use crate::probe::Probe;
@@ -123,12 +124,12 @@ fn color_level(width: i64, reach: i64, top: u8) -> Option<(u8, u32)> {
     Some((level, fraction(width - begins, begins)))
 }
 
-/// `num / den` in 1/256 (`0 ≤ num < den`), with a 32-bit division.
+/// `num / den` in 1/256 (`0 ≤ num < den`), both brought under 2^32 for
+/// the caster's 32-bit [`fraction_256`].
 #[inline]
 fn fraction(num: i64, den: i64) -> u32 {
-    let shift = (64 - den.leading_zeros()).saturating_sub(24);
-    let (num, den) = ((num >> shift) as u32, ((den >> shift) as u32).max(1));
-    ((num << WEIGHT_BITS) / den).min(1 << WEIGHT_BITS)
+    let shift = (64 - den.leading_zeros()).saturating_sub(32);
+    fraction_256((num >> shift) as u32, (den >> shift) as u32)
 }
 
 /// The color at world point `point` (Q16) on `level`: its four grid points

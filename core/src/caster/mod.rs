@@ -668,7 +668,13 @@ fn crossing(
 /// One division a pixel, outside the per-step loop.
 fn crossing_fraction(above: i32, below: i32) -> u32 {
     let num = above.unsigned_abs();
-    let den = num + below.unsigned_abs();
+    fraction_256(num, num + below.unsigned_abs())
+}
+
+/// `num / den` in 1/256 (`num ≤ den`): one 32-bit division, of both
+/// brought under 2^24 so that the numerator's 8 extra bits fit.
+#[inline]
+fn fraction_256(num: u32, den: u32) -> u32 {
     let shift = (32 - den.leading_zeros()).saturating_sub(24);
     ((num >> shift) << 8) / (den >> shift).max(1)
 }
