@@ -227,8 +227,8 @@ mod tests {
     }
 
     proptest! {
-        /// The slope's and the level weight's shapes: a Q16-shifted
-        /// direction component over a run of up to 42 bits.
+        /// The slope's shape: a Q16-shifted direction component over a
+        /// run of up to 42 bits.
         #[test]
         fn per_ray_quotients_are_exact(n in -(1i64 << 58)..(1i64 << 58), d in 1i64..(1i64 << 42)) {
             prop_assert_eq!(narrow_div_trunc(n, d), n / d);

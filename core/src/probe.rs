@@ -21,9 +21,9 @@ pub trait Probe {
         let _ = (level, cell);
     }
     /// The colors of voxel `voxel` of level `level` and its minor-axis
-    /// neighbour were fetched to shade a pixel (and the level below's), or,
-    /// past the color reach, the four around the crossing on `level`. At
-    /// most [`MAX_COLOR_FETCHES_A_RAY`] a ray.
+    /// neighbour were fetched to shade a pixel, or, past the color reach,
+    /// the four around the crossing on `level`. At most
+    /// [`MAX_COLOR_FETCHES_A_RAY`] a ray.
     #[inline(always)]
     fn color(&mut self, level: u8, voxel: usize) {
         let _ = (level, voxel);

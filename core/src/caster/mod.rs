@@ -524,7 +524,12 @@ fn shade_above<T: Surface + ?Sized, P: Probe>(
     probe: &mut P,
 ) -> Sample {
     let at = ray.cursor(surface, k);
-    match Stage::new(surface, ray, at.level).color(&ray.color_cursor(&at), probe) {
+    // Colored as a hit there would be: by the footprint past the color
+    // reach (at the sample itself; there is no crossing), else level 0's
+    // grid line.
+    let color = footprint_color(surface, ray, &at, 0, None, 0, probe)
+        .or_else(|| Stage::new(surface, ray, at.level).color(&ray.color_cursor(&at), probe));
+    match color {
         Some(color) => Sample {
             color,
             distance: ray.distance(k).clamp(0, i64::from(Sample::SKY - 1)) as u32,

@@ -18,7 +18,7 @@ use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS, WEIGHT_BITS};
 use crate::probe::NoProbe;
 use crate::probe::Probe;
 use crate::surface::{Grid, Surface};
-use crate::view::ray::{Cursor, Ray, T_ONE};
+use crate::view::ray::{Cursor, Ray};
 use crate::Rgb;
 
 /// Everything a step on one level needs, fixed while the ray stays there.
@@ -26,11 +26,8 @@ use crate::Rgb;
 pub(crate) struct Stage<G> {
     level: u8,
     here: G,
-    /// The level below, for the color blend (`here` again at level 0).
-    below: G,
-    /// Index change across a minor grid line, here and on the level below.
+    /// Index change across a minor grid line.
     minor_stride: isize,
-    minor_stride_below: isize,
     /// Index change per step, here and on the level below (two of its grid
     /// lines per step).
     step: isize,
@@ -58,24 +55,12 @@ impl<G: Grid> Stage<G> {
     {
         let level = level.min(surface.top());
         let here = surface.grid(level).unwrap_or_else(|| surface.base());
-        let below = level
-            .checked_sub(1)
-            .and_then(|l| surface.grid(l))
-            .unwrap_or(here);
-        let x_major = ray.key.x_major;
         let sign = if ray.key.forward { 1 } else { -1 };
-        let (major_stride, minor_stride) = strides(here.stride(), x_major);
-        let minor_below = if level > 0 {
-            strides(below.stride(), x_major).1
-        } else {
-            0
-        };
+        let (major_stride, minor_stride) = strides(here.stride(), ray.key.x_major);
         Self {
             level,
             here,
-            below,
             minor_stride,
-            minor_stride_below: minor_below,
             step: sign * major_stride,
             dminor: ray.dminor.to_bits() << level,
             dz: ray.dz.to_bits() << level,
@@ -166,27 +151,15 @@ impl<G: Grid> Stage<G> {
         self.here.color(nearest)
     }
 
-    /// The color where a sample's grid line is crossed: two voxels blended by
-    /// the subvoxel weight, on this level and on the one below, blended by
-    /// the sample's level weight `t` (the soft transition).
+    /// The color where a sample's grid line is crossed: two voxels of this
+    /// level blended by the subvoxel weight. (Past the color reach, hits
+    /// take the levels their footprint brackets instead:
+    /// `caster::footprint_color`.)
     ///
-    /// Reported to `probe` once both levels gave a color: a lookup that
-    /// finds none leaves the caller to try another, uncounted.
+    /// Reported to `probe` once a color was found: a lookup that finds
+    /// none leaves the caller to try another, uncounted.
     pub fn color<P: Probe>(&self, at: &Cursor, probe: &mut P) -> Option<Rgb> {
-        let here = line_color(&self.here, at.base, self.minor_stride, at.minor, self.level)?;
-        let color = if self.level == 0 {
-            here
-        } else {
-            let below = line_color(
-                &self.below,
-                at.base_below,
-                self.minor_stride_below,
-                at.minor,
-                self.level - 1,
-            )?;
-            let t = (at.t.clamp(0, T_ONE) >> (COORD_FRAC_BITS - WEIGHT_BITS)) as u32;
-            lerp(below, here, t)
-        };
+        let color = line_color(&self.here, at.base, self.minor_stride, at.minor, self.level)?;
         probe.color(
             self.level,
             index(at.base, self.minor_stride, at.minor, self.level) as usize,
@@ -301,20 +274,15 @@ pub(crate) fn walk<'s, T: Surface + ?Sized, P: Probe>(
                 cell,
             } => {
                 recent.add(cell);
-                let at = if stage.level == 0 {
-                    // Level 0 needs no level weight: the loop's values are
-                    // the cursor.
-                    Cursor {
-                        k,
-                        level: 0,
-                        base,
-                        base_below: 0,
-                        minor,
-                        z,
-                        t: 0,
-                    }
-                } else {
-                    ray.cursor(surface, k)
+                // The loop's values are the cursor: stepping lands on the
+                // directly computed positions, on every level (tested
+                // below).
+                let at = Cursor {
+                    k,
+                    level: stage.level,
+                    base,
+                    minor,
+                    z,
                 };
                 return Walk::Hit {
                     at,

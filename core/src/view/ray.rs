@@ -18,10 +18,9 @@
 //! at level `l` only when `major(k)` is a multiple of `2^l`, and steps there
 //! by `2^l`, with doubled increments.
 //!
-//! Within level `l` a weight `t = depth / (2^(l−1)·D1) − 1` runs from 0
-//! where the level begins to 1 where it ends; a hit's color is level
-//! `l − 1`'s blended into level `l`'s by it, so colors do not jump at a
-//! switch. `t` grows by the same `dt` every step at every level.
+//! Colors have a schedule of their own (`Ray::color_reach`, by the ratio
+//! as given; see `caster::footprint_color`), blended between levels by
+//! depth, so they do not jump where the heights switch.
 
 use super::View;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, MAX_WALK_LEVEL};
@@ -30,9 +29,6 @@ use crate::surface::{Extent, Surface};
 use fixed::types::I16F16;
 
 const ONE: i64 = 1 << COORD_FRAC_BITS;
-
-/// Morph weight of a whole level, Q16.
-pub(crate) const T_ONE: i32 = 1 << COORD_FRAC_BITS;
 
 /// Which family of grid lines a ray steps across. Two rays with the same key
 /// number their samples identically, so one can resume where the other hit.
@@ -79,14 +75,12 @@ impl LodPlan {
 }
 
 /// A ray's level schedule. Two rays with equal `Lod` (and key) visit the
-/// same samples at the same levels with the same level weights.
+/// same samples at the same levels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Lod {
     /// Major-axis distance where level 1 begins, Q16 (level `l` begins at
     /// `reach << (l − 1)`).
     reach: i64,
-    /// Morph-weight growth per step, Q16 of a level.
-    pub dt: i32,
     /// Highest level this ray uses.
     pub top: u8,
 }
@@ -153,15 +147,11 @@ pub(crate) struct Cursor {
     pub k: i32,
     pub level: u8,
     /// Index of the level's grid-line start (`floor(minor) = 0`) in the
-    /// level's grid, and the same on the level below (for the color blend;
-    /// 0 on level 0).
+    /// level's grid.
     pub base: isize,
-    pub base_below: isize,
     /// Minor coordinate (world voxels) and height, Q16.
     pub minor: i32,
     pub z: i32,
-    /// Level weight `t`, Q16, unclamped (see [`Ray::level_weight`]).
-    pub t: i32,
 }
 
 /// What every ray of an image line shares: its vertical plane. The
@@ -473,7 +463,6 @@ impl Lod {
     fn new(plan: &LodPlan, run: i64, dz: i64, delta0: i64, end: i64) -> Self {
         const SINGLE: Lod = Lod {
             reach: i64::MAX,
-            dt: 0,
             top: 0,
         };
         // Doubling must keep the height increment inside I16F16 with room
@@ -493,16 +482,12 @@ impl Lod {
             1 << 40,
         );
         // A ray that ends before level 1 can begin steps on level 0 only:
-        // it needs no schedule and no level weight (the division below).
-        // It samples and shades exactly as with the levels it never
-        // reaches.
+        // it needs no schedule. It samples exactly as with the levels it
+        // never reaches.
         if first_sample_from(reach, delta0) > end {
             return SINGLE;
         }
-        // t goes from 0 to 1 over the level's `2^(l−1)·reach` voxels, which
-        // are `reach/2` steps of `2^l`: dt = 2 / reach (Q16 over Q16).
-        let dt = div_trunc(1i64 << 33, reach).min(1 << 24) as i32;
-        Self { reach, dt, top }
+        Self { reach, top }
     }
 }
 
@@ -654,18 +639,6 @@ impl Ray {
         k - (1 << self.level_at(k - 1))
     }
 
-    /// The level weight `t` of sample `k` on level `level`, Q16, unclamped.
-    #[inline]
-    fn level_weight(&self, k: i32, level: u8) -> i32 {
-        if level == 0 {
-            return 0;
-        }
-        let distance = self.delta0 + (i64::from(k) << COORD_FRAC_BITS);
-        let t = ((distance * i64::from(self.lod.dt)) >> (COORD_FRAC_BITS + u32::from(level)))
-            - i64::from(T_ONE);
-        saturate(t)
-    }
-
     /// The position of sample `k` on its level, computed directly (not by
     /// stepping), so a resumed ray sees exactly the values it would have
     /// reached by walking.
@@ -697,13 +670,10 @@ impl Ray {
     #[inline]
     fn cursor_on<T: Surface + ?Sized>(&self, surface: &T, k: i32, level: u8) -> Cursor {
         let major = self.major_at(k);
-        let base_on = |level: u8| -> isize {
-            let stride = if self.key.x_major {
-                1
-            } else {
-                surface.stride(level).unwrap_or(1)
-            };
-            (major >> level) as isize * stride
+        let stride = if self.key.x_major {
+            1
+        } else {
+            surface.stride(level).unwrap_or(1)
         };
         let k64 = i64::from(k);
         // Inside [first, end] both values are in range by construction;
@@ -712,11 +682,9 @@ impl Ray {
         Cursor {
             k,
             level,
-            base: base_on(level),
-            base_below: if level > 0 { base_on(level - 1) } else { 0 },
+            base: (major >> level) as isize * stride,
             minor: saturate(self.minor0 + k64 * i64::from(self.dminor.to_bits())),
             z: saturate(self.z0 + k64 * i64::from(self.dz.to_bits())),
-            t: self.level_weight(k, level),
         }
     }
 
@@ -950,12 +918,12 @@ mod tests {
         };
         let short = view.pixel_ray(&terrain.extent(), &plan, 32, 0);
         assert!((3..=8).contains(&short.end), "end {}", short.end);
-        assert_eq!((short.lod.top, short.lod.dt), (0, 0));
+        assert_eq!((short.lod.top, short.lod.reach), (0, i64::MAX));
         assert!((short.first..=short.end).all(|k| short.level_at(k) == 0));
         // A ray with room to run keeps its levels.
         let long = ray_with_levels(true, 0.3);
         assert_eq!(long.lod.top, 4);
-        assert!(long.lod.dt > 0);
+        assert!(long.lod.reach < i64::MAX);
     }
 
     /// `cursor_before` skips working out the level behind a level-0 hit;
@@ -976,8 +944,7 @@ mod tests {
             color_level1_depth: i64::MAX,
         };
         let same = |a: &Cursor, b: &Cursor| {
-            (a.k, a.level, a.base, a.base_below, a.minor, a.z, a.t)
-                == (b.k, b.level, b.base, b.base_below, b.minor, b.z, b.t)
+            (a.k, a.level, a.base, a.minor, a.z) == (b.k, b.level, b.base, b.minor, b.z)
         };
         for (eye, yaw) in [
             ([0.3, 31.5], 0.0),
@@ -1051,24 +1018,6 @@ mod tests {
             for pair in begins.windows(2) {
                 assert!(pair[1] >= 2 * pair[0] - (16 << 16), "{begins:?}");
             }
-        }
-    }
-
-    #[test]
-    fn level_weight_runs_from_zero_to_one_within_each_level() {
-        let ray = ray_with_levels(true, 0.3);
-        for k in ray.start..60 {
-            let level = ray.level_at(k);
-            if level == 0 || !ray.on_level_grid(k, level) {
-                continue;
-            }
-            let t = ray.level_weight(k, level);
-            // One step of slack on either side: the switch waits for the
-            // coarser grid line.
-            assert!(
-                (-ray.lod.dt..=T_ONE + ray.lod.dt * 2).contains(&t),
-                "k {k} t {t}"
-            );
         }
     }
 }
