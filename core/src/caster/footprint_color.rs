@@ -146,8 +146,15 @@ fn bilinear<T: Surface + ?Sized, P: Probe>(
     let cell = point.map(|v| v >> shift);
     let weight = point.map(|v| ((v >> (shift - WEIGHT_BITS)) & ((1 << WEIGHT_BITS) - 1)) as u32);
     let index = cell[1] as isize * grid.stride() + cell[0] as isize;
-    let (c00, c10) = grid.color_pair(index, 1)?;
-    let (c01, c11) = grid.color_pair(index + grid.stride(), 1)?;
+    // A neighbour of weight 0 is not read: a point on the map's last row
+    // or column has none there.
+    let across = isize::from(weight[0] != 0);
+    let (c00, c10) = grid.color_pair(index, across)?;
+    let (c01, c11) = if weight[1] == 0 {
+        (c00, c10)
+    } else {
+        grid.color_pair(index + grid.stride(), across)?
+    };
     probe.color(level, index as usize);
     Some(lerp(
         lerp(c00, c10, weight[0]),
@@ -194,6 +201,24 @@ mod tests {
         );
         // Unknown before: the width across.
         assert_eq!(narrower_side(distance, 1, None, -ONE_I32), distance);
+    }
+
+    #[test]
+    fn bilinear_reads_the_maps_last_row_and_column_without_a_neighbour_past_them() {
+        use crate::{NoProbe, Pyramid, Terrain};
+        let heights = [0u16; 16];
+        let colors: [Rgb; 16] = core::array::from_fn(|i| [(i * 10) as u8, 0, 0]);
+        let terrain = Terrain::new(4, 4, &heights, &colors).unwrap();
+        let pyramid = Pyramid::flat(terrain);
+        let at = |x: i64, y: i64| bilinear(&pyramid, 0, [x, y], &mut NoProbe).map(|c| c[0]);
+        // The far corner, the last column and the last row: grid points.
+        assert_eq!(at(3 * ONE, 3 * ONE), Some(150));
+        assert_eq!(at(3 * ONE, ONE), Some(70));
+        assert_eq!(at(ONE, 3 * ONE), Some(130));
+        // Halfway along the last row: its two points blended.
+        assert_eq!(at(ONE + ONE / 2, 3 * ONE), Some(135));
+        // Past the last row: no color.
+        assert_eq!(at(ONE, 3 * ONE + ONE / 2), None);
     }
 
     #[test]
