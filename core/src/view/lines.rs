@@ -35,7 +35,7 @@
 
 use super::View;
 use crate::config::COORD_FRAC_BITS;
-use crate::divide::div_trunc;
+use crate::divide::{div_ceil, div_trunc};
 
 /// Fractional bits of image-plane positions in the ownership tests.
 const IMG_FRAC: u32 = 8;
@@ -247,7 +247,16 @@ pub(crate) struct Line {
     far: i64,
     nearest_from: i64,
     nearest_to: i64,
+    /// The row skip's terms (see [`OwnedPixels::holds_no_pixel`]): rows
+    /// nearer the vanishing point than `skip_within` (Q8, `far / 2`; 0 for
+    /// no skip) are tested, with `2^30 / far` rounded up.
+    skip_within: u32,
+    inverse_far: u32,
 }
+
+/// The most a line's point ([`Line::cross_at`], Q16) is off the exact
+/// line: the slope's truncation and the shift's, with room to spare.
+const CROSS_ERROR_Q16: i64 = 4;
 
 /// A pixel a line owns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -297,14 +306,24 @@ impl View {
         };
         let (s_v, t_v) = sector.vanishing.unwrap_or((0, 0));
         let k_t = (i64::from(k) << IMG_FRAC) - t_v;
+        let far = ((i64::from(sector.s_ref) << IMG_FRAC) - s_v).abs();
+        // Both under 2^31: one 32-bit divide on a 32-bit core.
+        let (skip_within, inverse_far) = match sector.vanishing {
+            Some(_) if (1..1 << 30).contains(&far) => {
+                ((far / 2) as u32, div_ceil(1 << 30, far) as u32)
+            }
+            _ => (0, 0),
+        };
         Some(Line {
             sector,
             k,
             reference,
             slope,
-            far: ((i64::from(sector.s_ref) << IMG_FRAC) - s_v).abs(),
+            far,
             nearest_from: k_t - IMG_ONE / 2,
             nearest_to: k_t + IMG_ONE / 2,
+            skip_within,
+            inverse_far,
         })
     }
 
@@ -422,6 +441,34 @@ pub(crate) struct OwnedPixels {
     top_row: i32,
 }
 
+impl OwnedPixels {
+    /// Whether row `s` holds none of the line's pixels, by one product:
+    /// a pixel the line owns lies within its share of the row, `a / far`
+    /// pixels wide and centered on the line's point `t_q16` (`a` the row's
+    /// distance from the vanishing point; [`Line::owns`]). So if even the
+    /// pixel `nearest` to the point lies outside, no pixel does. Near the
+    /// vanishing point the lines are closer than a pixel and most rows hold
+    /// none, so this spares them the exact test; it never rejects a row
+    /// the exact test would not (the share is rounded up, the point's
+    /// error allowed for). Rows where the share is half a pixel or more
+    /// mostly hold a pixel and go straight to the exact test.
+    #[inline(always)]
+    fn holds_no_pixel(&self, s: i32, t_q16: i64, nearest: i32) -> bool {
+        let Some((s_v, _)) = self.line.sector.vanishing else {
+            return false;
+        };
+        let a = ((i64::from(s) << IMG_FRAC) - s_v).unsigned_abs();
+        if a >= u64::from(self.line.skip_within) {
+            return false;
+        }
+        // Half the share, Q16: 2^15 · a / far, rounded up (a < 2^29: one
+        // 32 × 32-bit product).
+        let half_share = ((a * u64::from(self.line.inverse_far)) >> 15) as i64 + 1;
+        let miss = ((i64::from(nearest) << COORD_FRAC_BITS) - t_q16).abs();
+        miss > half_share + CROSS_ERROR_Q16
+    }
+}
+
 impl Iterator for OwnedPixels {
     type Item = Owned;
 
@@ -446,6 +493,9 @@ impl Iterator for OwnedPixels {
             // The owned pixel is within half a pixel of the line, so it is
             // the nearest one or (by rounding) a neighbour.
             let nearest = ((t_q16 + (1 << (COORD_FRAC_BITS - 1))) >> COORD_FRAC_BITS) as i32;
+            if self.holds_no_pixel(s, t_q16, nearest) {
+                continue;
+            }
             let other = if t_q16 >= i64::from(nearest) << COORD_FRAC_BITS {
                 nearest + 1
             } else {
@@ -516,6 +566,42 @@ mod tests {
                             .collect::<vec::Vec<_>>()
                     );
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn the_row_skip_passes_every_row_that_holds_a_pixel_of_the_line() {
+        for (pitch, size) in [
+            (30.0, (64, 48)),
+            (60.0, (63, 47)),
+            (89.9, (64, 48)),
+            (90.0, (640, 480)),
+        ] {
+            let view = view(pitch, 25.0, size, 60.0);
+            let (mut rows, mut skipped) = (0u32, 0u32);
+            for index in 0..view.lines() {
+                let line = view.line(index).unwrap();
+                let pixels = line.pixels(size.1);
+                let sector = line.sector;
+                let mut s = sector.first;
+                while s != sector.last + sector.step {
+                    let t_q16 = line.cross_at(i64::from(s) << COORD_FRAC_BITS);
+                    let nearest =
+                        ((t_q16 + (1 << (COORD_FRAC_BITS - 1))) >> COORD_FRAC_BITS) as i32;
+                    let holds = (nearest - 1..=nearest + 1).any(|t| line.owns(t, s));
+                    if pixels.holds_no_pixel(s, t_q16, nearest) {
+                        assert!(!holds, "pitch {pitch}: line {index} row {s} skipped");
+                        skipped += 1;
+                    }
+                    rows += 1;
+                    s += sector.step;
+                }
+            }
+            // Straight down, most of a line's rows near the center are
+            // another line's: the skip spares their exact test.
+            if pitch == 90.0 {
+                assert!(skipped * 3 > rows, "{skipped} of {rows} rows skipped");
             }
         }
     }
