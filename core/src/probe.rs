@@ -21,12 +21,21 @@ pub trait Probe {
         let _ = (level, cell);
     }
     /// The colors of voxel `voxel` of level `level` and its minor-axis
-    /// neighbour were fetched to shade a pixel, or, past the color reach,
-    /// the four around the crossing on `level`. At most
-    /// [`MAX_COLOR_FETCHES_A_RAY`] a ray.
+    /// neighbour were fetched to shade a pixel. With
+    /// [`Probe::color_square`], at most [`MAX_COLOR_FETCHES_A_RAY`] a ray.
     #[inline(always)]
     fn color(&mut self, level: u8, voxel: usize) {
         let _ = (level, voxel);
+    }
+    /// Past the color reach, the four colors of the grid square whose
+    /// first corner is voxel `corner` of level `level` (it and the next
+    /// voxel on its row and on the row after) were fetched to shade a
+    /// pixel. One color fetch as [`Probe::color`] is, and by default
+    /// reported as one: a probe that counts bytes or memory traffic
+    /// tells the two apart.
+    #[inline(always)]
+    fn color_square(&mut self, level: u8, corner: usize) {
+        self.color(level, corner);
     }
     /// A ray hit the terrain on level `level`.
     #[inline(always)]
@@ -38,7 +47,8 @@ pub trait Probe {
     fn ray(&mut self) {}
 }
 
-/// The most color fetches ([`Probe::color`]) the caster makes for one ray:
+/// The most color fetches ([`Probe::color`], [`Probe::color_square`]) the
+/// caster makes for one ray:
 /// a hit is shaded from its own grid line and the one before it (near the
 /// eye) or from two levels around the crossing (farther out), a ray cut
 /// short from the grid line under it, and a sky ray from none. (A fetch

@@ -255,7 +255,18 @@ fn render(
 struct TouchProbe {
     heights: HashSet<(u8, usize)>,
     colors: HashSet<(u8, usize)>,
+    color_squares: HashSet<(u8, usize)>,
     bounds: HashSet<(u8, usize)>,
+}
+
+impl TouchProbe {
+    /// The bytes of what was read (see [`bytes_touched`]).
+    fn bytes(&self) -> u64 {
+        self.heights.len() as u64 * 4
+            + self.colors.len() as u64 * 6
+            + self.color_squares.len() as u64 * 12
+            + self.bounds.len() as u64 * 2
+    }
 }
 
 impl Probe for TouchProbe {
@@ -268,15 +279,17 @@ impl Probe for TouchProbe {
     fn color(&mut self, level: u8, voxel: usize) {
         self.colors.insert((level, voxel));
     }
+    fn color_square(&mut self, level: u8, corner: usize) {
+        self.color_squares.insert((level, corner));
+    }
 }
 
 /// Terrain bytes a frame reads, by method:
 /// - kernel: each visit reads two U12.4 heights (the voxel and its
 ///   neighbour across the minor grid line), each shading two RGB colors
-///   and as many on the level below (past level 0; a fetch past the color
-///   reach reads four on one level, counted the same, so six bytes short
-///   on level 0), each bound test one u16; distinct (level, index) pairs,
-///   neighbours counted with each;
+///   (the same pair) or, past the color reach, four (a grid square), each
+///   bound test one u16; distinct (level, index) pairs, neighbours counted
+///   with each;
 /// - Voxel Space: an f32 height and an RGB color for each distinct voxel;
 /// - march: the four corners (f32 height and RGB color) of each distinct
 ///   cell sampled.
@@ -294,12 +307,7 @@ pub fn bytes_touched(
                 .map_err(|e| Error::new(format!("bad view: {e}")))?;
             let mut probe = TouchProbe::default();
             terracast::render(&pyramid, &view, options, &mut Discard, &mut probe);
-            let colors: u64 = probe
-                .colors
-                .iter()
-                .map(|&(level, _)| if level > 0 { 12 } else { 6 })
-                .sum();
-            probe.heights.len() as u64 * 4 + colors + probe.bounds.len() as u64 * 2
+            probe.bytes()
         }
         Method::VoxelSpace(growth) => {
             let mut seen = HashSet::new();
@@ -708,6 +716,18 @@ mod tests {
         // The kernel reads a part of what it holds: 5 bytes a voxel, plus
         // the pyramid and bounds.
         assert!(of("kernel") < 96 * 96 * 5 * 2, "{touched:?}");
+    }
+
+    #[test]
+    fn a_color_square_is_four_colors_and_what_is_read_twice_counts_once() {
+        let mut probe = TouchProbe::default();
+        probe.visit(0, 7); // two heights
+        probe.color(0, 7); // a pair of colors
+        probe.color(0, 7);
+        probe.color_square(0, 7); // four colors
+        probe.color_square(1, 7);
+        probe.bound(1, 2);
+        assert_eq!(probe.bytes(), 4 + 6 + 2 * 12 + 2);
     }
 
     #[test]

@@ -222,6 +222,10 @@ impl<P: Probe> Probe for Metered<'_, P> {
         self.inner.color(level, voxel);
     }
     #[inline(always)]
+    fn color_square(&mut self, level: u8, corner: usize) {
+        self.inner.color_square(level, corner);
+    }
+    #[inline(always)]
     fn hit(&mut self, level: u8) {
         self.inner.hit(level);
     }

@@ -134,7 +134,7 @@ fn fraction(num: i64, den: i64) -> u32 {
 
 /// The color at world point `point` (Q16) on `level`: its four grid points
 /// blended by the point's fraction of the level's spacing on each axis.
-/// Reported to `probe` as one color fetch.
+/// Reported to `probe` as one color fetch, of a square.
 fn bilinear<T: Surface + ?Sized, P: Probe>(
     surface: &T,
     level: u8,
@@ -155,7 +155,7 @@ fn bilinear<T: Surface + ?Sized, P: Probe>(
     } else {
         grid.color_pair(index + grid.stride(), across)?
     };
-    probe.color(level, index as usize);
+    probe.color_square(level, index as usize);
     Some(lerp(
         lerp(c00, c10, weight[0]),
         lerp(c01, c11, weight[0]),

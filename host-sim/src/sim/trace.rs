@@ -166,6 +166,12 @@ impl Probe for Recorder<'_> {
         self.fetch(level, voxel, self.width(level), 2);
     }
 
+    fn color_square(&mut self, level: u8, corner: usize) {
+        self.work(0, 0, 1);
+        // Charged to the first corner's tile, as a pair is to its first.
+        self.fetch(level, corner, self.width(level), 4);
+    }
+
     fn ray(&mut self) {
         self.work(1, 0, 0);
     }
@@ -223,7 +229,7 @@ mod tests {
     #[test]
     fn the_recording_holds_all_of_the_kernels_work() {
         let scene = crate::scene::procedural(256, 2).to_kernel().unwrap();
-        let camera = terracast::Camera::looking([128.0, 20.0, 150.0], 90.0, 15.0);
+        let camera = terracast::Camera::looking([128.0, 20.0, 90.0], 90.0, 25.0);
         let options = RenderOptions::default();
         let machine = Machine::default();
         let trace = record_frame(&scene, &camera, (80, 60), &options, &machine).unwrap();
@@ -241,6 +247,40 @@ mod tests {
         assert_eq!(sum(|e| e.rays), counts.rays);
         assert_eq!(sum(|e| e.steps), counts.steps);
         assert_eq!(sum(|e| e.colors), counts.color_fetches);
+        // Fetched voxels: two a step, one a bound, two a color pair and
+        // four a color square (the far hits' footprint colors).
+        #[derive(Default)]
+        struct Colors {
+            pairs: u64,
+            squares: u64,
+        }
+        impl Probe for Colors {
+            fn color(&mut self, _: u8, _: usize) {
+                self.pairs += 1;
+            }
+            fn color_square(&mut self, _: u8, _: usize) {
+                self.squares += 1;
+            }
+        }
+        let mut colors = Colors::default();
+        render(
+            &scene.pyramid_for(&options).unwrap(),
+            &view,
+            &options,
+            &mut Discard,
+            &mut colors,
+        );
+        assert!(
+            colors.squares > 0 && colors.pairs > 0,
+            "{} squares, {} pairs",
+            colors.squares,
+            colors.pairs
+        );
+        let walk_steps = counts.steps - counts.bound_tests;
+        assert_eq!(
+            sum(|e| e.fetches),
+            2 * walk_steps + counts.bound_tests + 2 * colors.pairs + 4 * colors.squares
+        );
         assert_eq!(trace.lines.len() as u32, view.lines());
         // Each event names the tile its fetches read, inside the map.
         let side = machine.tiles.side;
