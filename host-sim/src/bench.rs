@@ -14,7 +14,7 @@ use crate::baselines::{
 };
 use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
-use crate::kernel::render_kernel;
+use crate::kernel::{render_kernel_with, PixelRays};
 use crate::metrics::{
     mean_abs_difference, psnr, relative_depth_error_quantile, sky_agreement, ssim,
 };
@@ -30,8 +30,8 @@ use terracast::{
 /// One way of rendering.
 #[derive(Debug, Clone)]
 pub enum Method {
-    /// The kernel with these options.
-    Kernel(RenderOptions),
+    /// The kernel with these options and rays a pixel.
+    Kernel(RenderOptions, PixelRays),
     /// Voxel Space with this slice-spacing growth.
     VoxelSpace(f64),
     /// The fixed-step march with this step.
@@ -52,7 +52,7 @@ pub fn settings() -> Vec<Setting> {
     let default = RenderOptions::default();
     let kernel = |name, options| Setting {
         name,
-        method: Method::Kernel(options),
+        method: Method::Kernel(options, PixelRays::Fixed),
     };
     vec![
         kernel("kernel", default),
@@ -102,6 +102,10 @@ pub fn settings() -> Vec<Setting> {
                 ..default
             },
         ),
+        Setting {
+            name: "kernel rays by footprint",
+            method: Method::Kernel(default, PixelRays::ByFootprint),
+        },
         kernel(
             "kernel nearest color",
             RenderOptions {
@@ -223,12 +227,13 @@ fn render(
     sky: terracast::Rgb,
 ) -> Result<(Frame, RenderStats)> {
     Ok(match &setting.method {
-        Method::Kernel(options) => render_kernel(
+        Method::Kernel(options, rays) => render_kernel_with(
             &scene.kernel,
             camera,
             size.0,
             size.1,
             &RenderOptions { sky, ..*options },
+            *rays,
         )?,
         Method::VoxelSpace(growth) => voxel_space(
             &scene.scene,
@@ -301,12 +306,23 @@ pub fn bytes_touched(
 ) -> Result<u64> {
     let sky = terracast::config::DEFAULT_SKY;
     Ok(match &setting.method {
-        Method::Kernel(options) => {
+        Method::Kernel(options, rays) => {
             let pyramid = scene.kernel.pyramid_for(options)?;
             let view = View::new(camera, size.0, size.1)
                 .map_err(|e| Error::new(format!("bad view: {e}")))?;
             let mut probe = TouchProbe::default();
-            terracast::render(&pyramid, &view, options, &mut Discard, &mut probe);
+            match rays {
+                PixelRays::Fixed => {
+                    terracast::render(&pyramid, &view, options, &mut Discard, &mut probe)
+                }
+                PixelRays::ByFootprint => terracast::render_by_footprint(
+                    &pyramid,
+                    &view,
+                    options,
+                    &mut Discard,
+                    &mut probe,
+                ),
+            }
             probe.bytes()
         }
         Method::VoxelSpace(growth) => {

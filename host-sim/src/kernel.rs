@@ -6,8 +6,21 @@ use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
-    render, Camera, Coherence, CountingProbe, RenderOptions, Sample, Sink, Surface, View,
+    render, render_by_footprint, Camera, Coherence, CountingProbe, RenderOptions, Sample, Sink,
+    Surface, View,
 };
+
+/// How many rays each pixel gets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PixelRays {
+    /// The options' `vertical_samples`, every pixel alike
+    /// (`terracast::render`).
+    #[default]
+    Fixed,
+    /// One, two or four, as many as the pixel's footprint needs
+    /// (`terracast::render_by_footprint`).
+    ByFootprint,
+}
 
 /// A sink that keeps every sample of the frame.
 #[derive(Debug)]
@@ -53,8 +66,20 @@ pub fn render_kernel(
     height: u32,
     options: &RenderOptions,
 ) -> Result<(Frame, RenderStats)> {
+    render_kernel_with(scene, camera, width, height, options, PixelRays::Fixed)
+}
+
+/// [`render_kernel`] with `rays` rays a pixel.
+pub fn render_kernel_with(
+    scene: &KernelScene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    options: &RenderOptions,
+    rays: PixelRays,
+) -> Result<(Frame, RenderStats)> {
     let pyramid = scene.pyramid_for(options)?;
-    let (frame, mut stats) = render_surface(&pyramid, camera, width, height, options)?;
+    let (frame, mut stats) = render_surface_with(&pyramid, camera, width, height, options, rays)?;
     stats.resident_bytes = pyramid.bytes() as u64;
     if let Some(levels) = &mut stats.levels {
         levels.levels = pyramid.levels();
@@ -71,12 +96,29 @@ pub fn render_surface<T: Surface + ?Sized>(
     height: u32,
     options: &RenderOptions,
 ) -> Result<(Frame, RenderStats)> {
+    render_surface_with(surface, camera, width, height, options, PixelRays::Fixed)
+}
+
+/// [`render_surface`] with `rays` rays a pixel.
+pub fn render_surface_with<T: Surface + ?Sized>(
+    surface: &T,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    options: &RenderOptions,
+    rays: PixelRays,
+) -> Result<(Frame, RenderStats)> {
     let view =
         View::new(camera, width, height).map_err(|e| Error::new(format!("bad view: {e}")))?;
     let mut buffer = SampleBuffer::new(width, height);
     let mut probe = CountingProbe::default();
     let started = Instant::now();
-    render(surface, &view, options, &mut buffer, &mut probe);
+    match rays {
+        PixelRays::Fixed => render(surface, &view, options, &mut buffer, &mut probe),
+        PixelRays::ByFootprint => {
+            render_by_footprint(surface, &view, options, &mut buffer, &mut probe)
+        }
+    }
     let render_ns = started.elapsed().as_nanos() as u64;
 
     let rays = ContractCamera::new(camera, width, height);

@@ -131,6 +131,10 @@ fn bad_input_gives_one_line_and_a_nonzero_exit() {
         (base(&["--yaw", "abc"]), "abc"),
         (base(&["--size", "0x10"]), "size"),
         (
+            base(&["--vertical-samples", "3"]),
+            "1, 2, 4, 8 or footprint",
+        ),
+        (
             base(&["--method", "march", "--march-step", "0"]),
             "--march-step",
         ),
@@ -197,6 +201,36 @@ fn bad_input_gives_one_line_and_a_nonzero_exit() {
             "{args:?}: '{err}' does not mention '{needle}'"
         );
     }
+}
+
+#[test]
+fn rays_by_footprint_cast_more_rays_than_pixels_and_fewer_than_four_each() {
+    let png = temp("footprint.png");
+    let stats = temp("footprint.json");
+    let (code, _, err) = sim(&[
+        "render",
+        "--procedural-size",
+        "256",
+        "--size",
+        "96x72",
+        "--vertical-samples",
+        "footprint",
+        "--out",
+        s(&png),
+        "--stats",
+        s(&stats),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let (rays, pixels) = (
+        json["rays"].as_u64().unwrap(),
+        json["pixels"].as_u64().unwrap(),
+    );
+    assert!(
+        rays > pixels && rays < 4 * pixels,
+        "{rays} rays, {pixels} pixels"
+    );
 }
 
 #[test]

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 use terracast::tiles::{cut_tile, Tile, TileError, TileKey, TileSource, World};
 use terracast::{Camera, HeightFilter, RenderOptions};
-use terracast_sim::kernel::render_kernel;
+use terracast_sim::kernel::{render_kernel, PixelRays};
 use terracast_sim::scene::{load_pair, procedural};
 use terracast_sim::tiles::{
     pack, page_flight, render_tiled, PackInput, PageOptions, ProceduralSource, TilesFile, TILE,
@@ -103,7 +103,8 @@ fn packed_equals_maps(
     for camera in views(scene.width as f32, scene.depth as f32, top) {
         let options = RenderOptions::default();
         let (from_maps, _) = render_kernel(&kernel, &camera, 96, 72, &options).unwrap();
-        let (from_tiles, _, tiled) = render_tiled(&mut file, &camera, 96, 72, &options).unwrap();
+        let (from_tiles, _, tiled) =
+            render_tiled(&mut file, &camera, 96, 72, &options, PixelRays::Fixed).unwrap();
         assert!(from_maps.colors == from_tiles.colors, "{name}: {camera:?}");
         assert_eq!(
             (tiled.misses, tiled.degraded_samples),
@@ -222,8 +223,15 @@ fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
     };
     assert_eq!(file.load(key, &mut tile), Err(TileError::Checksum));
     let camera = Camera::looking([30.0, -20.0, 60.0], 80.0, 25.0);
-    let (frame, _, tiled) =
-        render_tiled(&mut file, &camera, 96, 72, &RenderOptions::default()).unwrap();
+    let (frame, _, tiled) = render_tiled(
+        &mut file,
+        &camera,
+        96,
+        72,
+        &RenderOptions::default(),
+        PixelRays::Fixed,
+    )
+    .unwrap();
     assert_eq!((tiled.misses, tiled.rejected), (1, 1));
     assert!(tiled.degraded_samples > 0);
     assert!(frame

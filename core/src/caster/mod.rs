@@ -29,6 +29,7 @@ use crate::probe::Probe;
 use crate::roughness::terrain_fit;
 use crate::sink::{Sample, Sink};
 use crate::surface::Surface;
+use crate::view::lines::Line;
 use crate::view::ray::{Clip, Cursor, Lod, LodPlan, Plane, Ray, RayKey};
 use crate::view::View;
 use crate::{config::DEFAULT_SKY, Rgb};
@@ -257,6 +258,44 @@ pub fn render<T: Surface + ?Sized, S: Sink, P: Probe>(
     }
 }
 
+/// Renders as [`render`] does, with one, two or four rays a pixel: as many
+/// as its footprint needs (Cohen-Or §2.1 supersamples the elongated
+/// footprints; [`VerticalSamples`] gives every pixel the same count).
+/// A pixel's count is judged by the pixel before it on its image line:
+/// the length along the line of that pixel's footprint (the spacing of the
+/// two hits before it) against the larger of a voxel and the pixel's
+/// width there, rounded to 1, 2 or 4 at 1.5 and 3. Grazing ground gets
+/// four rays, slopes facing the eye, steep views and terrain within a
+/// voxel of a pixel one. `options.vertical_samples` is not used.
+///
+/// A function of its own, not a [`VerticalSamples`] setting, so that a
+/// build that never calls it (a board's) keeps the one line loop it has:
+/// a second copy of that loop in the same build changes how the compiler
+/// inlines the caster, which cost the board's default render 90 to 290
+/// instructions a pixel when measured.
+pub fn render_by_footprint<T: Surface + ?Sized, S: Sink, P: Probe>(
+    surface: &T,
+    view: &View,
+    options: &RenderOptions,
+    sink: &mut S,
+    probe: &mut P,
+) {
+    let frame = Frame::new(surface, view, options);
+    for line in 0..view.lines() {
+        line_rays(
+            surface,
+            view,
+            options,
+            &frame,
+            line,
+            sink,
+            probe,
+            &mut Unlimited,
+            RaysByFootprint::new(view, options),
+        );
+    }
+}
+
 /// How many steps each ray of a line may take, asked before each ray:
 /// `u32::MAX` for no limit, `n` for at most `4n + 2` steps (the ray is cut
 /// short past that), 0 for none at all (the pixel repeats the line's
@@ -314,6 +353,7 @@ pub fn render_line<T: Surface + ?Sized, S: Sink, P: Probe>(
     );
 }
 
+/// Renders a line with `options.vertical_samples` rays a pixel.
 #[allow(clippy::too_many_arguments)]
 fn line_with<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances>(
     surface: &T,
@@ -325,19 +365,146 @@ fn line_with<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances>(
     probe: &mut P,
     allowances: &mut A,
 ) {
+    let rays = FixedRays(options.vertical_samples.log2());
+    line_rays(
+        surface, view, options, frame, line, sink, probe, allowances, rays,
+    );
+}
+
+/// How many rays each pixel of a line gets.
+trait RaysPerPixel {
+    /// A line begins.
+    fn start(&mut self, line: &Line) {
+        let _ = line;
+    }
+    /// log2 of the rays the next pixel gets.
+    fn log2(&self) -> u32;
+    /// The pixel just rendered: its center ray's sample, and its row.
+    fn rendered(&mut self, center: &Sample, row: i32) {
+        let _ = (center, row);
+    }
+}
+
+/// The same count for every pixel, as log2.
+struct FixedRays(u32);
+
+impl RaysPerPixel for FixedRays {
+    #[inline(always)]
+    fn log2(&self) -> u32 {
+        self.0
+    }
+}
+
+/// [`render_by_footprint`]'s counts: by the footprint of the pixel before.
+struct RaysByFootprint {
+    /// The hits of the two pixels before on the line, older first, and
+    /// their rows (near the vanishing point a line skips rows).
+    before: [(Sample, i32); 2],
+    sky: Sample,
+    eye_z: i64,
+    focal: i64,
+    /// The line's pixel spacing (`Line::pixel_spacing_q16`).
+    spacing: u64,
+}
+
+impl RaysByFootprint {
+    fn new(view: &View, options: &RenderOptions) -> Self {
+        Self {
+            before: [(sky(options), 0); 2],
+            sky: sky(options),
+            eye_z: view.eye[2].to_bits(),
+            focal: view.focal,
+            spacing: 1 << 16,
+        }
+    }
+}
+
+impl RaysPerPixel for RaysByFootprint {
+    fn start(&mut self, line: &Line) {
+        self.before = [(self.sky, 0); 2];
+        self.spacing = line.pixel_spacing_q16();
+    }
+    fn log2(&self) -> u32 {
+        let [(older, older_row), (newer, newer_row)] = &self.before;
+        let rows = u64::from(older_row.abs_diff(*newer_row).max(1));
+        footprint_rays_log2([older, newer], self.eye_z, self.focal, self.spacing * rows)
+    }
+    fn rendered(&mut self, center: &Sample, row: i32) {
+        self.before = [self.before[1], (*center, row)];
+    }
+}
+
+/// log2 of the most rays [`render_by_footprint`] gives a pixel.
+const FOOTPRINT_MOST_LOG2: u32 = 2;
+
+/// log2 of the rays [`render_by_footprint`] gives a pixel, from the hits
+/// of the two pixels before it on its line, `older` first, seen from eye
+/// height `eye_z` (I16.16); the line's pixels are `spacing` pixels apart
+/// (Q16, `Line::pixel_spacing_q16`, times the rows between the two). The
+/// hits' spacing (the larger of their distances' and their heights'
+/// differences) over `spacing` is a pixel's footprint length along the
+/// line. Over the larger of a voxel (colors are interpolated between
+/// voxels, so a footprint within one needs no more rays) and the pixel's
+/// width (its depth over `focal`; the depth is the larger of the
+/// major-axis distance and the height below the eye, within √2 of the
+/// Euclidean one either way), it is how many rays the footprint needs:
+/// rounded to 1, 2 or 4 at 1.5 and 3. A sky pixel before gives one ray.
+fn footprint_rays_log2([older, newer]: [&Sample; 2], eye_z: i64, focal: i64, spacing: u64) -> u32 {
+    if older.is_sky() || newer.is_sky() {
+        return 0;
+    }
+    let length = u128::from(
+        older
+            .distance
+            .abs_diff(newer.distance)
+            .max(older.elevation.abs_diff(newer.elevation)),
+    );
+    let depth = u128::from(newer.distance).max(u128::from(
+        (eye_z - i64::from(newer.elevation)).unsigned_abs(),
+    ));
+    // `length / spacing / max(1, width) ≥ half_rays / 2`, without
+    // dividing: width is `depth · 2^16 / focal` (U16.16).
+    let spacing = u128::from(spacing);
+    let needs = |half_rays: u128| {
+        2 * length >= half_rays * spacing
+            && 2 * length * focal.unsigned_abs() as u128 >= half_rays * depth * spacing
+    };
+    if needs(6) {
+        FOOTPRINT_MOST_LOG2
+    } else if needs(3) {
+        1
+    } else {
+        0
+    }
+}
+
+/// Renders a line with the rays a pixel `rays_per_pixel` gives.
+#[allow(clippy::too_many_arguments)]
+fn line_rays<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances, R: RaysPerPixel>(
+    surface: &T,
+    view: &View,
+    options: &RenderOptions,
+    frame: &Frame,
+    line: u32,
+    sink: &mut S,
+    probe: &mut P,
+    allowances: &mut A,
+    mut rays_per_pixel: R,
+) {
     let Some(line) = view.line(line) else {
         return;
     };
+    rays_per_pixel.start(&line);
     let extent = surface.extent();
     let plane = Plane::new(view, &extent, &line.reference).with_across(&view.across(&line));
     let mut anchor: Option<Anchor> = None;
     let mut previous: Option<Sample> = None;
     let mut recent = Recent::default();
-    let log2 = options.vertical_samples.log2();
-    let samples = 1i64 << log2;
     // Sub-rays go by rising elevation too: the way the line is walked.
     let step = i64::from(line.sector.step);
     for pixel in line.pixels(view.height()) {
+        let log2 = rays_per_pixel.log2();
+        let samples = 1i64 << log2;
         let mut sum = [0u32; 3];
         let mut center = sky(options);
         for sub in 0..samples {
@@ -405,6 +572,7 @@ fn line_with<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances>(
             }
         }
         let color = sum.map(|s| ((s + (1 << log2 >> 1)) >> log2) as u8);
+        rays_per_pixel.rendered(&center, pixel.s);
         sink.put(pixel.x, pixel.y, Sample { color, ..center });
     }
 }
@@ -699,6 +867,116 @@ mod tests {
         };
         render(pyramid, view, &options, &mut frame, &mut crate::NoProbe);
         pixels
+    }
+
+    #[test]
+    fn elongated_footprints_get_more_rays_and_short_ones_one() {
+        const VOXEL: u32 = 1 << 16;
+        const ONE: u64 = 1 << 16;
+        let focal = 500i64 << 16;
+        // The eye 10 voxels above the ground.
+        let eye_z = 10i64 << 16;
+        let at = |distance: u32, height: i32| Sample {
+            color: [0; 3],
+            distance,
+            elevation: height << 16,
+        };
+        let log2 =
+            |older: Sample, newer: Sample| footprint_rays_log2([&older, &newer], eye_z, focal, ONE);
+        // Ground 1000 voxels out, a pixel 2 wide there: its hits 8 apart
+        // are four widths long, 5 apart 2.5, 2 apart one.
+        assert_eq!(log2(at(1000 * VOXEL, 0), at(1008 * VOXEL, 0)), 2);
+        assert_eq!(log2(at(1000 * VOXEL, 0), at(1005 * VOXEL, 0)), 1);
+        assert_eq!(log2(at(1000 * VOXEL, 0), at(1002 * VOXEL, 0)), 0);
+        // Near the eye a footprint within a voxel needs one ray, however
+        // thin it is (colors are interpolated between voxels).
+        assert_eq!(log2(at(50 * VOXEL, 0), at(50 * VOXEL + VOXEL / 2, 0)), 0);
+        assert_eq!(log2(at(50 * VOXEL, 0), at(54 * VOXEL, 0)), 2);
+        // A slope facing the eye: hits at nearly one distance, and heights
+        // a pixel's width apart.
+        assert_eq!(log2(at(1000 * VOXEL, 0), at(1000 * VOXEL + 100, 2)), 0);
+        // Straight down from 1000 voxels up: hits 2 apart near the nadir
+        // are as long as a pixel is wide there.
+        let high = 1000i64 << 16;
+        let down = footprint_rays_log2([&at(VOXEL, 0), &at(3 * VOXEL, 0)], high, focal, ONE);
+        assert_eq!(down, 0);
+        // On a diagonal line the pixels are √2 apart: hits 8 apart 1000
+        // voxels out are 2.8 widths a pixel.
+        let diagonal = 92682; // √2, Q16
+        let hits = [&at(1000 * VOXEL, 0), &at(1008 * VOXEL, 0)];
+        assert_eq!(footprint_rays_log2(hits, eye_z, focal, diagonal), 1);
+        // After sky, or on the line's first pixels: one ray.
+        let sky = Sample {
+            distance: Sample::SKY,
+            ..at(0, 0)
+        };
+        assert_eq!(log2(sky, at(1000 * VOXEL, 0)), 0);
+        assert_eq!(log2(at(1000 * VOXEL, 0), sky), 0);
+    }
+
+    /// Each pixel of [`render_by_footprint`] is the pixel one, two or four
+    /// rays give: more where the ground is seen at a grazing angle, one
+    /// looking straight down.
+    #[test]
+    fn by_footprint_each_pixel_takes_one_two_or_four_rays() {
+        use crate::{Camera, CountingProbe, Terrain};
+        use std::vec;
+        // Flat, in 3-voxel stripes of black and white across y.
+        let (w, d) = (64u32, 64u32);
+        let heights = vec![0u16; (w * d) as usize];
+        let colors: vec::Vec<Rgb> = (0..w * d)
+            .map(|i| [((i / w) / 3 % 2 * 255) as u8; 3])
+            .collect();
+        let terrain = Terrain::new(w, d, &heights, &colors).unwrap();
+        let pyramid = Pyramid::flat(terrain);
+        // `None`: by footprint.
+        let render_with = |camera: &Camera, vertical_samples: Option<VerticalSamples>| {
+            let view = View::new(camera, 32, 24).unwrap();
+            let mut pixels = [[0u8; 3]; 32 * 24];
+            let mut frame = Framebuffer::new(&mut pixels, 32, 24).unwrap();
+            let mut probe = CountingProbe::default();
+            match vertical_samples {
+                Some(vertical_samples) => {
+                    let options = RenderOptions {
+                        vertical_samples,
+                        ..RenderOptions::default()
+                    };
+                    render(&pyramid, &view, &options, &mut frame, &mut probe)
+                }
+                None => render_by_footprint(
+                    &pyramid,
+                    &view,
+                    &RenderOptions::default(),
+                    &mut frame,
+                    &mut probe,
+                ),
+            }
+            (pixels, probe.rays)
+        };
+        let grazing = Camera::looking([32.0, 1.0, 6.0], 90.0, 8.0);
+        let (by_footprint, rays) = render_with(&grazing, None);
+        let fixed = [
+            VerticalSamples::One,
+            VerticalSamples::Two,
+            VerticalSamples::Four,
+        ]
+        .map(|v| render_with(&grazing, Some(v)).0);
+        for (i, color) in by_footprint.iter().enumerate() {
+            assert!(fixed.iter().any(|f| f[i] == *color), "pixel {i}");
+        }
+        let four_alone = (0..by_footprint.len())
+            .filter(|&i| by_footprint[i] == fixed[2][i] && by_footprint[i] != fixed[0][i])
+            .count();
+        assert!(four_alone > 20, "{four_alone} pixels took four rays");
+        assert!(rays > 32 * 24 && rays < 4 * 32 * 24, "{rays} rays");
+        // Straight down every footprint is about as long as it is wide.
+        let down = Camera::looking([32.0, 32.0, 40.0], 90.0, 90.0);
+        let (by_footprint, rays) = render_with(&down, None);
+        assert_eq!(rays, 32 * 24);
+        assert_eq!(
+            by_footprint,
+            render_with(&down, Some(VerticalSamples::One)).0
+        );
     }
 
     #[test]

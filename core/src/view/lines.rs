@@ -381,6 +381,15 @@ fn scale(v: i64, q: i64) -> i64 {
 }
 
 impl Line {
+    /// How far apart (in pixels, Q16) the centers of two of the line's
+    /// pixels on neighbouring rows are: `√(1 + slope²)`, from 1 for a line
+    /// along the axis to √2 on the diagonals.
+    pub(crate) fn pixel_spacing_q16(&self) -> u64 {
+        // Slope to Q16 (at most about 1 inside the sector), squared to Q32.
+        let slope = (self.slope >> 16).unsigned_abs().min(1 << 20);
+        ((1u64 << 32) + slope * slope).isqrt()
+    }
+
     /// The line's cross coordinate at axis coordinate `s_q16` (Q16 both).
     #[inline]
     fn cross_at(&self, s_q16: i64) -> i64 {

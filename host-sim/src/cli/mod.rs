@@ -8,7 +8,7 @@ mod sim;
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
 use crate::board::{board_views, verify, write_scene};
 use crate::error::{Error, Result};
-use crate::kernel::render_kernel;
+use crate::kernel::{render_kernel_with, PixelRays};
 use crate::output::{stats_json, write_pfm, write_png, write_stats};
 use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{load_pair, procedural, Scene};
@@ -331,9 +331,11 @@ struct RenderArgs {
     /// Kernel: how rays cast from the eye find their first hit.
     #[arg(long, value_enum, default_value_t = FirstHitArg::Hierarchical)]
     first_hit: FirstHitArg,
-    /// Kernel: rays per pixel, spread over its height (1, 2, 4 or 8).
-    #[arg(long, default_value_t = 1, value_name = "N")]
-    vertical_samples: u32,
+    /// Kernel: rays per pixel, spread over its height: 1, 2, 4 or 8, or
+    /// `footprint` (one to four, as many as each pixel's footprint is
+    /// longer than wide along its image line).
+    #[arg(long, default_value = "1", value_name = "N", value_parser = parse_vertical_samples)]
+    vertical_samples: (VerticalSamples, PixelRays),
     /// Kernel: how a hit is colored: subvoxel weights (the default) or the
     /// nearest voxel.
     #[arg(long, value_enum, default_value_t = ShadingArg::Subvoxel)]
@@ -464,7 +466,14 @@ fn render_command(args: RenderArgs) -> Result<()> {
                     .map_or_else(HeightFilter::default, Into::into),
             )?;
             View::new(&camera, width, height).map_err(view_error)?;
-            render_kernel(&kernel, &camera, width, height, &options)?
+            render_kernel_with(
+                &kernel,
+                &camera,
+                width,
+                height,
+                &options,
+                args.vertical_samples.1,
+            )?
         }
         Method::Reference => {
             // The reference shares the kernel's camera limits but can roll.
@@ -563,17 +572,7 @@ fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
             }
         }
     };
-    let vertical_samples = match args.vertical_samples {
-        1 => VerticalSamples::One,
-        2 => VerticalSamples::Two,
-        4 => VerticalSamples::Four,
-        8 => VerticalSamples::Eight,
-        n => {
-            return Err(Error::new(format!(
-                "--vertical-samples must be 1, 2, 4 or 8, not {n}"
-            )))
-        }
-    };
+    let (vertical_samples, _) = args.vertical_samples;
     Ok(RenderOptions {
         coherence,
         resolution,
@@ -661,4 +660,17 @@ fn parse_rgb(s: &str) -> std::result::Result<Rgb, String> {
             .map_err(|_| format!("'{p}' is not a color value 0-255"))?;
     }
     Ok(out)
+}
+
+/// `--vertical-samples`: a count of rays every pixel gets, or `footprint`.
+fn parse_vertical_samples(text: &str) -> std::result::Result<(VerticalSamples, PixelRays), String> {
+    let fixed = |count| Ok((count, PixelRays::Fixed));
+    match text {
+        "1" => fixed(VerticalSamples::One),
+        "2" => fixed(VerticalSamples::Two),
+        "4" => fixed(VerticalSamples::Four),
+        "8" => fixed(VerticalSamples::Eight),
+        "footprint" => Ok((VerticalSamples::One, PixelRays::ByFootprint)),
+        other => Err(format!("must be 1, 2, 4, 8 or footprint, not {other:?}")),
+    }
 }

@@ -122,7 +122,14 @@ pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> 
         height,
     )
     .map_err(view_error)?;
-    let (frame, stats, tiled) = render_tiled(&mut terrain, &camera, width, height, &options)?;
+    let (frame, stats, tiled) = render_tiled(
+        &mut terrain,
+        &camera,
+        width,
+        height,
+        &options,
+        args.vertical_samples.1,
+    )?;
     write_png(&args.out, &frame)?;
     if let Some(path) = &args.depth {
         crate::output::write_pfm(path, &frame)?;

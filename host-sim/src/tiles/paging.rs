@@ -8,7 +8,7 @@
 use super::{new_slots, SLOTS, TILE};
 use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
-use crate::kernel::render_surface;
+use crate::kernel::{render_surface, render_surface_with, PixelRays};
 use serde::Serialize;
 use terracast::tiles::{
     footprint_under, FootprintView, Tile, TileCache, TileKey, TileSource, TiledSurface,
@@ -118,6 +118,7 @@ pub fn render_tiled<S: TileSource<TILE>>(
     width: u32,
     height: u32,
     options: &RenderOptions,
+    rays: PixelRays,
 ) -> Result<(Frame, RenderStats, TiledRender)> {
     let world = source.world();
     let mut slots = new_slots();
@@ -133,12 +134,13 @@ pub fn render_tiled<S: TileSource<TILE>>(
         &mut needed,
     )?;
     let surface = TiledSurface::around(&cache, camera.eye);
-    let (frame, mut stats) = render_surface(
+    let (frame, mut stats) = render_surface_with(
         &surface,
         &local_camera(&surface, camera)?,
         width,
         height,
         options,
+        rays,
     )?;
     stats.resident_bytes = cache.resident_bytes() as u64;
     let cache_stats = cache.stats();
