@@ -17,6 +17,8 @@
 //!   other height filters (subsample, mean and max).
 //! * Far views on 4096² maps (each pair tiled 4 × 4), in
 //!   [`far_views_on_tiled_maps`].
+//! * `render_by_footprint` against one ray a pixel, in
+//!   [`rays_by_footprint_are_more_accurate_where_footprints_are_long`].
 
 use terracast::{Camera, Coherence, HeightFilter, RenderOptions, Resolution, U8F8};
 use terracast_sim::metrics::{median_relative_depth_error, psnr, sky_agreement};
@@ -224,4 +226,40 @@ fn far_views_on_tiled_maps() {
         }
     }
     assert!(failures.is_empty(), "far views: {failures:?}");
+}
+
+/// `render_by_footprint` against one ray a pixel, on C7W/D7 at the bench's
+/// 320 × 240: on the grazing views, where the ground's footprints are long
+/// along the image lines, it is closer to the reference; looking steeply
+/// down (60°) its footprints are short: it casts few more rays than one a
+/// pixel, and is no worse.
+#[test]
+fn rays_by_footprint_are_more_accurate_where_footprints_are_long() {
+    use terracast_sim::kernel::{render_kernel_with, PixelRays};
+    const SMALL: (u32, u32) = (320, 240);
+    let scene = comanche("7W", "7");
+    let kernel = scene.to_kernel().unwrap();
+    let reference = Reference::new(&scene);
+    let options = RenderOptions::default();
+    let render = |cam: &Camera, rays| {
+        render_kernel_with(&kernel, cam, SMALL.0, SMALL.1, &options, rays).unwrap()
+    };
+    let steep = ([500.0, 500.0, 250.0], 30.0, 60.0);
+    for (eye, yaw, pitch) in GRAZING.into_iter().chain([steep]) {
+        let cam = Camera::looking(eye, yaw, pitch);
+        let r = reference_view(&reference, &cam, SMALL);
+        let (one, _) = render(&cam, PixelRays::Fixed);
+        let (by_footprint, stats) = render(&cam, PixelRays::ByFootprint);
+        let gain = psnr(&by_footprint.colors, &r.colors) - psnr(&one.colors, &r.colors);
+        let rays = stats.rays as f64 / stats.pixels as f64;
+        println!("C7W/D7 yaw {yaw} pitch {pitch}: {gain:+.2} dB, {rays:.2} rays a pixel");
+        if pitch < 10.0 {
+            assert!(gain > 0.3, "pitch {pitch}: {gain:+.2} dB");
+        } else {
+            assert!(
+                gain >= 0.0 && rays < 1.2,
+                "pitch {pitch}: {gain:+.2} dB, {rays:.2} rays"
+            );
+        }
+    }
 }
