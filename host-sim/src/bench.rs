@@ -311,18 +311,7 @@ pub fn bytes_touched(
             let view = View::new(camera, size.0, size.1)
                 .map_err(|e| Error::new(format!("bad view: {e}")))?;
             let mut probe = TouchProbe::default();
-            match rays {
-                PixelRays::Fixed => {
-                    terracast::render(&pyramid, &view, options, &mut Discard, &mut probe)
-                }
-                PixelRays::ByFootprint => terracast::render_by_footprint(
-                    &pyramid,
-                    &view,
-                    options,
-                    &mut Discard,
-                    &mut probe,
-                ),
-            }
+            rays.render(&pyramid, &view, options, &mut Discard, &mut probe);
             probe.bytes()
         }
         Method::VoxelSpace(growth) => {

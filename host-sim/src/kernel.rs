@@ -6,20 +6,37 @@ use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
-    render, render_by_footprint, Camera, Coherence, CountingProbe, RenderOptions, Sample, Sink,
-    Surface, View,
+    render, render_by_footprint, Camera, Coherence, CountingProbe, Probe, RenderOptions, Sample,
+    Sink, Surface, View,
 };
 
 /// How many rays each pixel gets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PixelRays {
     /// The options' `vertical_samples`, every pixel alike
     /// (`terracast::render`).
-    #[default]
     Fixed,
     /// One, two or four, as many as the pixel's footprint needs
     /// (`terracast::render_by_footprint`).
     ByFootprint,
+}
+
+impl PixelRays {
+    /// Renders `view` of `surface` with the kernel entry point these rays
+    /// a pixel name.
+    pub fn render<T: Surface + ?Sized, S: Sink, P: Probe>(
+        self,
+        surface: &T,
+        view: &View,
+        options: &RenderOptions,
+        sink: &mut S,
+        probe: &mut P,
+    ) {
+        match self {
+            Self::Fixed => render(surface, view, options, sink, probe),
+            Self::ByFootprint => render_by_footprint(surface, view, options, sink, probe),
+        }
+    }
 }
 
 /// A sink that keeps every sample of the frame.
@@ -113,12 +130,7 @@ pub fn render_surface_with<T: Surface + ?Sized>(
     let mut buffer = SampleBuffer::new(width, height);
     let mut probe = CountingProbe::default();
     let started = Instant::now();
-    match rays {
-        PixelRays::Fixed => render(surface, &view, options, &mut buffer, &mut probe),
-        PixelRays::ByFootprint => {
-            render_by_footprint(surface, &view, options, &mut buffer, &mut probe)
-        }
-    }
+    rays.render(surface, &view, options, &mut buffer, &mut probe);
     let render_ns = started.elapsed().as_nanos() as u64;
 
     let rays = ContractCamera::new(camera, width, height);

@@ -396,11 +396,11 @@ impl RaysPerPixel for FixedRays {
 }
 
 /// [`render_by_footprint`]'s counts: by the footprint of the pixel before.
+/// One for each line (the line loop takes it by value).
 struct RaysByFootprint {
     /// The hits of the two pixels before on the line, older first, and
     /// their rows (near the vanishing point a line skips rows).
     before: [(Sample, i32); 2],
-    sky: Sample,
     eye_z: i64,
     focal: i64,
     /// The line's pixel spacing (`Line::pixel_spacing_q16`).
@@ -411,7 +411,6 @@ impl RaysByFootprint {
     fn new(view: &View, options: &RenderOptions) -> Self {
         Self {
             before: [(sky(options), 0); 2],
-            sky: sky(options),
             eye_z: view.eye[2].to_bits(),
             focal: view.focal,
             spacing: 1 << 16,
@@ -421,7 +420,6 @@ impl RaysByFootprint {
 
 impl RaysPerPixel for RaysByFootprint {
     fn start(&mut self, line: &Line) {
-        self.before = [(self.sky, 0); 2];
         self.spacing = line.pixel_spacing_q16();
     }
     fn log2(&self) -> u32 {
