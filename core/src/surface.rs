@@ -37,6 +37,15 @@ pub trait Grid: Copy {
     fn height(&self, index: isize) -> Option<u16>;
     /// The color at `index`; `None` outside the grid.
     fn color(&self, index: isize) -> Option<Rgb>;
+    /// This grid, for reads mostly near index `index`: a grid paged in
+    /// tiles resolves that point's tile once, so that reads inside it skip
+    /// the tile directory. Reads anywhere are still served, with the same
+    /// values.
+    #[inline(always)]
+    fn near(self, index: isize) -> Self {
+        let _ = index;
+        self
+    }
     /// The heights at `index` and `index + across`, both or `None`: the two
     /// ends of the grid-line cell a step tests. A grid that pays per lookup
     /// (a tile cache) can find both in one.

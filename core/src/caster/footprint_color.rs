@@ -146,6 +146,7 @@ fn bilinear<T: Surface + ?Sized, P: Probe>(
     let cell = point.map(|v| v >> shift);
     let weight = point.map(|v| ((v >> (shift - WEIGHT_BITS)) & ((1 << WEIGHT_BITS) - 1)) as u32);
     let index = cell[1] as isize * grid.stride() + cell[0] as isize;
+    let grid = grid.near(index);
     // A neighbour of weight 0 is not read: a point on the map's last row
     // or column has none there.
     let across = isize::from(weight[0] != 0);

@@ -67,6 +67,15 @@ impl<G: Grid> Stage<G> {
         }
     }
 
+    /// This stage, its grid resolved for reads near `at` ([`Grid::near`]).
+    #[inline(always)]
+    pub fn near(mut self, at: &Cursor) -> Self {
+        self.here = self
+            .here
+            .near(index(at.base, self.minor_stride, at.minor, self.level));
+        self
+    }
+
     /// This stage when it is `level`'s (a walk's, at hand), else a new one.
     #[inline]
     pub fn on_level<'s, T>(self, surface: &'s T, ray: &Ray, level: u8) -> Self
@@ -262,7 +271,7 @@ pub(crate) fn walk<'s, T: Surface + ?Sized, P: Probe>(
     let mut last: Option<(i32, i32)> = None;
     let mut first = Some(&*recent);
     loop {
-        let stage = Stage::new(surface, ray, at.level);
+        let stage = Stage::new(surface, ray, at.level).near(&at);
         let switch = ray.next_switch(at.level, at.k);
         match stage.steps(at, end, switch, first.take(), &mut last, probe) {
             Run::Hit {

@@ -371,14 +371,13 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_missing_tile_reads_the_coarser_level_and_is_counted() {
-        let built = Built::hills(64, 64);
-        let pyramid = built.pyramid();
-        let (heights, ph) = (&built.heights, &built.coarse.0);
-        let mut source = Cut(&pyramid);
-        let mut slots = vec![Tile::<16>::EMPTY; 64].into_boxed_slice();
-        let slots: &mut [Tile<16>; 64] = (&mut slots[..]).try_into().unwrap();
+    /// The tiles of a 64 x 64 map's levels 0 and 1, but for level 0's
+    /// tile (1, 1), resident in `slots`.
+    fn all_but_one_tile<'a>(
+        pyramid: &Pyramid<'_>,
+        slots: &'a mut [Tile<16>; 64],
+    ) -> TileCache<'a, 16, 64> {
+        let mut source = Cut(pyramid);
         let mut cache = TileCache::<16, 64>::new(source.world(), slots);
         cache.begin_frame();
         // Level 1 whole (33 x 33 points: tiles 0..=2), level 0 without tile (1, 1).
@@ -398,6 +397,16 @@ mod tests {
                 }
             }
         }
+        cache
+    }
+
+    #[test]
+    fn a_missing_tile_reads_the_coarser_level_and_is_counted() {
+        let built = Built::hills(64, 64);
+        let pyramid = built.pyramid();
+        let (heights, ph) = (&built.heights, &built.coarse.0);
+        let mut slots = vec![Tile::<16>::EMPTY; 64].into_boxed_slice();
+        let cache = all_but_one_tile(&pyramid, (&mut slots[..]).try_into().unwrap());
         let surface = TiledSurface::around(&cache, [0.0; 3]);
         let level0 = crate::Surface::grid(&surface, 0).unwrap();
         let stride = level0.stride();
@@ -437,6 +446,55 @@ mod tests {
                 2 * counted,
                 "{at} {across}"
             );
+        }
+    }
+    /// A grid resolved near a point (the walk resolves its stage's grid
+    /// near where it begins) reads what the plain grid reads, at every
+    /// point and pair, inside the resolved tile, across its borders, in
+    /// the missing tile and outside the world, and counts the same
+    /// degraded samples.
+    #[test]
+    fn a_grid_resolved_near_a_point_reads_what_the_plain_grid_reads() {
+        let built = Built::hills(64, 64);
+        let pyramid = built.pyramid();
+        let mut slots = vec![Tile::<16>::EMPTY; 64].into_boxed_slice();
+        let cache = all_but_one_tile(&pyramid, (&mut slots[..]).try_into().unwrap());
+        let surface = TiledSurface::around(&cache, [0.0; 3]);
+        for level in [0, 1] {
+            let plain = crate::Surface::grid(&surface, level).unwrap();
+            let stride = plain.stride();
+            let side = if level == 0 { 64 } else { 33 };
+            // In tile (0, 0), in tile (2, 1), in the missing tile (1, 1)
+            // (level 0), on the world's last point, outside it.
+            for (x, y) in [(3, 5), (40, 20), (20, 24), (side - 1, side - 1), (side, 0)] {
+                let near = plain.near(y * stride + x);
+                for index in
+                    (-2..side + 2).flat_map(|y| (-2..side + 2).map(move |x| y * stride + x))
+                {
+                    for across in [1, stride] {
+                        let before = surface.degraded_samples();
+                        let expected = (
+                            plain.height(index),
+                            plain.color(index),
+                            plain.height_pair(index, across),
+                            plain.color_pair(index, across),
+                        );
+                        let plain_counted = surface.degraded_samples() - before;
+                        let got = (
+                            near.height(index),
+                            near.color(index),
+                            near.height_pair(index, across),
+                            near.color_pair(index, across),
+                        );
+                        assert_eq!(got, expected, "level {level} near ({x}, {y}) index {index}");
+                        assert_eq!(
+                            surface.degraded_samples() - before - plain_counted,
+                            plain_counted,
+                            "level {level} near ({x}, {y}) index {index}"
+                        );
+                    }
+                }
+            }
         }
     }
 }

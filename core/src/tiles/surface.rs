@@ -171,9 +171,21 @@ pub struct TiledGrid<'s, 'c, 'a, const T: usize, const N: usize> {
     origin: [u32; 2],
     /// Points of the world's level.
     size: (u32, u32),
+    /// A resident tile of this level resolved ahead, and its tile column
+    /// and row: reads inside it skip the directory.
+    near: Option<(&'s Tile<T>, u32, u32)>,
 }
 
-impl<const T: usize, const N: usize> TiledGrid<'_, '_, '_, T, N> {
+impl<'s, const T: usize, const N: usize> TiledGrid<'s, '_, '_, T, N> {
+    /// The tile resolved ahead ([`Grid::near`]), if it holds world point
+    /// `(x, y)`.
+    #[inline(always)]
+    fn near_tile(&self, (x, y): (u32, u32)) -> Option<&'s Tile<T>> {
+        let shift = T.trailing_zeros();
+        let (tile, tx, ty) = self.near?;
+        (x >> shift == tx && y >> shift == ty).then_some(tile)
+    }
+
     /// World point of window index `index`, if inside the world.
     #[inline(always)]
     fn at(&self, index: isize) -> Option<(u32, u32)> {
@@ -191,6 +203,10 @@ impl<const T: usize, const N: usize> TiledGrid<'_, '_, '_, T, N> {
     #[inline(always)]
     fn read<V>(&self, index: isize, field: impl Fn(&Tile<T>, usize, usize) -> V) -> Option<V> {
         let (x, y) = self.at(index)?;
+        if let Some(tile) = self.near_tile((x, y)) {
+            let (row, column) = TiledSurface::<T, N>::place(x, y);
+            return Some(field(tile, row, column));
+        }
         let (tile, row, column) = self.surface.point(self.level, x, y)?;
         Some(field(tile, row, column))
     }
@@ -206,6 +222,11 @@ impl<const T: usize, const N: usize> TiledGrid<'_, '_, '_, T, N> {
         field: impl Fn(&Tile<T>, usize, usize) -> V,
     ) -> Option<(V, V)> {
         let (a, b) = (self.at(index)?, self.at(index + across)?);
+        if let (Some(tile), Some(_)) = (self.near_tile(a), self.near_tile(b)) {
+            let (r0, c0) = TiledSurface::<T, N>::place(a.0, a.1);
+            let (r1, c1) = TiledSurface::<T, N>::place(b.0, b.1);
+            return Some((field(tile, r0, c0), field(tile, r1, c1)));
+        }
         match self.surface.pair_in_one_tile(self.level, a, b) {
             Some((tile, [(r0, c0), (r1, c1)])) => Some((field(tile, r0, c0), field(tile, r1, c1))),
             None => Some((
@@ -220,6 +241,22 @@ impl<const T: usize, const N: usize> Grid for TiledGrid<'_, '_, '_, T, N> {
     #[inline(always)]
     fn stride(&self) -> isize {
         1 << self.shift
+    }
+    #[inline]
+    fn near(mut self, index: isize) -> Self {
+        if let Some((x, y)) = self.at(index) {
+            let shift = T.trailing_zeros();
+            let key = TileKey {
+                level: self.level,
+                x: x >> shift,
+                y: y >> shift,
+            };
+            if let Some((slot, tile)) = self.surface.cache.lookup(&key) {
+                self.surface.touch(slot);
+                self.near = Some((tile, key.x, key.y));
+            }
+        }
+        self
     }
     #[inline]
     fn height(&self, index: isize) -> Option<u16> {
@@ -253,6 +290,7 @@ impl<'c, 'a, const T: usize, const N: usize> Surface for TiledSurface<'c, 'a, T,
             shift: STRIDE_LOG2 - u32::from(level),
             origin: self.origin.map(|o| o >> level),
             size: self.world().level_size(level),
+            near: None,
         })
     }
     #[inline]
@@ -263,6 +301,7 @@ impl<'c, 'a, const T: usize, const N: usize> Surface for TiledSurface<'c, 'a, T,
             shift: STRIDE_LOG2,
             origin: self.origin,
             size: (self.world().width, self.world().depth),
+            near: None,
         }
     }
     fn top(&self) -> u8 {
