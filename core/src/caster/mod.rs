@@ -1109,4 +1109,23 @@ mod tests {
         assert_eq!(lerp([0, 100, 255], [255, 0, 255], 256), [255, 0, 255]);
         assert_eq!(lerp([0, 0, 0], [255, 255, 255], 128), [128, 128, 128]);
     }
+
+    /// Two channels share a word in `lerp`: each must still round exactly
+    /// as on its own, whatever its neighbours hold.
+    #[test]
+    fn lerp_rounds_each_channel_as_on_its_own() {
+        let alone = |a: u8, b: u8, t: u32| {
+            let t = t.min(256);
+            ((u32::from(a) * (256 - t) + u32::from(b) * t + 128) >> 8) as u8
+        };
+        for x in 0..=255u8 {
+            for y in 0..=255u8 {
+                let (a, b) = ([x, !x, x], [y, y, !y]);
+                for t in (0..=256).chain([300, u32::MAX]) {
+                    let expected: Rgb = core::array::from_fn(|i| alone(a[i], b[i], t));
+                    assert_eq!(lerp(a, b, t), expected, "{a:?} {b:?} {t}");
+                }
+            }
+        }
+    }
 }

@@ -236,7 +236,13 @@ fn line_color<G: Grid>(
 #[inline]
 pub(crate) fn lerp(a: Rgb, b: Rgb, t: u32) -> Rgb {
     let t = t.min(256);
-    core::array::from_fn(|i| ((u32::from(a[i]) * (256 - t) + u32::from(b[i]) * t + 128) >> 8) as u8)
+    // Red and blue side by side in one word, 16 bits a lane: a lane's sum
+    // is at most 255 · 256 + 128 < 2^16, so no carry crosses lanes and
+    // each channel rounds exactly as on its own. Two products fewer.
+    let red_blue = |c: Rgb| (u32::from(c[0]) << 16) | u32::from(c[2]);
+    let mixed = ((red_blue(a) * (256 - t) + red_blue(b) * t + 0x0080_0080) >> 8) & 0x00FF_00FF;
+    let green = (u32::from(a[1]) * (256 - t) + u32::from(b[1]) * t + 128) >> 8;
+    [(mixed >> 16) as u8, green as u8, mixed as u8]
 }
 
 /// The outcome of a walk along one ray.

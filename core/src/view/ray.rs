@@ -399,13 +399,20 @@ fn narrow(v: i64) -> i32 {
     bound(v, 1 << 20) as i32
 }
 
-/// `v` clamped to `low..=high` (`low ≤ high`). `i64::clamp` is a call on
-/// the board (its bounds check stops it inlining); `max` and `min` are a
-/// few word compares in place.
+/// `v` clamped to `low..=high` (`low ≤ high`, `high − low` within
+/// `i64`). `i64::clamp` is a call on the board (its bounds check stops it
+/// inlining). Values within the range are the rule: one unsigned compare
+/// of `v − low` finds them, as in [`bound`], where `max` and `min` compare
+/// against both ends.
 #[inline(always)]
-#[allow(clippy::manual_clamp)]
 fn clamp_in_place(v: i64, low: i64, high: i64) -> i64 {
-    v.max(low).min(high)
+    if (v.wrapping_sub(low) as u64) <= (high.wrapping_sub(low)) as u64 {
+        v
+    } else if v < low {
+        low
+    } else {
+        high
+    }
 }
 
 /// `v` clamped to `-limit..=limit` (`0 ≤ limit < 2^62`), in place. Values
@@ -808,6 +815,24 @@ mod tests {
                 .flat_map(|e| [e.saturating_sub(1), e, e.saturating_add(1)])
             {
                 assert_eq!(bound(v, limit), v.clamp(-limit, limit), "{v} {limit}");
+            }
+        }
+    }
+
+    #[test]
+    fn clamp_in_place_equals_a_clamp() {
+        // The bounds the caster clamps to: a positive range, one from 0.
+        for (low, high) in [(1, 1 << 40), (0, 0), (0, i64::from(i32::MAX)), (-5, 5)] {
+            let edges = [0, low, high, i64::MIN, i64::MAX, -high];
+            for v in edges
+                .into_iter()
+                .flat_map(|e| [e.saturating_sub(1), e, e.saturating_add(1)])
+            {
+                assert_eq!(
+                    clamp_in_place(v, low, high),
+                    v.clamp(low, high),
+                    "{v} {low} {high}"
+                );
             }
         }
     }
