@@ -4,7 +4,8 @@
 //! discrete ray caster of Cohen-Or et al. (1996), with the accuracy
 //! refinements of Qu et al. (1998).
 //!
-//! Data flows one way: **terrain → view → columns → sink**.
+//! Data flows one way: **terrain → view → image lines → sink** (the lines
+//! through the vertical's vanishing point, which are the columns at pitch 0).
 //!
 //! ```
 //! use terracast::{

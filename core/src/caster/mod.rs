@@ -199,7 +199,7 @@ impl Default for RenderOptions {
     }
 }
 
-/// What every column of a frame shares.
+/// What every line of a frame shares.
 #[derive(Debug, Clone, Copy)]
 struct Frame {
     lod: LodPlan,
@@ -235,7 +235,7 @@ impl Frame {
     }
 }
 
-/// Renders every column of the view into `sink`.
+/// Renders every image line of the view into `sink`: the whole frame.
 pub fn render<T: Surface + ?Sized, S: Sink, P: Probe>(
     surface: &T,
     view: &View,
