@@ -821,7 +821,8 @@ mod tests {
 
     #[test]
     fn clamp_in_place_equals_a_clamp() {
-        // The bounds the caster clamps to: a positive range, one from 0.
+        // The ranges the caster clamps to (a reach, a minor coordinate),
+        // an empty one and one across 0.
         for (low, high) in [(1, 1 << 40), (0, 0), (0, i64::from(i32::MAX)), (-5, 5)] {
             let edges = [0, low, high, i64::MIN, i64::MAX, -high];
             for v in edges
