@@ -126,6 +126,50 @@ pub fn draw_table(path: &Path, table: &Table) -> Result<()> {
     Ok(())
 }
 
+/// How far right of its point a label beside it begins, pixels.
+const LABEL_GAP: i32 = 8;
+/// How far right of its point a label moved up or down begins, pixels: far
+/// enough for the line back to the point to show.
+const LEADER: i32 = 36;
+/// A label's height, pixels.
+const LABEL_HEIGHT: i32 = 14;
+
+/// Where each point's label goes, as pixels from the point (its box's top
+/// left corner): beside it, centred; else farther right, one label height
+/// up, one down, two up, two down and so on, at the first place where it
+/// covers no point and no label placed before it (beside it, covering,
+/// when none is free). `sizes` are the labels' boxes; a point covers 10
+/// pixels a side.
+fn place_labels(points: &[(i32, i32)], sizes: &[(i32, i32)]) -> Vec<(i32, i32)> {
+    let mut taken: Vec<(i32, i32, i32, i32)> = points
+        .iter()
+        .map(|&(x, y)| (x - 5, y - 5, x + 5, y + 5))
+        .collect();
+    points
+        .iter()
+        .zip(sizes)
+        .map(|(&(px, py), &(width, height))| {
+            let label_at =
+                |(dx, dy): (i32, i32)| (px + dx, py + dy, px + dx + width, py + dy + height);
+            let free = |at| !taken.iter().any(|&t| overlap(label_at(at), t));
+            let beside = (LABEL_GAP, -height / 2);
+            // Pixel y grows downward: -1, 1, -2, 2, ...
+            let shifts = (1..16).map(|k: i32| if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 });
+            let place = std::iter::once(beside)
+                .chain(shifts.map(|shift| (LEADER, -height / 2 + shift * height)))
+                .find(|&at| free(at))
+                .unwrap_or(beside);
+            taken.push(label_at(place));
+            place
+        })
+        .collect()
+}
+
+/// Whether boxes `a` and `b` (left, top, right, bottom; pixels) overlap.
+fn overlap(a: (i32, i32, i32, i32), b: (i32, i32, i32, i32)) -> bool {
+    a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
+}
+
 /// Draws the bench summary to a PNG: mean PSNR against Mpx/s (log scale),
 /// a point per setting, the Pareto front joined by a line.
 pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
@@ -137,7 +181,8 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
     root.fill(&WHITE).map_err(|e| failed(&e))?;
     let speeds = summaries.iter().map(|s| s.mpx_per_s);
     let lo_x = speeds.clone().fold(f64::MAX, f64::min).max(1e-3) / 2.0;
-    let hi_x = speeds.fold(0.0, f64::max).max(lo_x * 4.0) * 4.0;
+    // Room on the right for the fastest setting's label.
+    let hi_x = speeds.fold(0.0, f64::max).max(lo_x * 4.0) * 8.0;
     let qualities = summaries.iter().map(|s| s.psnr);
     let lo_y = qualities.clone().fold(f64::MAX, f64::min) - 2.0;
     let hi_y = qualities.fold(f64::MIN, f64::max) + 2.0;
@@ -169,48 +214,83 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
         .map_err(|e| failed(&e))?
         .label("Pareto front")
         .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.mix(0.5).stroke_width(2)));
-    // Label boxes already drawn, in pixels: a label moves down or up in
-    // steps of its height until it overlaps none (the kernel's settings
-    // crowd around one speed).
-    let mut taken: Vec<(i32, i32, i32, i32)> = Vec::new();
-    for s in summaries {
-        let color = if s.setting.starts_with("kernel") {
+    let color_of = |setting: &str| {
+        if setting.starts_with("kernel") {
             RED
-        } else if s.setting.starts_with("voxelspace") {
+        } else if setting.starts_with("voxelspace") {
             BLUE
         } else {
             GREEN
-        };
+        }
+    };
+    let points: Vec<(i32, i32)> = summaries
+        .iter()
+        .map(|s| chart.backend_coord(&(s.mpx_per_s, s.psnr)))
+        .collect();
+    let sizes: Vec<(i32, i32)> = summaries
+        .iter()
+        .map(|s| (7 * s.setting.chars().count() as i32, LABEL_HEIGHT))
+        .collect();
+    let places = place_labels(&points, &sizes);
+    for (s, (dx, dy)) in summaries.iter().zip(places) {
         let point = (s.mpx_per_s, s.psnr);
-        chart
-            .draw_series([Circle::new(point, 5, color.filled())])
-            .map_err(|e| failed(&e))?;
-        let (px, py) = chart.backend_coord(&point);
-        let (width, height) = (7 * s.setting.chars().count() as i32, 14);
-        let free = |dy: i32| {
-            let (x0, y0) = (px + 8, py + dy);
-            !taken
-                .iter()
-                .any(|&(a0, b0, a1, b1)| x0 < a1 && a0 < x0 + width && y0 < b1 && b0 < y0 + height)
+        // A label moved up or down is tied to its point by a thin line.
+        let leader = if dx == LABEL_GAP {
+            Vec::new()
+        } else {
+            vec![(0, 0), (dx - 2, dy + LABEL_HEIGHT / 2)]
         };
-        // Centred on the point, then one label height up, one down, two
-        // up, two down, and so on (pixel y grows downward).
-        let shifts = (0..12).map(|k: i32| if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 });
-        let offset = shifts
-            .map(|shift| -height / 2 + shift * height)
-            .find(|&dy| free(dy))
-            .unwrap_or(-height / 2);
-        taken.push((px + 8, py + offset, px + 8 + width, py + offset + height));
         chart
             .draw_series([EmptyElement::at(point)
+                + Circle::new((0, 0), 5, color_of(s.setting).filled())
+                + PathElement::new(leader, color_of(s.setting).mix(0.6))
                 + Text::new(
                     s.setting.to_string(),
-                    (8, offset),
+                    (dx, dy),
                     ("sans-serif", 13).into_font(),
                 )])
             .map_err(|e| failed(&e))?;
     }
-    legend(&mut chart, SeriesLabelPosition::LowerRight).map_err(|e| failed(&e))?;
+    // The upper right is empty: speed and accuracy trade against each
+    // other, so no setting is both fast and accurate.
+    legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(|e| failed(&e))?;
     root.present().map_err(|e| failed(&e))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bench's kernel settings crowd around one speed: their labels
+    /// must still cover no point and no other label, and a lone point's
+    /// label sits beside it.
+    #[test]
+    fn crowded_labels_cover_no_point_and_no_other_label() {
+        let mut points = vec![(300, 200), (302, 203), (304, 206), (301, 210), (303, 214)];
+        points.push((600, 400));
+        let sizes = vec![(180, LABEL_HEIGHT); points.len()];
+        let places = place_labels(&points, &sizes);
+        let boxes: Vec<_> = points
+            .iter()
+            .zip(&places)
+            .zip(&sizes)
+            .map(|((&(x, y), &(dx, dy)), &(w, h))| (x + dx, y + dy, x + dx + w, y + dy + h))
+            .collect();
+        for (i, a) in boxes.iter().enumerate() {
+            for &(x, y) in &points {
+                assert!(
+                    !overlap(*a, (x - 5, y - 5, x + 5, y + 5)),
+                    "label {i} covers ({x}, {y})"
+                );
+            }
+            for (j, b) in boxes.iter().enumerate().skip(i + 1) {
+                assert!(!overlap(*a, *b), "labels {i} and {j} overlap");
+            }
+        }
+        // The lone point's label is beside it; in the crowd, labels moved.
+        assert_eq!(places[5], (LABEL_GAP, -LABEL_HEIGHT / 2));
+        let moved = places[..5].iter().filter(|&&(dx, _)| dx == LEADER).count();
+        assert!(moved >= 4, "{places:?}");
+    }
 }
