@@ -71,7 +71,12 @@ pub fn with_margin(camera: &Camera, size: (u32, u32), margin: f32) -> (Camera, (
     let grow = |n: u32| ((f64::from(n) * f64::from(margin)) as u32).max(n);
     (
         Camera {
-            hfov_deg: (wide.to_degrees() as f32).min(crate::config::HFOV_RANGE_DEG.1),
+            // Not `f32::min`, which would turn a NaN field into the
+            // widest one: a bad camera stays bad, for `View::new` to refuse.
+            hfov_deg: match wide.to_degrees() as f32 {
+                deg if deg > crate::config::HFOV_RANGE_DEG.1 => crate::config::HFOV_RANGE_DEG.1,
+                deg => deg,
+            },
             ..*camera
         },
         (grow(size.0), grow(size.1)),
@@ -321,6 +326,26 @@ fn bilinear(frame: &[Rgb], w: i64, h: i64, x: i64, y: i64) -> Rgb {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_nan_field_of_view_stays_nan_for_the_view_to_refuse() {
+        let camera = Camera {
+            hfov_deg: f32::NAN,
+            ..Camera::looking([10.0, 10.0, 50.0], 0.0, 10.0)
+        };
+        let (wide, _) = with_margin(&camera, (64, 48), 1.2);
+        assert!(wide.hfov_deg.is_nan());
+        assert!(crate::View::new(&wide, 64, 48).is_err());
+        let (widest, _) = with_margin(
+            &Camera {
+                hfov_deg: 159.0,
+                ..camera
+            },
+            (64, 48),
+            1.2,
+        );
+        assert_eq!(widest.hfov_deg, crate::config::HFOV_RANGE_DEG.1);
+    }
 
     /// Control points of a flat ground at height 0 seen by `camera`.
     fn ground_points(camera: &Camera, size: (u32, u32)) -> [ControlPoint; 9] {

@@ -93,9 +93,10 @@ impl Path {
     }
 
     /// The built-in scenic path over `scene`: in from its south edge over
-    /// the middle, a long turn east and back north, dipping toward the
+    /// the middle, a long turn east and back west, dipping toward the
     /// ground and looking down on the way, about 100 voxels a second at a
-    /// 1024-voxel scale.
+    /// 1024-voxel scale. It looks across the map all the way: terrain
+    /// fills the view out to 0.3 of the map's side.
     pub fn scenic(scene: &Scene) -> Self {
         let (w, d) = (scene.width as f32, scene.depth as f32);
         let s = w.min(d) / 1024.0;
@@ -105,10 +106,10 @@ impl Path {
             (0.0, at(0.50, 0.06), top + 40.0 * s, 90.0, 10.0),
             (2.0, at(0.52, 0.25), top + 10.0 * s, 80.0, 14.0),
             (4.0, at(0.60, 0.42), top - 20.0 * s, 55.0, 22.0),
-            (6.0, at(0.72, 0.52), top + 5.0 * s, 20.0, 35.0),
-            (8.0, at(0.80, 0.64), top + 60.0 * s, 75.0, 55.0),
-            (10.0, at(0.74, 0.80), top + 30.0 * s, 130.0, 18.0),
-            (12.0, at(0.60, 0.90), top + 15.0 * s, 170.0, 8.0),
+            (6.0, at(0.70, 0.50), top + 5.0 * s, 40.0, 35.0),
+            (8.0, at(0.74, 0.64), top + 60.0 * s, 100.0, 55.0),
+            (10.0, at(0.66, 0.72), top + 30.0 * s, 160.0, 18.0),
+            (12.0, at(0.52, 0.68), top + 15.0 * s, 210.0, 8.0),
         ];
         Self {
             keys: keys
@@ -467,6 +468,31 @@ fn true_view(kernel: &KernelScene, camera: &Camera, size: (u32, u32)) -> Result<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_scenic_path_looks_across_the_map_all_the_way() {
+        let scene = crate::scene::procedural(256, 1);
+        let path = Path::scenic(&scene);
+        let side = 256.0f32;
+        // The display's field (60°) widened by fly's default margin (1.2).
+        let half_field = 36.0f32;
+        for k in 0..=120 {
+            let t = path.duration() * f64::from(k) / 120.0;
+            let camera = path.camera(t, 60.0);
+            for turn in [-half_field, 0.0, half_field] {
+                let heading = (camera.yaw_deg + turn).to_radians();
+                let reach = side * 0.3;
+                let [x, y] = [
+                    camera.eye[0] + reach * heading.cos(),
+                    camera.eye[1] + reach * heading.sin(),
+                ];
+                assert!(
+                    (0.0..=side).contains(&x) && (0.0..=side).contains(&y),
+                    "at {t:.1} s the view at {turn}° leaves the map within 0.3 of its side"
+                );
+            }
+        }
+    }
 
     #[test]
     fn paths_interpolate_and_turn_the_short_way() {

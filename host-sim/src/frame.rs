@@ -26,6 +26,11 @@ impl Frame {
             depth: vec![f32::INFINITY; n],
         }
     }
+
+    /// Pixels whose ray saw sky.
+    pub fn sky_pixels(&self) -> usize {
+        self.depth.iter().filter(|d| d.is_infinite()).count()
+    }
 }
 
 /// What only a kernel render counts: steps and hits per pyramid level,

@@ -17,6 +17,7 @@ pub mod frame;
 pub mod kernel;
 pub mod metrics;
 pub mod output;
+pub mod outputs;
 pub mod reference;
 pub mod scene;
 pub mod sim;

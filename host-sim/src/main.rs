@@ -1,5 +1,6 @@
 //! `terracast-sim`: see `terracast-sim --help`.
 
+use clap::error::ErrorKind;
 use clap::Parser;
 use std::process::ExitCode;
 use terracast_sim::cli::{run, Cli};
@@ -17,6 +18,11 @@ fn main() -> ExitCode {
         Err(e) if !e.use_stderr() => {
             let _ = e.print();
             return ExitCode::SUCCESS;
+        }
+        Err(e) if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            // A bare command: the list of what it takes, as --help prints.
+            let _ = e.print();
+            return ExitCode::from(2);
         }
         Err(e) => {
             // clap explains over several lines; keep the explanation, drop

@@ -6,7 +6,8 @@
 mod load;
 mod procedural;
 
-pub use load::{load_colors, load_heights};
+pub use load::{hgt_spacing, load_colors, load_heights, not_a_height_map, HgtSpacing};
+pub use procedural::HeightBands;
 pub use procedural::{color_by_height_and_slope, procedural};
 pub(crate) use procedural::{terrain_color, value_noise, WATER_LEVEL};
 

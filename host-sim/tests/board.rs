@@ -159,6 +159,9 @@ fn exceeded_budget_fails_and_missing_or_bad_files_are_named() {
         "--out",
         s(&scene),
     ]);
-    assert_eq!(code, 1);
-    assert!(err.contains("4 MiB"), "{err}");
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("'--procedural-size ") && err.contains("from 2 to 800"),
+        "{err}"
+    );
 }

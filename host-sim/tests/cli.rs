@@ -127,7 +127,7 @@ fn bad_input_gives_one_line_and_a_nonzero_exit() {
             "cannot open",
         ),
         (base(&["--eye", "1,2"]), "X,Y,Z"),
-        (base(&["--eye", "nan,2,3"]), "finite"),
+        (base(&["--eye", "nan,2,3"]), "--eye"),
         (base(&["--yaw", "abc"]), "abc"),
         (base(&["--size", "0x10"]), "size"),
         (
@@ -144,7 +144,7 @@ fn bad_input_gives_one_line_and_a_nonzero_exit() {
         ),
         (base(&["--pitch", "120"]), "pitch"),
         (base(&["--roll", "10"]), "roll"),
-        (base(&["--hfov", "0"]), "field of view"),
+        (base(&["--hfov", "0"]), "--hfov"),
         (base(&["--height-scale", "-1"]), "height-scale"),
         (base(&["--height-scale", "1000"]), "kernel's range"),
         (base(&["--sky", "1,2,300"]), "300"),

@@ -122,13 +122,10 @@ fn bad_input_is_one_line() {
             &["fly", "--out", "/tmp/x.txt"],
             "give a .gif file or an existing folder",
         ),
-        (
-            &["fly", "--frames", "0", "--out", gif],
-            "--frames must be between",
-        ),
+        (&["fly", "--frames", "0", "--out", gif], "'--frames <N>'"),
         (
             &["fly", "--size", "4000x10", "--out", gif],
-            "--size must be between",
+            "larger than 2048x2048",
         ),
         (&["fly", "--path", bad_path, "--out", gif], "path line 2"),
         (

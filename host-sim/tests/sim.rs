@@ -87,8 +87,11 @@ fn a_flight_reports_every_frame_and_the_machine() {
     assert_eq!(code, 1);
     assert!(err.contains("frames x image pixels"), "{err}");
     let (code, _, err) = sim(&["sim", "--processors", "1"]);
-    assert_eq!(code, 1);
-    assert!(err.contains("processors must be between 2"), "{err}");
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("'--processors <N>'") && err.contains("from 2 to 1024"),
+        "{err}"
+    );
     let (code, _, err) = sim(&["sim", "--machine", "/nonexistent/m.toml"]);
     assert_eq!(code, 1);
     assert!(err.contains("cannot read /nonexistent/m.toml"), "{err}");
@@ -114,7 +117,7 @@ fn threads_render_the_same_frames_and_report_mpx() {
         "{out}"
     );
     let (code, _, err) = sim(&["sim", "--threads", "0"]);
-    assert_eq!(code, 1);
+    assert_eq!(code, 2);
     assert!(err.contains("--threads"), "{err}");
 }
 
@@ -149,6 +152,6 @@ fn bench_writes_one_csv_row_per_view_and_setting_and_marks_the_front() {
         );
     }
     let (code, _, err) = sim(&["bench", "--repeats", "0"]);
-    assert_eq!(code, 1);
+    assert_eq!(code, 2);
     assert!(err.contains("--repeats"), "{err}");
 }

@@ -1,12 +1,13 @@
 //! `terracast-sim bench`: speed against accuracy for every method.
 
-use super::parse_size;
+use super::values::{number, size};
 use crate::bench::{
     csv, flicker, kernel_vs_voxel_space_at_pitch_0, run, split_by_map_size, summarize,
     summary_table, views, BenchScene, LARGE_MAP_SIDE,
 };
 use crate::chart::draw_bench;
 use crate::error::{Error, Result};
+use crate::outputs::Outputs;
 use crate::scene::{load_pair, procedural, Scene};
 use std::path::PathBuf;
 
@@ -17,10 +18,10 @@ pub(super) struct BenchArgs {
     #[arg(long, value_name = "DIR")]
     data: Option<PathBuf>,
     /// Image size of every view.
-    #[arg(long, default_value = "320x240", value_parser = parse_size, value_name = "WxH")]
+    #[arg(long, default_value = "320x240", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
     /// Timed runs of each render; the best counts.
-    #[arg(long, default_value_t = 3, value_name = "N")]
+    #[arg(long, default_value_t = 3, value_name = "N", value_parser = number(1u32, 20), allow_hyphen_values = true)]
     repeats: u32,
     /// Only the first scene's pitch-0 and pitch-15 views, and no flicker
     /// flights (a smoke run).
@@ -39,9 +40,6 @@ pub(super) struct BenchArgs {
 }
 
 pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
-    if !(1..=20).contains(&args.repeats) {
-        return Err(Error::new("--repeats must be between 1 and 20"));
-    }
     if args.stability {
         let outcomes = crate::stability::run(args.size, |done, total| {
             eprint!("\rstability: condition {done}/{total}   ");
@@ -50,23 +48,40 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
         print!("{}", crate::stability::table(&outcomes));
         return Ok(());
     }
-    for path in [&args.csv, &args.chart] {
-        super::check_writable(path)?;
+    let mut outputs = Outputs::new();
+    let comanche = args.data.as_ref().map(|dir| dir.join("comanche"));
+    let comanche_maps: Vec<_> = [("C1W", "D1"), ("C7W", "D7")]
+        .into_iter()
+        .flat_map(|(color, height)| {
+            let dir = comanche.clone().unwrap_or_default();
+            [
+                ("--data", dir.join(format!("{height}.png"))),
+                ("--data", dir.join(format!("{color}.png"))),
+            ]
+        })
+        .collect();
+    if comanche.is_some() {
+        for (flag, path) in &comanche_maps {
+            outputs.input(flag, path);
+        }
     }
+    let csv_out = outputs.output("--csv", &args.csv)?;
+    let chart_out = outputs.output("--chart", &args.chart)?;
     let mut named: Vec<(String, Scene)> = vec![
         ("procedural 1024".into(), procedural(1024, 1)),
         ("procedural 512 seed 9".into(), procedural(512, 9)),
     ];
-    if let Some(dir) = &args.data {
-        let comanche = dir.join("comanche");
-        for (color, height) in [("C1W", "D1"), ("C7W", "D7")] {
-            let (h, c) = (
-                comanche.join(format!("{height}.png")),
-                comanche.join(format!("{color}.png")),
-            );
+    if comanche.is_some() {
+        for pair in comanche_maps.chunks(2) {
+            let (h, c) = (&pair[0].1, &pair[1].1);
+            let name = |p: &std::path::Path| {
+                p.file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            };
             named.push((
-                format!("{color}/{height}"),
-                load_pair(&h, Some(&c), 1.0, 0)?,
+                format!("{}/{}", name(c), name(h)),
+                load_pair(h, Some(c), 1.0, 0)?,
             ));
         }
     }
@@ -101,8 +116,8 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
         eprint!("\rbench: view {done}/{total} (reference, then every setting)   ");
     })?;
     eprintln!();
-    std::fs::write(&args.csv, csv(&measures))
-        .map_err(|e| Error::new(format!("cannot write {}: {e}", args.csv.display())))?;
+    std::fs::write(outputs.temporary(csv_out), csv(&measures))
+        .map_err(|e| Error::new(format!("cannot write --csv {}: {e}", args.csv.display())))?;
     let mut summaries = summarize(&measures);
     if !args.quick {
         let flicker = flicker(&scenes, args.size, 8, |done, total| {
@@ -116,7 +131,8 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
                 .map(|(_, f)| *f);
         }
     }
-    draw_bench(&args.chart, &summaries)?;
+    draw_bench(outputs.temporary(chart_out), &summaries)?;
+    outputs.commit()?;
     println!(
         "{} views of {}x{}, {} settings; best of {} runs, one thread",
         suite.len(),

@@ -1,9 +1,11 @@
 //! `terracast-sim fly`: the main job. A flight at a steady display rate on
 //! the modeled machine, written as an animation and a report.
 
-use super::{check_writable, load_scene, parse_size, SceneArgs};
+use super::values::{hfov, number, positive, size};
+use super::{load_scene, SceneArgs};
 use crate::error::{Error, Result};
 use crate::fly::{fly, FlyOptions, Kind, Path};
+use crate::outputs::{OutputId, Outputs};
 use image::codecs::gif::{GifEncoder, Repeat};
 use image::{Delay, Frame, RgbaImage};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -18,30 +20,30 @@ pub(super) struct FlyArgs {
     #[arg(long, value_name = "PATH.txt")]
     path: Option<PathBuf>,
     /// Display frames [default: the path's length at the display rate].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = number(1u32, 100_000), allow_hyphen_values = true)]
     frames: Option<u32>,
     /// Display rate, frames a second.
-    #[arg(long, default_value_t = 30.0, value_name = "HZ")]
+    #[arg(long, default_value_t = 30.0, value_name = "HZ", value_parser = positive(0.0f64, 1000.0), allow_hyphen_values = true)]
     display_hz: f64,
     /// Rendering rate the step budget is made for; the frames between are
     /// warped.
-    #[arg(long, default_value_t = 10.0, value_name = "HZ")]
+    #[arg(long, default_value_t = 10.0, value_name = "HZ", value_parser = positive(0.0f64, 1000.0), allow_hyphen_values = true)]
     render_hz: f64,
-    /// Display size.
-    #[arg(long, default_value = "200x150", value_parser = parse_size, value_name = "WxH")]
+    /// Display size, up to 2048x2048.
+    #[arg(long, default_value = "200x150", value_parser = display_size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
     /// Horizontal field of view, degrees.
-    #[arg(long, default_value_t = 60.0, value_name = "DEG")]
+    #[arg(long, default_value_t = 60.0, value_name = "DEG", value_parser = hfov, allow_hyphen_values = true)]
     hfov: f32,
     /// How much wider and taller than the display frames are rendered, so
     /// that warps stay inside them.
-    #[arg(long, default_value_t = 1.2, value_name = "M")]
+    #[arg(long, default_value_t = 1.2, value_name = "M", value_parser = number(1.0f32, 2.0), allow_hyphen_values = true)]
     margin: f32,
     /// Machine description (TOML); fields left out keep the PVS defaults.
     #[arg(long, value_name = "MACHINE.toml")]
     machine: Option<PathBuf>,
     /// Processors, master included (overrides the machine file).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = number(2u32, 1024), allow_hyphen_values = true)]
     processors: Option<u32>,
     /// Skip rendering each warped frame's true view (faster; no warp PSNR).
     #[arg(long)]
@@ -53,6 +55,15 @@ pub(super) struct FlyArgs {
     /// The report: a record per display frame, as JSON.
     #[arg(long, value_name = "REPORT.json")]
     report: Option<PathBuf>,
+}
+
+/// `fly --size`: the display is at most 2048 a side.
+fn display_size(text: &str) -> std::result::Result<(u32, u32), String> {
+    let (w, h) = size(text)?;
+    if w > 2048 || h > 2048 {
+        return Err(format!("{w}x{h} is larger than 2048x2048"));
+    }
+    Ok((w, h))
 }
 
 pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
@@ -69,18 +80,24 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
             args.out.display()
         )));
     }
-    if !png_dir {
-        check_writable(&args.out)?;
+    let mut outputs = Outputs::new();
+    args.scene.name_inputs(&mut outputs);
+    for (flag, path) in [("--path", &args.path), ("--machine", &args.machine)] {
+        if let Some(path) = path {
+            outputs.input(flag, path);
+        }
     }
-    if let Some(report) = &args.report {
-        check_writable(report)?;
-    }
-    if !(1..=2048).contains(&args.size.0) || !(1..=2048).contains(&args.size.1) {
-        return Err(Error::new("--size must be between 1x1 and 2048x2048"));
-    }
-    if !(args.margin.is_finite() && (1.0..=2.0).contains(&args.margin)) {
-        return Err(Error::new("--margin must be between 1 and 2"));
-    }
+    let gif: Option<OutputId> = if png_dir {
+        outputs.folder("--out", &args.out)?;
+        None
+    } else {
+        Some(outputs.output("--out", &args.out)?)
+    };
+    let report_out = args
+        .report
+        .as_deref()
+        .map(|path| outputs.output("--report", path))
+        .transpose()?;
     let scene = load_scene(&args.scene)?;
     let path = match &args.path {
         Some(file) => {
@@ -91,9 +108,6 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
         None => Path::scenic(&scene),
     };
     let frames = match args.frames {
-        Some(0) | Some(100_001..) => {
-            return Err(Error::new("--frames must be between 1 and 100000"));
-        }
         Some(n) => n,
         None => ((path.duration() * args.display_hz).floor() as u32 + 1).min(100_000),
     };
@@ -116,28 +130,35 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
     })?;
     bar.finish_and_clear();
 
-    if png_dir {
-        for (k, image) in flight.images.iter().enumerate() {
-            let file = args.out.join(format!("frame-{k:05}.png"));
-            crate::output::write_png(
-                &file,
-                &crate::frame::Frame {
-                    width: args.size.0,
-                    height: args.size.1,
-                    colors: image.clone(),
-                    depth: vec![f32::INFINITY; image.len()],
-                },
-            )?;
+    match gif {
+        Some(id) => write_gif(
+            outputs.temporary(id),
+            &flight.images,
+            args.size,
+            args.display_hz,
+        )?,
+        None => {
+            for (k, image) in flight.images.iter().enumerate() {
+                let id = outputs.output("--out", &args.out.join(format!("frame-{k:05}.png")))?;
+                crate::output::write_png(
+                    outputs.temporary(id),
+                    &crate::frame::Frame {
+                        width: args.size.0,
+                        height: args.size.1,
+                        colors: image.clone(),
+                        depth: vec![f32::INFINITY; image.len()],
+                    },
+                )?;
+            }
         }
-    } else {
-        write_gif(&args.out, &flight.images, args.size, args.display_hz)?;
     }
-    if let Some(report) = &args.report {
+    if let (Some(id), Some(report)) = (report_out, &args.report) {
         let text = serde_json::to_string_pretty(&flight.report_json(&options))
             .map_err(|e| Error::new(e.to_string()))?;
-        std::fs::write(report, text + "\n")
-            .map_err(|e| Error::new(format!("cannot write {}: {e}", report.display())))?;
+        std::fs::write(outputs.temporary(id), text + "\n")
+            .map_err(|e| Error::new(format!("cannot write --report {}: {e}", report.display())))?;
     }
+    outputs.commit()?;
 
     let rendered = flight
         .frames
@@ -194,6 +215,15 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
     Ok(())
 }
 
+/// Display frame `k`'s delay in the GIF's centiseconds: frame k ends at
+/// round((k + 1) × 100 / hz) cs, so the delays alternate (3 and 4 cs at
+/// 30 Hz) and their sum keeps the flight's clock to within a centisecond.
+/// A delay is at least 1 cs (players treat 0 as "as fast as you can").
+pub(crate) fn frame_delay_cs(k: usize, hz: f64) -> u32 {
+    let end = |k: usize| (k as f64 * 100.0 / hz).round() as u32;
+    (end(k + 1) - end(k)).max(1)
+}
+
 fn write_gif(
     path: &std::path::Path,
     images: &[Vec<[u8; 3]>],
@@ -206,8 +236,8 @@ fn write_gif(
     encoder
         .set_repeat(Repeat::Infinite)
         .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))?;
-    let delay = Delay::from_numer_denom_ms(1000, hz.round().max(1.0) as u32);
-    for image in images {
+    for (k, image) in images.iter().enumerate() {
+        let delay = Delay::from_numer_denom_ms(frame_delay_cs(k, hz) * 10, 1);
         let rgba: Vec<u8> = image.iter().flat_map(|c| [c[0], c[1], c[2], 255]).collect();
         let buffer = RgbaImage::from_raw(size.0, size.1, rgba)
             .ok_or_else(|| Error::new("frame size does not match the display size"))?;
@@ -216,4 +246,23 @@ fn write_gif(
             .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::frame_delay_cs;
+
+    #[test]
+    fn gif_delays_keep_the_flights_clock() {
+        for (hz, frames) in [(30.0, 300), (30.0, 7), (24.0, 100), (60.0, 61), (10.0, 9)] {
+            let total: u32 = (0..frames).map(|k| frame_delay_cs(k, hz)).sum();
+            let flight_cs = frames as f64 * 100.0 / hz;
+            assert!(
+                (f64::from(total) - flight_cs).abs() <= 1.0,
+                "{frames} frames at {hz} Hz: {total} cs against {flight_cs}"
+            );
+        }
+        let first: Vec<u32> = (0..3).map(|k| frame_delay_cs(k, 30.0)).collect();
+        assert_eq!(first, [3, 4, 3]);
+    }
 }

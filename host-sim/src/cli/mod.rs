@@ -4,25 +4,28 @@ mod bench;
 mod fly;
 mod paging;
 mod sim;
+mod values;
 
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
 use crate::board::{board_views, verify, write_scene};
 use crate::error::{Error, Result};
 use crate::kernel::{render_kernel_with, PixelRays};
 use crate::output::{stats_json, write_pfm, write_png, write_stats};
+use crate::outputs::{OutputId, Outputs};
 use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{load_pair, procedural, Scene};
 use clap::{Parser, Subcommand, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use terracast::config::DEFAULT_HFOV_DEG;
 use terracast::{
     Camera, Coherence, HeightFilter, RenderOptions, Resolution, Rgb, Shading, VerticalSamples,
     View, ViewError, U8F8,
 };
+use values::{angle, hfov, number, pitch, positive, seed, size, triple};
 
 /// Real-time terrain flythrough: the terracast kernel on the host.
 #[derive(Debug, Parser)]
-#[command(name = "terracast-sim", version, about)]
+#[command(name = "terracast-sim", version, about, arg_required_else_help = true)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -38,7 +41,7 @@ enum Command {
     Render(RenderArgs),
     /// The emulated board: pack its scene, verify what it rendered
     /// (scripts/board-check runs both around QEMU).
-    #[command(subcommand)]
+    #[command(subcommand, arg_required_else_help = true)]
     Board(BoardCommand),
     /// Fly on the modeled parallel machine (Cohen-Or's PVS by default):
     /// simulated frame times, deadlines, utilization, bank contention;
@@ -72,13 +75,14 @@ enum BoardCommand {
 struct BoardSceneArgs {
     /// Side of the procedural map (it must fit the board's 4 MiB of code
     /// memory: 5 bytes a voxel).
-    #[arg(long, default_value_t = 512, value_name = "N")]
+    #[arg(long, default_value_t = 512, value_name = "N",
+          value_parser = number(2u32, 800), allow_hyphen_values = true)]
     procedural_size: u32,
     /// Seed of the procedural scene.
-    #[arg(long, default_value_t = 1, value_name = "N")]
+    #[arg(long, default_value_t = 1, value_name = "N", value_parser = seed, allow_hyphen_values = true)]
     seed: u64,
     /// Image size of the board's frames.
-    #[arg(long, default_value = "320x240", value_parser = parse_size, value_name = "WxH")]
+    #[arg(long, default_value = "320x240", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
     /// Output scene file.
     #[arg(long, value_name = "SCENE.tcb")]
@@ -96,7 +100,7 @@ struct BoardVerifyArgs {
     from: PathBuf,
     /// Fail when the kernel's instructions per pixel over all views exceed
     /// this.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = positive(0.0f64, 1e9), allow_hyphen_values = true)]
     budget: Option<f64>,
 }
 
@@ -218,20 +222,16 @@ struct SceneArgs {
     /// are colored by height and slope.
     #[arg(long, value_name = "C.png")]
     color: Option<PathBuf>,
-    /// World height of one height-map unit, in voxels.
-    #[arg(
-        long,
-        default_value_t = 1.0,
-        allow_negative_numbers = true,
-        value_name = "S"
-    )]
-    height_scale: f32,
+    /// World height of one height-map unit, in voxels [default: 1; for an
+    /// SRTM .hgt, one meter in voxels of its grid spacing].
+    #[arg(long, value_name = "S", value_parser = positive(0.0f32, 1e6), allow_hyphen_values = true)]
+    height_scale: Option<f32>,
     /// Side of the procedural scene, used when no --height is given
     /// [default: 1024; `sim --table`: 4096].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = number(2u32, 8192), allow_hyphen_values = true)]
     procedural_size: Option<u32>,
     /// Seed of the procedural scene.
-    #[arg(long, default_value_t = 1, value_name = "N")]
+    #[arg(long, default_value_t = 1, value_name = "N", value_parser = seed, allow_hyphen_values = true)]
     seed: u64,
 }
 
@@ -240,27 +240,17 @@ struct SceneArgs {
 struct CameraArgs {
     /// Eye position in voxels [default: over the middle of the map's south
     /// edge, a little above the highest terrain].
-    #[arg(long, value_parser = parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    #[arg(long, value_parser = triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
     eye: Option<[f32; 3]>,
     /// Heading in degrees, from +x toward +y.
-    #[arg(
-        long,
-        default_value_t = 90.0,
-        allow_negative_numbers = true,
-        value_name = "DEG"
-    )]
+    #[arg(long, default_value_t = 90.0, value_parser = angle, allow_hyphen_values = true, value_name = "DEG")]
     yaw: f32,
     /// Degrees below the horizon (positive looks down), -89 to 90.
-    #[arg(
-        long,
-        default_value_t = 12.0,
-        allow_negative_numbers = true,
-        value_name = "DEG"
-    )]
+    #[arg(long, default_value_t = 12.0, value_parser = pitch, allow_hyphen_values = true, value_name = "DEG")]
     pitch: f32,
-    /// Full horizontal field of view in degrees [default: 60; `sim
-    /// --table`: 30].
-    #[arg(long, allow_negative_numbers = true, value_name = "DEG")]
+    /// Full horizontal field of view in degrees, 1 to 160 [default: 60;
+    /// `sim --table`: 30].
+    #[arg(long, value_parser = hfov, allow_hyphen_values = true, value_name = "DEG")]
     hfov: Option<f32>,
 }
 
@@ -286,18 +276,13 @@ struct RenderArgs {
     #[command(flatten)]
     camera: CameraArgs,
     /// Bank in degrees, positive = right wing down.
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        allow_negative_numbers = true,
-        value_name = "DEG"
-    )]
+    #[arg(long, default_value_t = 0.0, value_parser = angle, allow_hyphen_values = true, value_name = "DEG")]
     roll: f32,
     /// Image size.
-    #[arg(long, default_value = "640x360", value_parser = parse_size, value_name = "WxH")]
+    #[arg(long, default_value = "640x360", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
     /// Sky color.
-    #[arg(long, value_parser = parse_rgb, value_name = "R,G,B")]
+    #[arg(long, value_parser = values::rgb, allow_hyphen_values = true, value_name = "R,G,B")]
     sky: Option<Rgb>,
     /// Renderer.
     #[arg(long, value_enum, default_value_t = Method::Kernel)]
@@ -316,7 +301,8 @@ struct RenderArgs {
     /// where its voxels get narrower than 1/RATIO pixels: higher is faster
     /// and blurrier. Colors switch by it as given; heights by it scaled
     /// down on rugged terrain by --terrain-fit.
-    #[arg(long, default_value_t = 1.0, value_name = "RATIO")]
+    #[arg(long, default_value_t = 1.0, value_name = "RATIO",
+          value_parser = number(1.0f32 / 256.0, 255.0), allow_hyphen_values = true)]
     pixel_to_voxel: f32,
     /// Kernel: scale the pixel-to-voxel ratio of the height levels down by
     /// the terrain's roughness, so that coarse levels begin where their
@@ -341,23 +327,16 @@ struct RenderArgs {
     #[arg(long, value_enum, default_value_t = ShadingArg::Subvoxel)]
     shading: ShadingArg,
     /// Voxel Space: growth of the slice spacing each slice.
-    #[arg(
-        long,
-        default_value_t = 0.005,
-        allow_negative_numbers = true,
-        value_name = "G"
-    )]
+    #[arg(long, default_value_t = 0.005, value_name = "G",
+          value_parser = number(0.0f64, 10.0), allow_hyphen_values = true)]
     voxelspace_growth: f64,
     /// March: step length in voxels.
-    #[arg(
-        long,
-        default_value_t = 0.5,
-        allow_negative_numbers = true,
-        value_name = "V"
-    )]
+    #[arg(long, default_value_t = 0.5, value_name = "V",
+          value_parser = number(0.01f64, 64.0), allow_hyphen_values = true)]
     march_step: f64,
     /// Reference: rays per pixel side (n x n rays a pixel).
-    #[arg(long, default_value_t = 4, value_name = "N")]
+    #[arg(long, default_value_t = 4, value_name = "N",
+          value_parser = number(1u32, 16), allow_hyphen_values = true)]
     supersample: u32,
     /// Output image (8-bit RGB PNG).
     #[arg(long, value_name = "OUT.png")]
@@ -385,15 +364,12 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 fn board_scene_command(args: BoardSceneArgs) -> Result<()> {
-    // 5 bytes a voxel must fit beside the code in 4 MiB.
-    if !(2..=800).contains(&args.procedural_size) {
-        return Err(Error::new(
-            "--procedural-size must be between 2 and 800 for the board's 4 MiB of code memory",
-        ));
-    }
+    let mut outputs = Outputs::new();
+    let out = outputs.output("--out", &args.out)?;
     let scene = procedural(args.procedural_size, args.seed);
     let views = board_views(args.procedural_size, scene.max_height());
-    write_scene(&args.out, &scene, args.size, &views)?;
+    write_scene(outputs.temporary(out), &scene, args.size, &views)?;
+    outputs.commit()?;
     println!(
         "board scene: {0}x{0} map, {1} views at {2}x{3} -> {4}",
         args.procedural_size,
@@ -439,15 +415,15 @@ fn board_verify_command(args: BoardVerifyArgs) -> Result<()> {
 
 fn render_command(args: RenderArgs) -> Result<()> {
     let (width, height) = args.size;
-    // Refuse unwritable outputs before spending time on a render.
-    for path in [Some(&args.out), args.depth.as_ref(), args.stats.as_ref()]
-        .into_iter()
-        .flatten()
-    {
-        check_writable(path)?;
-    }
+    // Every output is refused or made ready before any time is spent.
+    let mut outputs = Outputs::new();
+    args.scene.name_inputs(&mut outputs);
     if let Some(spec) = &args.terrain {
-        return paging::render_tiled_command(&args, spec);
+        outputs.input("--terrain", Path::new(spec));
+    }
+    let files = RenderFiles::name(&args, &mut outputs)?;
+    if let Some(spec) = &args.terrain {
+        return paging::render_tiled_command(&args, spec, outputs, files);
     }
     let scene = load_scene(&args.scene)?;
     let camera = Camera {
@@ -458,14 +434,33 @@ fn render_command(args: RenderArgs) -> Result<()> {
         hfov_deg: args.camera.hfov_or(DEFAULT_HFOV_DEG),
     };
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
+    // The reference can roll; every other method shares the kernel's
+    // camera limits.
+    let checked = Camera {
+        roll_deg: if args.method == Method::Reference {
+            0.0
+        } else {
+            camera.roll_deg
+        },
+        ..camera
+    };
+    // The kernel's terrain first: heights out of its range are the problem
+    // to report, before the camera placed over them.
+    let filter = args
+        .height_filter
+        .map_or_else(HeightFilter::default, Into::into);
+    let kernel = match args.method {
+        Method::Kernel => Some(scene.to_kernel_with(filter)?),
+        _ => None,
+    };
+    View::new(&checked, width, height).map_err(view_error)?;
     let (frame, stats) = match args.method {
         Method::Kernel => {
-            let options = kernel_options(&args, sky)?;
-            let kernel = scene.to_kernel_with(
-                args.height_filter
-                    .map_or_else(HeightFilter::default, Into::into),
-            )?;
-            View::new(&camera, width, height).map_err(view_error)?;
+            let options = kernel_options(&args, sky);
+            let kernel = match kernel {
+                Some(kernel) => kernel,
+                None => scene.to_kernel_with(filter)?,
+            };
             render_kernel_with(
                 &kernel,
                 &camera,
@@ -476,83 +471,78 @@ fn render_command(args: RenderArgs) -> Result<()> {
             )?
         }
         Method::Reference => {
-            // The reference shares the kernel's camera limits but can roll.
-            View::new(
-                &Camera {
-                    roll_deg: 0.0,
-                    ..camera
-                },
-                width,
-                height,
-            )
-            .map_err(view_error)?;
-            if !args.roll.is_finite() {
-                return Err(view_error(ViewError::NotFinite));
-            }
-            if args.supersample == 0 || args.supersample > 16 {
-                return Err(Error::new("--supersample must be between 1 and 16"));
-            }
             let options = ReferenceOptions {
                 supersample: args.supersample,
                 sky,
             };
             Reference::new(&scene).render(&camera, width, height, &options)
         }
-        Method::Voxelspace | Method::March => {
-            View::new(&camera, width, height).map_err(view_error)?;
-            if args.method == Method::Voxelspace {
-                if !(0.0..=10.0).contains(&args.voxelspace_growth) {
-                    return Err(Error::new("--voxelspace-growth must be between 0 and 10"));
-                }
-                let options = VoxelSpaceOptions {
-                    spacing_growth: args.voxelspace_growth,
-                    sky,
-                };
-                voxel_space(&scene, &camera, width, height, &options)
-            } else {
-                if !(0.01..=64.0).contains(&args.march_step) {
-                    return Err(Error::new(
-                        "--march-step must be between 0.01 and 64 voxels",
-                    ));
-                }
-                let options = MarchOptions {
-                    step: args.march_step,
-                    sky,
-                };
-                march(&scene, &camera, width, height, &options)
-            }
+        Method::Voxelspace => {
+            let options = VoxelSpaceOptions {
+                spacing_growth: args.voxelspace_growth,
+                sky,
+            };
+            voxel_space(&scene, &camera, width, height, &options)
+        }
+        Method::March => {
+            let options = MarchOptions {
+                step: args.march_step,
+                sky,
+            };
+            march(&scene, &camera, width, height, &options)
         }
     };
-    write_png(&args.out, &frame)?;
-    if let Some(path) = &args.depth {
-        write_pfm(path, &frame)?;
-    }
-    if let Some(path) = &args.stats {
-        let sky_pixels = frame.depth.iter().filter(|d| d.is_infinite()).count();
-        write_stats(path, &stats_json(&stats, width, height, sky_pixels))?;
-    }
-    Ok(())
+    let stats = files
+        .stats
+        .map(|id| (id, stats_json(&stats, width, height, frame.sky_pixels())));
+    files.write(&outputs, &frame, stats)?;
+    outputs.commit()
 }
 
-/// Refuses an output whose folder does not exist.
-fn check_writable(path: &std::path::Path) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(std::path::Path::new("."));
-    if dir.is_dir() {
+/// `render`'s outputs: the image, and the depth and stats when asked for.
+struct RenderFiles {
+    image: OutputId,
+    depth: Option<OutputId>,
+    stats: Option<OutputId>,
+}
+
+impl RenderFiles {
+    fn name(args: &RenderArgs, outputs: &mut Outputs) -> Result<Self> {
+        Ok(Self {
+            image: outputs.output("--out", &args.out)?,
+            depth: args
+                .depth
+                .as_deref()
+                .map(|p| outputs.output("--depth", p))
+                .transpose()?,
+            stats: args
+                .stats
+                .as_deref()
+                .map(|p| outputs.output("--stats", p))
+                .transpose()?,
+        })
+    }
+
+    /// Writes the frame, its depth and `stats` into their temporaries.
+    fn write(
+        &self,
+        outputs: &Outputs,
+        frame: &crate::frame::Frame,
+        stats: Option<(OutputId, serde_json::Value)>,
+    ) -> Result<()> {
+        write_png(outputs.temporary(self.image), frame)?;
+        if let Some(id) = self.depth {
+            write_pfm(outputs.temporary(id), frame)?;
+        }
+        if let Some((id, json)) = stats {
+            write_stats(outputs.temporary(id), &json)?;
+        }
         Ok(())
-    } else {
-        Err(Error::new(format!(
-            "cannot write {}: folder {} does not exist",
-            path.display(),
-            dir.display()
-        )))
     }
 }
 
-/// The kernel's options from the flags, each checked.
-fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
+/// The kernel's options from the flags (each checked by its parser).
+fn kernel_options(args: &RenderArgs, sky: Rgb) -> RenderOptions {
     let coherence = match args.coherence {
         CoherenceArg::Off => Coherence::Off,
         CoherenceArg::Exact => Coherence::Exact,
@@ -560,20 +550,12 @@ fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
     };
     let resolution = match args.resolution {
         ResolutionArg::Single => Resolution::Single,
-        ResolutionArg::Multi => {
-            let ratio = args.pixel_to_voxel;
-            if !(1.0 / 256.0..=255.0).contains(&ratio) {
-                return Err(Error::new(
-                    "--pixel-to-voxel must be between 0.004 (1/256) and 255",
-                ));
-            }
-            Resolution::Multi {
-                pixel_to_voxel: U8F8::from_num(ratio),
-            }
-        }
+        ResolutionArg::Multi => Resolution::Multi {
+            pixel_to_voxel: U8F8::from_num(args.pixel_to_voxel),
+        },
     };
     let (vertical_samples, _) = args.vertical_samples;
-    Ok(RenderOptions {
+    RenderOptions {
         coherence,
         resolution,
         hierarchical_first_hit: args.first_hit == FirstHitArg::Hierarchical,
@@ -584,7 +566,19 @@ fn kernel_options(args: &RenderArgs, sky: Rgb) -> Result<RenderOptions> {
         },
         terrain_fit: args.terrain_fit == TerrainFitArg::On,
         sky,
-    })
+    }
+}
+
+impl SceneArgs {
+    /// Names the files the scene is read from as inputs.
+    fn name_inputs(&self, outputs: &mut Outputs) {
+        if let Some(path) = &self.height {
+            outputs.input("--height", path);
+        }
+        if let Some(path) = &self.color {
+            outputs.input("--color", path);
+        }
+    }
 }
 
 fn load_scene(args: &SceneArgs) -> Result<Scene> {
@@ -596,70 +590,43 @@ fn load_scene(args: &SceneArgs) -> Result<Scene> {
 fn load_scene_or(args: &SceneArgs, default_side: u32) -> Result<Scene> {
     match (&args.height, &args.color) {
         (None, Some(_)) => Err(Error::new("--color needs --height")),
-        (None, None) => {
-            let side = args.procedural_size.unwrap_or(default_side);
-            if !(2..=8192).contains(&side) {
-                return Err(Error::new("--procedural-size must be between 2 and 8192"));
-            }
-            Ok(procedural(side, args.seed))
+        (None, None) => Ok(procedural(
+            args.procedural_size.unwrap_or(default_side),
+            args.seed,
+        )),
+        (Some(h), color) => {
+            let scale = height_scale(h, args.height_scale)?;
+            load_pair(h, color.as_deref(), scale, args.seed)
         }
-        (Some(h), color) => load_pair(h, color.as_deref(), args.height_scale, args.seed),
     }
 }
 
+/// `--height-scale` as given, or derived from an SRTM tile's grid spacing
+/// (saying what it chose), or 1.
+fn height_scale(height: &Path, given: Option<f32>) -> Result<f32> {
+    if let Some(scale) = given {
+        return Ok(scale);
+    }
+    match crate::scene::hgt_spacing(height)? {
+        Some(spacing) => {
+            eprintln!("{}", spacing.describe());
+            Ok(spacing.height_scale())
+        }
+        None => Ok(1.0),
+    }
+}
+
+/// A camera the kernel refuses, with the flag to change.
 fn view_error(e: ViewError) -> Error {
-    Error::new(format!("bad camera: {e}"))
-}
-
-fn parse_triple(s: &str) -> std::result::Result<[f32; 3], String> {
-    let parts: Vec<&str> = s.split(',').collect();
-    if parts.len() != 3 {
-        return Err(format!("expected X,Y,Z, got '{s}'"));
-    }
-    let mut out = [0.0; 3];
-    for (o, p) in out.iter_mut().zip(parts) {
-        *o = p
-            .trim()
-            .parse::<f32>()
-            .map_err(|_| format!("'{p}' is not a number"))?;
-        if !o.is_finite() {
-            return Err(format!("'{p}' is not a finite number"));
-        }
-    }
-    Ok(out)
-}
-
-fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected WxH, got '{s}'"))?;
-    let w: u32 = w
-        .trim()
-        .parse()
-        .map_err(|_| format!("width '{w}' is not a whole number"))?;
-    let h: u32 = h
-        .trim()
-        .parse()
-        .map_err(|_| format!("height '{h}' is not a whole number"))?;
-    if w == 0 || h == 0 || w > 8192 || h > 8192 {
-        return Err(format!("size {w}x{h} is outside 1x1..8192x8192"));
-    }
-    Ok((w, h))
-}
-
-fn parse_rgb(s: &str) -> std::result::Result<Rgb, String> {
-    let parts: Vec<&str> = s.split(',').collect();
-    if parts.len() != 3 {
-        return Err(format!("expected R,G,B, got '{s}'"));
-    }
-    let mut out = [0u8; 3];
-    for (o, p) in out.iter_mut().zip(parts) {
-        *o = p
-            .trim()
-            .parse()
-            .map_err(|_| format!("'{p}' is not a color value 0-255"))?;
-    }
-    Ok(out)
+    let flag = match e {
+        ViewError::NotFinite => "--eye, --yaw, --pitch, --hfov",
+        ViewError::EyeOutOfRange => "--eye",
+        ViewError::PitchOutOfRange => "--pitch",
+        ViewError::RollUnsupported => "--roll",
+        ViewError::FovOutOfRange => "--hfov",
+        ViewError::ImageSize | ViewError::AspectOutOfRange => "--size",
+    };
+    Error::new(format!("bad camera ({flag}): {e}"))
 }
 
 /// `--vertical-samples`: a count of rays every pixel gets, or `footprint`.

@@ -1,9 +1,11 @@
 //! `terracast-sim pack`, `terracast-sim page`, and `render --terrain`:
 //! tiled terrain on the command line.
 
-use super::{check_writable, kernel_options, parse_size, view_error, Method, RenderArgs};
+use super::values::{hfov, number, pitch, positive, seed, size, triple};
+use super::{kernel_options, view_error, Method, RenderArgs, RenderFiles};
 use crate::error::{Error, Result};
-use crate::output::{stats_json, write_png, write_stats};
+use crate::output::{stats_json, write_png};
+use crate::outputs::Outputs;
 use crate::tiles::{
     pack, page_flight, render_tiled, PackInput, PageOptions, PagedFrame, Terrain, SLOTS, TILE,
 };
@@ -21,19 +23,15 @@ pub(super) struct PackArgs {
     /// and slope, as `render` colors a height map alone].
     #[arg(long, value_name = "C.png")]
     color: Option<PathBuf>,
-    /// World height of one height-map unit, in voxels.
-    #[arg(
-        long,
-        default_value_t = 1.0,
-        allow_negative_numbers = true,
-        value_name = "S"
-    )]
-    height_scale: f32,
+    /// World height of one height-map unit, in voxels [default: 1; for an
+    /// SRTM .hgt, one meter in voxels of its grid spacing].
+    #[arg(long, value_name = "S", value_parser = positive(0.0f32, 1e6), allow_hyphen_values = true)]
+    height_scale: Option<f32>,
     /// How the pyramid's coarse heights are made.
     #[arg(long, value_enum, default_value_t = super::HeightFilterArg::Wavelet)]
     height_filter: super::HeightFilterArg,
     /// Seed of the coloring's texture (without --color).
-    #[arg(long, default_value_t = 1, value_name = "N")]
+    #[arg(long, default_value_t = 1, value_name = "N", value_parser = seed, allow_hyphen_values = true)]
     seed: u64,
     /// The tiled terrain file to write.
     #[arg(long, value_name = "T.tiles")]
@@ -41,11 +39,11 @@ pub(super) struct PackArgs {
 }
 
 pub(super) fn pack_command(args: PackArgs) -> Result<()> {
-    check_writable(&args.out)?;
+    let height_scale = super::height_scale(&args.height, args.height_scale)?;
     let input = PackInput {
         height: args.height,
         color: args.color,
-        height_scale: args.height_scale,
+        height_scale,
         filter: args.height_filter.into(),
         seed: args.seed,
     };
@@ -86,7 +84,12 @@ fn default_eye(world: &World) -> [f32; 3] {
     }
 }
 
-pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> {
+pub(super) fn render_tiled_command(
+    args: &RenderArgs,
+    spec: &str,
+    outputs: Outputs,
+    files: RenderFiles,
+) -> Result<()> {
     if args.method != Method::Kernel {
         return Err(Error::new("--terrain renders with --method kernel only"));
     }
@@ -101,7 +104,7 @@ pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> 
     };
     let (width, height) = args.size;
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
-    let options = kernel_options(args, sky)?;
+    let options = kernel_options(args, sky);
     // A file's levels are built already: it renders with its own filter,
     // and asking for another is an error rather than a silent substitute.
     if let (Terrain::File(file), Some(wanted)) = (&terrain, args.height_filter) {
@@ -130,16 +133,16 @@ pub(super) fn render_tiled_command(args: &RenderArgs, spec: &str) -> Result<()> 
         &options,
         args.vertical_samples.1,
     )?;
-    write_png(&args.out, &frame)?;
-    if let Some(path) = &args.depth {
-        crate::output::write_pfm(path, &frame)?;
-    }
-    if let Some(path) = &args.stats {
-        let sky_pixels = frame.depth.iter().filter(|d| d.is_infinite()).count();
-        let mut json = stats_json(&stats, width, height, sky_pixels);
-        json["tiles"] = serde_json::to_value(tiled).map_err(|e| Error::new(e.to_string()))?;
-        write_stats(path, &json)?;
-    }
+    let stats = match files.stats {
+        Some(id) => {
+            let mut json = stats_json(&stats, width, height, frame.sky_pixels());
+            json["tiles"] = serde_json::to_value(tiled).map_err(|e| Error::new(e.to_string()))?;
+            Some((id, json))
+        }
+        None => None,
+    };
+    files.write(&outputs, &frame, stats)?;
+    outputs.commit()?;
     if tiled.misses > 0 {
         eprintln!(
             "warning: {} of {} footprint tiles could not be loaded ({} rejected for bad checksums); drawn from coarser levels",
@@ -159,49 +162,44 @@ pub(super) struct PageArgs {
     )]
     terrain: String,
     /// Seed of a procedural terrain.
-    #[arg(long, default_value_t = 1, value_name = "N")]
+    #[arg(long, default_value_t = 1, value_name = "N", value_parser = seed, allow_hyphen_values = true)]
     seed: u64,
     /// Frames to fly.
-    #[arg(long, default_value_t = 90, value_name = "N")]
+    #[arg(long, default_value_t = 90, value_name = "N", value_parser = number(1u32, 100_000), allow_hyphen_values = true)]
     frames: u32,
     /// Frame rate.
-    #[arg(long, default_value_t = 30.0, value_name = "HZ")]
+    #[arg(long, default_value_t = 30.0, value_name = "HZ", value_parser = positive(0.0f32, 1000.0), allow_hyphen_values = true)]
     fps: f32,
     /// Image size.
-    #[arg(long, default_value = "320x240", value_parser = parse_size, value_name = "WxH")]
+    #[arg(long, default_value = "320x240", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
     /// Horizontal field of view, degrees.
-    #[arg(long, default_value_t = 60.0, value_name = "DEG")]
+    #[arg(long, default_value_t = 60.0, value_name = "DEG", value_parser = hfov, allow_hyphen_values = true)]
     hfov: f32,
     /// Heading change, degrees a second [default: one field of view a
     /// second].
-    #[arg(long, allow_negative_numbers = true, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", value_parser = number(-3600.0f32, 3600.0), allow_hyphen_values = true)]
     turn: Option<f32>,
     /// Ground speed, voxels a second.
-    #[arg(long, default_value_t = 300.0, value_name = "V")]
+    #[arg(long, default_value_t = 300.0, value_name = "V", value_parser = number(0.0f32, 1e5), allow_hyphen_values = true)]
     speed: f32,
     /// Start eye position [default: over the middle, above the highest
     /// terrain].
-    #[arg(long, value_parser = super::parse_triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
+    #[arg(long, value_parser = triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
     eye: Option<[f32; 3]>,
     /// Degrees below the horizon.
-    #[arg(
-        long,
-        default_value_t = 20.0,
-        allow_negative_numbers = true,
-        value_name = "DEG"
-    )]
+    #[arg(long, default_value_t = 20.0, value_name = "DEG", value_parser = pitch, allow_hyphen_values = true)]
     pitch: f32,
     /// Tiles the loader may fetch during one frame [default: the PVS
     /// disk's 70 MB/s over a frame].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = number(1u32, 1_000_000), allow_hyphen_values = true)]
     load_budget: Option<u32>,
     /// Only fetch what a frame lacked (no next-frame or extended
     /// footprint): shows what prefetch is for.
     #[arg(long)]
     no_prefetch: bool,
     /// How far ahead the extended footprint looks, seconds.
-    #[arg(long, default_value_t = 0.25, value_name = "S")]
+    #[arg(long, default_value_t = 0.25, value_name = "S", value_parser = number(0.0f32, 10.0), allow_hyphen_values = true)]
     lead: f32,
     /// Folder to write each frame to as a PNG.
     #[arg(long, value_name = "DIR")]
@@ -212,20 +210,16 @@ pub(super) struct PageArgs {
 }
 
 pub(super) fn page_command(args: PageArgs) -> Result<()> {
+    let mut outputs = Outputs::new();
+    outputs.input("--terrain", std::path::Path::new(&args.terrain));
     if let Some(dir) = &args.frames_dir {
-        if !dir.is_dir() {
-            return Err(Error::new(format!(
-                "--frames-dir {}: no such folder",
-                dir.display()
-            )));
-        }
+        outputs.folder("--frames-dir", dir)?;
     }
-    if let Some(path) = &args.report {
-        check_writable(path)?;
-    }
-    if !(args.fps > 0.0 && args.fps <= 1000.0) {
-        return Err(Error::new("--fps must be between 0 and 1000"));
-    }
+    let report_out = args
+        .report
+        .as_deref()
+        .map(|path| outputs.output("--report", path))
+        .transpose()?;
     let mut terrain = Terrain::open(&args.terrain, args.seed)?;
     let world = terrain.world();
     let start = Camera {
@@ -272,7 +266,11 @@ pub(super) fn page_command(args: PageArgs) -> Result<()> {
             record.loads, record.missing_tiles
         ));
         if let Some(dir) = &frames_dir {
-            write_png(&dir.join(format!("frame-{:04}.png", record.frame)), image)?;
+            let id = outputs.output(
+                "--frames-dir",
+                &dir.join(format!("frame-{:04}.png", record.frame)),
+            )?;
+            write_png(outputs.temporary(id), image)?;
         }
         Ok(())
     })?;
@@ -301,10 +299,17 @@ pub(super) fn page_command(args: PageArgs) -> Result<()> {
     println!(
         "resident bytes / tiles the frame read: mean {mean_touched:.2}, most {max_touched:.2}"
     );
-    if let Some(path) = &args.report {
-        let json = serde_json::to_string_pretty(&report).map_err(|e| Error::new(e.to_string()))?;
-        std::fs::write(path, format!("{json}\n"))
-            .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))?;
+    if report.rejected > 0 {
+        eprintln!(
+            "warning: {} tile loads rejected for bad checksums ({} frames); those tiles were drawn from coarser levels",
+            report.rejected,
+            report.frames.iter().filter(|f| f.rejected > 0).count()
+        );
     }
-    Ok(())
+    if let (Some(id), Some(path)) = (report_out, &args.report) {
+        let json = serde_json::to_string_pretty(&report).map_err(|e| Error::new(e.to_string()))?;
+        std::fs::write(outputs.temporary(id), format!("{json}\n"))
+            .map_err(|e| Error::new(format!("cannot write --report {}: {e}", path.display())))?;
+    }
+    outputs.commit()
 }

@@ -1,8 +1,10 @@
 //! `terracast-sim sim`: a flight on the modeled parallel machine, Table 1,
 //! and the line pool on real threads.
 
-use super::{load_scene_or, parse_size, CameraArgs, SceneArgs, DEFAULT_PROCEDURAL_SIDE};
+use super::values::{number, positive, size};
+use super::{load_scene_or, CameraArgs, SceneArgs, DEFAULT_PROCEDURAL_SIDE};
 use crate::error::{Error, Result};
+use crate::outputs::Outputs;
 use crate::scene::KernelScene;
 use crate::sim::threads::render_threads;
 use crate::sim::{
@@ -24,22 +26,22 @@ pub(super) struct SimArgs {
     #[arg(long, value_name = "MACHINE.toml")]
     machine: Option<PathBuf>,
     /// Processors, master included (overrides the machine file).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = number(2u32, 1024), allow_hyphen_values = true)]
     processors: Option<u32>,
     /// Frame deadline in milliseconds (overrides the machine file).
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", value_parser = positive(0.0f64, 1e6), allow_hyphen_values = true)]
     deadline_ms: Option<f64>,
     /// The flight's first camera (it flies along its heading).
     #[command(flatten)]
     camera: CameraArgs,
     /// Image size.
-    #[arg(long, default_value = "640x480", value_parser = parse_size, value_name = "WxH")]
+    #[arg(long, default_value = "640x480", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
     /// Frames of the flight.
-    #[arg(long, default_value_t = 8, value_name = "N")]
+    #[arg(long, default_value_t = 8, value_name = "N", value_parser = number(1u32, 100_000), allow_hyphen_values = true)]
     frames: u32,
     /// Voxels the eye advances a frame.
-    #[arg(long, default_value_t = 4.0, value_name = "V")]
+    #[arg(long, default_value_t = 4.0, value_name = "V", value_parser = number(-1e4f32, 1e4), allow_hyphen_values = true)]
     speed: f32,
     /// Print Table 1 instead: fps for 2 to 32 processors at pitch 14.6°,
     /// 26.5° and 39° (a flight of --frames frames at each). Its view sees
@@ -55,7 +57,7 @@ pub(super) struct SimArgs {
     chart: Option<PathBuf>,
     /// Instead of simulating, render the flight on this many real threads
     /// (a list: 1,2,4) sharing the kernel's line pool, and print Mpx/s.
-    #[arg(long, value_delimiter = ',', value_name = "N,N,...")]
+    #[arg(long, value_delimiter = ',', value_name = "N,N,...", value_parser = number(1usize, 1024), allow_hyphen_values = true)]
     threads: Vec<usize>,
 }
 
@@ -88,14 +90,22 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
     // The recording holds every frame's events (about 40 bytes a pixel)
     // until the replay: keep it to a few GiB.
     let pixels = u64::from(args.size.0) * u64::from(args.size.1);
-    if args.frames == 0 || u64::from(args.frames) * pixels > MAX_RECORDED_PIXELS {
+    if u64::from(args.frames) * pixels > MAX_RECORDED_PIXELS {
         return Err(Error::new(format!(
-            "--frames must be at least 1, and frames x image pixels at most {MAX_RECORDED_PIXELS} (the recording keeps about 40 bytes a pixel)"
+            "--frames {} x --size {}x{}: frames x image pixels must be at most {MAX_RECORDED_PIXELS} (the recording keeps about 40 bytes a pixel)",
+            args.frames, args.size.0, args.size.1
         )));
     }
-    if !args.speed.is_finite() {
-        return Err(Error::new("--speed must be a finite number"));
+    let mut outputs = Outputs::new();
+    args.scene.name_inputs(&mut outputs);
+    if let Some(path) = &args.machine {
+        outputs.input("--machine", path);
     }
+    let chart = args
+        .chart
+        .as_deref()
+        .map(|path| outputs.output("--chart", path))
+        .transpose()?;
     // Table 1 has its own view (see TABLE_HFOV_DEG): every flag given
     // still wins.
     let (side, hfov) = if args.table {
@@ -140,8 +150,9 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
             },
         )?;
         eprintln!();
-        if let Some(path) = &args.chart {
-            crate::chart::draw_table(path, &table)?;
+        if let Some(id) = chart {
+            crate::chart::draw_table(outputs.temporary(id), &table)?;
+            outputs.commit()?;
         }
         if args.json {
             println!("{}", table.to_json());
@@ -226,9 +237,6 @@ fn threads_command(
     args: &SimArgs,
     options: &RenderOptions,
 ) -> Result<()> {
-    if args.threads.iter().any(|&t| t == 0 || t > 1024) {
-        return Err(Error::new("--threads counts must be between 1 and 1024"));
-    }
     let cameras = flight(start, args.frames, args.speed);
     let available = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!(

@@ -25,23 +25,30 @@ pub fn load_heights(path: &Path, scale: f32) -> Result<(u32, u32, Vec<f32>)> {
     let image = open_image(path, "height map")?;
     let (w, h) = (image.width(), image.height());
     let values: Vec<f32> = match image {
-        DynamicImage::ImageLuma8(_)
-        | DynamicImage::ImageLumaA8(_)
-        | DynamicImage::ImageRgb8(_)
-        | DynamicImage::ImageRgba8(_) => image
+        DynamicImage::ImageLuma8(_) | DynamicImage::ImageLumaA8(_) => image
             .to_luma8()
             .into_raw()
             .into_iter()
             .map(f32::from)
             .collect(),
-        _ => image
+        DynamicImage::ImageLuma16(_) | DynamicImage::ImageLumaA16(_) => image
             .to_luma16()
             .into_raw()
             .into_iter()
             .map(f32::from)
             .collect(),
+        other => return Err(not_a_height_map(path, &format!("{:?}", other.color()))),
     };
     Ok((w, h, values.into_iter().map(|v| v * scale).collect()))
+}
+
+/// The one refusal of a height map that is not grayscale (`kind` says what
+/// it is): every command that reads heights says the same.
+pub fn not_a_height_map(path: &Path, kind: &str) -> Error {
+    Error::new(format!(
+        "height map {} is {kind}: a height map is an 8- or 16-bit grayscale PNG or an SRTM .hgt (convert a color image to grayscale first)",
+        path.display()
+    ))
 }
 
 fn load_hgt(path: &Path, scale: f32) -> Result<(u32, u32, Vec<f32>)> {
@@ -143,4 +150,115 @@ fn open_image(path: &Path, what: &str) -> Result<DynamicImage> {
     reader
         .decode()
         .map_err(|e| Error::new(format!("cannot decode {what} {}: {e}", path.display())))
+}
+
+/// Meters along one arc-second of latitude (and of longitude at the
+/// equator).
+const METERS_PER_ARC_SECOND: f64 = 30.87;
+
+/// The ground spacing of an SRTM `.hgt` tile's grid, from its sample count
+/// and the latitude in its name (`N44W072…`: the tile's south edge).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HgtSpacing {
+    /// Arc-seconds between samples: 3600 / (side − 1).
+    pub arc_seconds: f64,
+    /// Latitude of the tile's middle in degrees, when the name gives it.
+    pub latitude: Option<f64>,
+    /// Meters between samples east-west.
+    pub east_m: f64,
+    /// Meters between samples north-south.
+    pub north_m: f64,
+}
+
+impl HgtSpacing {
+    /// Meters one voxel spans: the mean of the two spacings (the kernel's
+    /// voxels are square; the tile's are not, away from the equator).
+    pub fn meters_per_voxel(&self) -> f64 {
+        0.5 * (self.east_m + self.north_m)
+    }
+
+    /// The height scale that puts meters into voxels.
+    pub fn height_scale(&self) -> f32 {
+        (1.0 / self.meters_per_voxel()) as f32
+    }
+
+    /// One line saying what was chosen and why.
+    pub fn describe(&self) -> String {
+        let at = match self.latitude {
+            Some(lat) => format!("at latitude {lat:.1}"),
+            None => "at the equator (no latitude in the file name)".to_owned(),
+        };
+        format!(
+            "height scale 1/{:.1}: {} arc-second samples {at} are {:.1} m east-west and {:.1} m north-south; --height-scale overrides",
+            self.meters_per_voxel(),
+            self.arc_seconds,
+            self.east_m,
+            self.north_m
+        )
+    }
+}
+
+/// The grid spacing of an `.hgt` height map, or `None` for any other file.
+pub fn hgt_spacing(path: &Path) -> Result<Option<HgtSpacing>> {
+    let is_hgt = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("hgt"));
+    if !is_hgt {
+        return Ok(None);
+    }
+    let length = std::fs::metadata(path)
+        .map_err(|e| Error::new(format!("cannot read height map {}: {e}", path.display())))?
+        .len();
+    let side = ((length / 2) as f64).sqrt().round();
+    if side < 2.0 {
+        return Ok(None);
+    }
+    let arc_seconds = 3600.0 / (side - 1.0);
+    let latitude = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .and_then(latitude_from_name);
+    let north_m = arc_seconds * METERS_PER_ARC_SECOND;
+    let east_m = north_m * latitude.unwrap_or(0.0).to_radians().cos();
+    Ok(Some(HgtSpacing {
+        arc_seconds,
+        latitude,
+        east_m,
+        north_m,
+    }))
+}
+
+/// The middle latitude of a tile named `N44…` or `S34…` (SRTM names a
+/// tile by its south-west corner).
+fn latitude_from_name(name: &str) -> Option<f64> {
+    let sign = match name.as_bytes().first()? {
+        b'N' | b'n' => 1.0,
+        b'S' | b's' => -1.0,
+        _ => return None,
+    };
+    let digits: String = name[1..].chars().take_while(char::is_ascii_digit).collect();
+    let south_edge = sign * digits.parse::<f64>().ok()?;
+    (digits.len() == 2 && south_edge.abs() < 90.0).then_some(south_edge + 0.5)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_srtm_tile_gets_its_grid_spacing_by_latitude() {
+        assert_eq!(latitude_from_name("N44W072_3arcsec.hgt"), Some(44.5));
+        assert_eq!(latitude_from_name("S34E020.hgt"), Some(-33.5));
+        assert_eq!(latitude_from_name("tile.hgt"), None);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("N60E010.hgt");
+        std::fs::write(&path, vec![0u8; 1201 * 1201 * 2]).unwrap();
+        let spacing = hgt_spacing(&path).unwrap().unwrap();
+        assert_eq!(spacing.arc_seconds, 3.0);
+        assert!((spacing.north_m - 92.61).abs() < 0.01);
+        // cos 60.5° ≈ 0.492.
+        assert!((spacing.east_m / spacing.north_m - 0.4924).abs() < 0.001);
+        assert!(spacing.describe().contains("latitude 60.5"));
+        assert_eq!(hgt_spacing(Path::new("h.png")).unwrap(), None);
+    }
 }

@@ -32,8 +32,8 @@ pub(crate) const WATER_LEVEL: f64 = 22.0;
 /// texture and sun shading baked in (as Comanche's color maps are).
 pub fn color_by_height_and_slope(width: u32, depth: u32, heights: &[f32], seed: u64) -> Vec<Rgb> {
     let (w, d) = (width as usize, depth as usize);
-    let lo = heights.iter().copied().fold(f32::MAX, f32::min) as f64;
-    let hi = heights.iter().copied().fold(f32::MIN, f32::max) as f64;
+    let mut bands = HeightBands::default();
+    heights.iter().for_each(|&h| bands.add(h));
     let at = |x: usize, y: usize| f64::from(heights[y.min(d - 1) * w + x.min(w - 1)]);
     let mut colors = Vec::with_capacity(w * d);
     for y in 0..d {
@@ -45,7 +45,7 @@ pub fn color_by_height_and_slope(width: u32, depth: u32, heights: &[f32], seed: 
                 [x as f64, y as f64],
                 at(x, y),
                 [gx, gy],
-                [lo, hi],
+                bands,
                 grain,
                 seed,
             ));
@@ -54,29 +54,104 @@ pub fn color_by_height_and_slope(width: u32, depth: u32, heights: &[f32], seed: 
     colors
 }
 
+/// A map's own height range, and its water: a flat surface at its lowest
+/// height covering at least [`HeightBands::WATER_SHARE`] of the map (the
+/// built-in scene's lake, a coast's sea at 0 m). Colors are banded by these,
+/// not by fixed heights, so a map colors the same at any height scale.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeightBands {
+    /// Lowest height.
+    pub lo: f64,
+    /// Highest height.
+    pub hi: f64,
+    /// Points at the lowest height.
+    pub at_lo: u64,
+    /// Points seen.
+    pub points: u64,
+}
+
+impl Default for HeightBands {
+    fn default() -> Self {
+        Self {
+            lo: f64::MAX,
+            hi: f64::MIN,
+            at_lo: 0,
+            points: 0,
+        }
+    }
+}
+
+impl HeightBands {
+    /// Share of the map a flat lowest surface must cover to be water.
+    pub const WATER_SHARE: f64 = 0.01;
+    /// Most height the shore's sand rises above the water, in voxels; on a
+    /// map of little relief, a fiftieth of its range instead.
+    const SAND_VOXELS: f64 = 2.5;
+
+    /// The bands of a map whose water level is known (the built-in scene's
+    /// lake) and whose heights reach `hi`.
+    pub fn with_water(water: f64, hi: f64) -> Self {
+        Self {
+            lo: water,
+            hi,
+            at_lo: 1,
+            points: 1,
+        }
+    }
+
+    /// Takes one more height into the range.
+    pub fn add(&mut self, h: f32) {
+        let h = f64::from(h);
+        if h < self.lo {
+            (self.lo, self.at_lo) = (h, 0);
+        }
+        if h == self.lo {
+            self.at_lo += 1;
+        }
+        self.hi = self.hi.max(h);
+        self.points += 1;
+    }
+
+    /// The water level, if the map has water.
+    pub fn water(&self) -> Option<f64> {
+        (self.at_lo as f64 >= Self::WATER_SHARE * self.points as f64).then_some(self.lo)
+    }
+
+    fn span(&self) -> f64 {
+        (self.hi - self.lo).max(1e-6)
+    }
+
+    fn sand(&self) -> f64 {
+        Self::SAND_VOXELS.min(self.span() / 50.0)
+    }
+}
+
 /// The color of one grid point at `at` (voxels) of height `h`, with height
-/// gradient `[gx, gy]` (per voxel), on terrain spanning heights `[lo, hi]`,
-/// with per-voxel texture `grain` (−0.5 to 0.5; 0 for a coarse level, where
-/// it averages out).
+/// gradient `[gx, gy]` (per voxel), on terrain of height `bands`, with
+/// per-voxel texture `grain` (−0.5 to 0.5; 0 for a coarse level, where it
+/// averages out).
 pub(crate) fn terrain_color(
     at: [f64; 2],
     h: f64,
     [gx, gy]: [f64; 2],
-    [lo, hi]: [f64; 2],
+    bands: HeightBands,
     grain: f64,
     seed: u64,
 ) -> Rgb {
-    let span = (hi - lo).max(1e-6);
+    let (lo, span) = (bands.lo, bands.span());
+    let water = bands.water();
+    let is_water = water.is_some_and(|w| h <= w + 0.01);
+    let is_sand = water.is_some_and(|w| h < w + bands.sand());
     let sun = normalize([-0.5, -0.35, 0.8]);
     let slope = (gx * gx + gy * gy).sqrt();
     let normal = normalize([-gx, -gy, 1.0]);
     let light = 0.5 + 0.6 * dot(normal, sun).max(0.0);
     let rel = (h - lo) / span;
     let patch = fbm(at[0] / 40.0, at[1] / 40.0, seed ^ 0xf00d, 4, 0.55);
-    let base: [f64; 3] = if h <= WATER_LEVEL + 0.01 && lo < WATER_LEVEL + 0.01 {
+    let base: [f64; 3] = if is_water {
         let depth_tint = 0.8 + 0.4 * patch;
         [40.0 * depth_tint, 80.0 * depth_tint, 110.0 * depth_tint]
-    } else if h < WATER_LEVEL + 2.5 {
+    } else if is_sand {
         [196.0, 180.0, 130.0]
     } else if slope > 1.3 || (rel > 0.62 && slope > 0.6) {
         [120.0 + 30.0 * patch, 108.0 + 20.0 * patch, 96.0]
@@ -87,7 +162,7 @@ pub(crate) fn terrain_color(
     } else {
         [92.0 + 40.0 * patch, 128.0 + 30.0 * patch, 58.0]
     };
-    let shade = if h <= WATER_LEVEL + 0.01 { 1.0 } else { light };
+    let shade = if is_water { 1.0 } else { light };
     base.map(|c| (c * shade * (1.0 + 0.18 * grain)).round().clamp(0.0, 255.0) as u8)
 }
 

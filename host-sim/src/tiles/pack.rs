@@ -11,7 +11,8 @@
 use super::file::{Header, TilesWriter};
 use super::TILE;
 use crate::error::{Error, Result};
-use crate::scene::{terrain_color, value_noise};
+use crate::outputs::Outputs;
+use crate::scene::{not_a_height_map, terrain_color, value_noise, HeightBands};
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufReader, Read};
@@ -58,6 +59,12 @@ pub struct PackSummary {
 
 /// Packs `input` into `out`, calling `progress(rows done, rows)` now and
 /// then.
+///
+/// `out` must not be one of the inputs (nor a link to one): that is
+/// refused before anything is written. The heights are checked against the
+/// kernel's range in a first pass, before the file is begun; the file is
+/// written beside `out` and renamed into place when complete, so a pack
+/// that fails (a truncated color map, say) leaves nothing behind.
 pub fn pack(
     input: &PackInput,
     out: &Path,
@@ -69,8 +76,17 @@ pub fn pack(
             input.height_scale
         )));
     }
+    let mut outputs = Outputs::new();
+    outputs.input("--height", &input.height);
+    if let Some(color) = &input.color {
+        outputs.input("--color", color);
+    }
+    let out_id = outputs.output("--out", out)?;
     let mut heights = HeightRows::open(&input.height, input.height_scale)?;
     let (width, depth) = heights.size();
+    // The whole range first: a height the kernel cannot hold is reported
+    // before any tile is written, and colors by height need the range too.
+    let bands = height_range(&input.height, input.height_scale, depth)?;
     let world = World::new(width, depth, 0).ok_or_else(|| {
         Error::new(format!(
             "height map is {width}x{depth}: it needs at least 2x2 points"
@@ -89,34 +105,18 @@ pub fn pack(
             }
             Colors::Map(Box::new(rows))
         }
-        None => {
-            // The coloring needs the height range first: one pass more.
-            let (mut lo, mut hi) = (f32::MAX, f32::MIN);
-            let mut first = HeightRows::open(&input.height, input.height_scale)?;
-            for _ in 0..depth {
-                for &h in first.next()? {
-                    lo = lo.min(h);
-                    hi = hi.max(h);
-                }
-            }
-            Colors::ByHeight {
-                range: [f64::from(lo), f64::from(hi)],
-                window: Vec::new(),
-                seed: input.seed,
-            }
-        }
+        None => Colors::ByHeight {
+            range: bands,
+            window: Vec::new(),
+            seed: input.seed,
+        },
     };
-    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        if !parent.is_dir() {
-            return Err(Error::new(format!(
-                "cannot write {}: folder {} does not exist",
-                out.display(),
-                parent.display()
-            )));
-        }
-    }
     let header = Header::new(world, input.filter);
-    let mut builder = Builder::new(world, input.filter, TilesWriter::create(out, header)?);
+    let mut builder = Builder::new(
+        world,
+        input.filter,
+        TilesWriter::create(outputs.temporary(out_id), header)?,
+    );
     let mut max_height = 0u16;
     // Measured on the rows a pyramid of the same map measures.
     let mut roughness = RoughnessSum::default();
@@ -156,7 +156,8 @@ pub fn pack(
     }
     let rows_held_at_most = builder.rows_held_at_most;
     builder.finish(max_height, roughness.roughness())?;
-    let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
+    let bytes = std::fs::metadata(outputs.temporary(out_id)).map_or(0, |m| m.len());
+    outputs.commit()?;
     Ok(PackSummary {
         width,
         depth,
@@ -167,10 +168,31 @@ pub fn pack(
     })
 }
 
+/// The lowest and highest height of the map, refusing the first one outside
+/// the kernel's range (with its grid point).
+fn height_range(path: &Path, scale: f32, depth: u32) -> Result<HeightBands> {
+    let mut bands = HeightBands::default();
+    let mut rows = HeightRows::open(path, scale)?;
+    for y in 0..depth {
+        for (x, &h) in rows.next()?.iter().enumerate() {
+            if Terrain::quantize_height(h).is_none() {
+                return Err(Error::new(format!(
+                    "height map {}: height {h} at grid point ({x}, {y}) is outside the kernel's range 0..={} voxels (adjust --height-scale)",
+                    path.display(),
+                    Terrain::MAX_HEIGHT
+                )));
+            }
+            bands.add(h);
+        }
+    }
+    Ok(bands)
+}
+
 /// Height rows from a PNG or an `.hgt`, scaled, top row first.
 enum HeightRows {
     Png {
         reader: Box<png::Reader<BufReader<File>>>,
+        path: PathBuf,
         size: (u32, u32),
         wide: bool,
         channels: usize,
@@ -179,6 +201,7 @@ enum HeightRows {
     },
     Hgt {
         file: BufReader<File>,
+        path: PathBuf,
         side: u32,
         bytes: Vec<u8>,
         row: Vec<f32>,
@@ -207,12 +230,14 @@ impl HeightRows {
             }
             return Ok(Self::Hgt {
                 file: BufReader::new(file),
+                path: path.to_owned(),
                 side: side as u32,
                 bytes: vec![0; side as usize * 2],
                 row: vec![0.0; side as usize],
                 scale,
             });
         }
+        let file = require_png(file, path, "height map")?;
         let mut decoder = png::Decoder::new(BufReader::new(file));
         decoder.set_transformations(png::Transformations::IDENTITY);
         let reader = decoder.read_info().map_err(|e| fail(&e))?;
@@ -220,27 +245,17 @@ impl HeightRows {
         let channels = match info.color_type {
             png::ColorType::Grayscale => 1,
             png::ColorType::GrayscaleAlpha => 2,
-            _ => {
-                return Err(Error::new(format!(
-                    "{}: pack reads grayscale height PNGs (8 or 16 bits); this one is {:?}",
-                    path.display(),
-                    info.color_type
-                )))
-            }
+            other => return Err(not_a_height_map(path, &format!("{other:?}"))),
         };
         let wide = match info.bit_depth {
             png::BitDepth::Eight => false,
             png::BitDepth::Sixteen => true,
-            other => {
-                return Err(Error::new(format!(
-                    "{}: pack reads 8- or 16-bit height PNGs; this one has {other:?} bits",
-                    path.display()
-                )))
-            }
+            other => return Err(not_a_height_map(path, &format!("{other:?}-bit"))),
         };
         let size = (info.width, info.height);
         Ok(Self::Png {
             reader: Box::new(reader),
+            path: path.to_owned(),
             size,
             wide,
             channels,
@@ -260,6 +275,7 @@ impl HeightRows {
         match self {
             Self::Png {
                 reader,
+                path,
                 wide,
                 channels,
                 row,
@@ -268,8 +284,10 @@ impl HeightRows {
             } => {
                 let data = reader
                     .next_row()
-                    .map_err(|e| Error::new(format!("height map: {e}")))?
-                    .ok_or_else(|| Error::new("height map ends early"))?;
+                    .map_err(|e| Error::new(format!("height map {}: {e}", path.display())))?
+                    .ok_or_else(|| {
+                        Error::new(format!("height map {} ends early", path.display()))
+                    })?;
                 let data = data.data();
                 let step = *channels * if *wide { 2 } else { 1 };
                 for (v, px) in row.iter_mut().zip(data.chunks_exact(step)) {
@@ -284,13 +302,15 @@ impl HeightRows {
             }
             Self::Hgt {
                 file,
+                path,
                 bytes,
                 row,
                 scale,
                 ..
             } => {
-                file.read_exact(bytes)
-                    .map_err(|e| Error::new(format!("height map ends early: {e}")))?;
+                file.read_exact(bytes).map_err(|e| {
+                    Error::new(format!("height map {} ends early: {e}", path.display()))
+                })?;
                 for (v, b) in row.iter_mut().zip(bytes.chunks_exact(2)) {
                     *v = match i16::from_be_bytes([b[0], b[1]]) {
                         i16::MIN => 0.0,
@@ -303,9 +323,34 @@ impl HeightRows {
     }
 }
 
+/// `file`, rewound, when it starts with PNG's signature; otherwise an
+/// error that says what it is instead.
+fn require_png(mut file: File, path: &Path, what: &str) -> Result<File> {
+    use std::io::{Seek, SeekFrom};
+    let mut magic = [0u8; 8];
+    let read = file.read(&mut magic).unwrap_or(0);
+    if read == 8 && magic == *b"\x89PNG\r\n\x1a\n" {
+        file.seek(SeekFrom::Start(0))
+            .map_err(|e| Error::new(format!("cannot read {what} {}: {e}", path.display())))?;
+        return Ok(file);
+    }
+    let is_tiff = magic.starts_with(b"II*\0") || magic.starts_with(b"MM\0*");
+    Err(Error::new(format!(
+        "{what} {} is {}, not a PNG: pack reads PNG{}",
+        path.display(),
+        if is_tiff { "a TIFF" } else { "not a PNG file" },
+        if what == "height map" {
+            " and SRTM .hgt height maps"
+        } else {
+            " color maps"
+        }
+    )))
+}
+
 /// Color rows of a PNG, expanded to RGB.
 struct ColorRows {
     reader: png::Reader<BufReader<File>>,
+    path: PathBuf,
     size: (u32, u32),
     channels: usize,
 }
@@ -316,6 +361,7 @@ impl ColorRows {
             Error::new(format!("cannot read color map {}: {e}", path.display()))
         };
         let file = File::open(path).map_err(|e| fail(&e))?;
+        let file = require_png(file, path, "color map")?;
         let mut decoder = png::Decoder::new(BufReader::new(file));
         decoder.set_transformations(png::Transformations::EXPAND);
         let reader = decoder.read_info().map_err(|e| fail(&e))?;
@@ -329,6 +375,7 @@ impl ColorRows {
         let size = (reader.info().width, reader.info().height);
         Ok(Self {
             reader,
+            path: path.to_owned(),
             size,
             channels: color.samples(),
         })
@@ -343,8 +390,8 @@ impl ColorRows {
         let row = self
             .reader
             .next_row()
-            .map_err(|e| Error::new(format!("color map: {e}")))?
-            .ok_or_else(|| Error::new("color map ends early"))?;
+            .map_err(|e| Error::new(format!("color map {}: {e}", self.path.display())))?
+            .ok_or_else(|| Error::new(format!("color map {} ends early", self.path.display())))?;
         Ok(row
             .data()
             .chunks_exact(channels)
@@ -365,7 +412,7 @@ enum Colors {
     /// Colored by height and slope, as `render` colors a height map alone:
     /// a row is colored when the row after it has arrived.
     ByHeight {
-        range: [f64; 2],
+        range: HeightBands,
         /// The last two height rows (row y − 1 and row y).
         window: Vec<Vec<f32>>,
         seed: u64,
@@ -419,7 +466,12 @@ impl Colors {
 
 /// Colors of row `y` from rows `y − 1`, `y`, `y + 1` (edges repeated), as
 /// [`crate::scene::color_by_height_and_slope`] colors them.
-fn color_row(y: u32, [above, here, below]: [&Vec<f32>; 3], range: [f64; 2], seed: u64) -> Vec<Rgb> {
+fn color_row(
+    y: u32,
+    [above, here, below]: [&Vec<f32>; 3],
+    range: HeightBands,
+    seed: u64,
+) -> Vec<Rgb> {
     let w = here.len();
     (0..w)
         .map(|x| {

@@ -203,6 +203,9 @@ pub struct PagedFrame {
     pub loads: u64,
     /// Bytes the source read for them.
     pub bytes_read: u64,
+    /// Tiles the cache rejected for a bad checksum while this frame was
+    /// drawn (they stay missing and are drawn from a coarser level).
+    pub rejected: u64,
     /// Terrain bytes resident when the frame was drawn.
     pub resident_bytes: u64,
     /// Bytes of the frame's own footprint.
@@ -222,6 +225,8 @@ pub struct PageReport {
     pub cache_bytes: u64,
     /// Every frame.
     pub frames: Vec<PagedFrame>,
+    /// Tiles rejected for a bad checksum over the flight.
+    pub rejected: u64,
 }
 
 impl PageReport {
@@ -394,6 +399,7 @@ pub fn page_flight<S: TileSource<TILE>>(
             degraded_samples: degraded,
             loads: end.loads - before.loads,
             bytes_read: end.bytes_read - before.bytes_read,
+            rejected: end.rejected - before.rejected,
             resident_bytes: resident,
             footprint_bytes: (needed.len() * Tile::<TILE>::BYTES) as u64,
             steps_per_pixel: stats.steps as f64 / stats.pixels.max(1) as f64,
@@ -405,6 +411,7 @@ pub fn page_flight<S: TileSource<TILE>>(
         world_width: world.width,
         world_depth: world.depth,
         cache_bytes: (SLOTS * Tile::<TILE>::BYTES) as u64,
+        rejected: frames.iter().map(|f| f.rejected).sum(),
         frames,
     })
 }

@@ -12,7 +12,7 @@
 
 use super::TILE;
 use crate::error::{Error, Result};
-use crate::scene::{terrain_color, value_noise, WATER_LEVEL};
+use crate::scene::{terrain_color, value_noise, HeightBands, WATER_LEVEL};
 use terracast::tiles::{Tile, TileError, TileKey, TileSource, World};
 
 const OCTAVES: usize = 13;
@@ -112,7 +112,7 @@ impl TileSource<TILE> for ProceduralSource {
         let rise: f64 = (0..octaves)
             .map(|o| amplitude(o) * (1.875 * spacing / wavelength(o)).min(1.0))
             .sum();
-        let range = [WATER_LEVEL, f64::from(self.world.max_height) / 16.0];
+        let range = HeightBands::with_water(WATER_LEVEL, f64::from(self.world.max_height) / 16.0);
         let quantize = |h: f64| (h * 16.0).round().clamp(0.0, f64::from(u16::MAX)) as u16;
         for j in 0..TILE {
             for i in 0..TILE {
