@@ -20,12 +20,7 @@ fn small_maps() -> (PathBuf, PathBuf) {
 /// parallel: each writes its own files.
 fn maps_named(height: &str, color: &str) -> (PathBuf, PathBuf) {
     let (h, c) = (temp(height), temp(color));
-    image::GrayImage::from_fn(16, 16, |x, y| image::Luma([(x * 3 + y) as u8]))
-        .save(&h)
-        .unwrap();
-    image::RgbImage::from_fn(16, 16, |x, _| image::Rgb([x as u8 * 10, 100, 50]))
-        .save(&c)
-        .unwrap();
+    common::write_small_maps(&h, &c);
     (h, c)
 }
 

@@ -11,12 +11,7 @@ use std::path::{Path, PathBuf};
 fn folder_with_maps() -> (tempfile::TempDir, PathBuf, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let (h, c) = (dir.path().join("h.png"), dir.path().join("c.png"));
-    image::GrayImage::from_fn(16, 16, |x, y| image::Luma([(x * 3 + y) as u8]))
-        .save(&h)
-        .unwrap();
-    image::RgbImage::from_fn(16, 16, |x, _| image::Rgb([x as u8 * 10, 100, 50]))
-        .save(&c)
-        .unwrap();
+    common::write_small_maps(&h, &c);
     (dir, h, c)
 }
 

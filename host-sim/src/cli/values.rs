@@ -22,16 +22,11 @@ pub(crate) fn number<T>(
 where
     T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
 {
-    move |text: &str| {
-        let range = || format!("must be a number from {low} to {high}");
-        let value: T = text.trim().parse().map_err(|_| range())?;
-        // NaN fails both comparisons.
-        if value >= low && value <= high {
-            Ok(value)
-        } else {
-            Err(range())
-        }
-    }
+    // NaN fails both comparisons.
+    ranged(
+        move |v: &T| *v >= low && *v <= high,
+        format!("must be a number from {low} to {high}"),
+    )
 }
 
 /// Like [`number`], for a value that must be above `low` (a rate, a
@@ -43,14 +38,22 @@ pub(crate) fn positive<T>(
 where
     T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
 {
-    move |text: &str| {
-        let range = || format!("must be a number above {low_exclusive} and at most {high}");
-        let value: T = text.trim().parse().map_err(|_| range())?;
-        if value > low_exclusive && value <= high {
-            Ok(value)
-        } else {
-            Err(range())
-        }
+    ranged(
+        move |v: &T| *v > low_exclusive && *v <= high,
+        format!("must be a number above {low_exclusive} and at most {high}"),
+    )
+}
+
+/// A parser that takes the values `within` accepts, and otherwise says
+/// `range`.
+fn ranged<T: FromStr>(
+    within: impl Fn(&T) -> bool + Clone + Send + Sync + 'static,
+    range: String,
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static {
+    move |text: &str| match text.trim().parse::<T>() {
+        Ok(value) if within(&value) => Ok(value),
+        // Parsed but outside `within`: dropped, the message says why.
+        _ => Err(range.clone()),
     }
 }
 
