@@ -49,9 +49,14 @@ fn no_command_writes_over_its_input() {
         s(&tiles),
     ]));
     assert_eq!(code, 0, "{err}");
+    // A data folder for bench: its Comanche maps are inputs.
+    let comanche = dir.path().join("data/comanche");
+    std::fs::create_dir_all(&comanche).unwrap();
+    let d1 = comanche.join("D1.png");
+    std::fs::copy(&h, &d1).unwrap();
     let symlink = dir.path().join("link");
     let hard_link = dir.path().join("hard");
-    let before: Vec<(PathBuf, Vec<u8>)> = [&h, &c, &tiles]
+    let before: Vec<(PathBuf, Vec<u8>)> = [&h, &c, &tiles, &d1]
         .iter()
         .map(|p| (p.to_path_buf(), std::fs::read(p).unwrap()))
         .collect();
@@ -83,6 +88,11 @@ fn no_command_writes_over_its_input() {
             strings(&["sim", "--height", s(&h), "--table"]),
             "--chart",
             h.clone(),
+        ),
+        (
+            strings(&["bench", "--data", s(&dir.path().join("data"))]),
+            "--csv",
+            d1.clone(),
         ),
     ];
     for (command, flag, input) in cases {
@@ -123,7 +133,7 @@ fn no_command_writes_over_its_input() {
     }
     let _ = std::fs::remove_file(&symlink);
     let _ = std::fs::remove_file(&hard_link);
-    assert_eq!(names(dir.path()), ["c.png", "h.png", "t.tiles"]);
+    assert_eq!(names(dir.path()), ["c.png", "data", "h.png", "t.tiles"]);
 }
 
 #[test]
