@@ -93,8 +93,8 @@ pub fn stats_json(
     value
 }
 
-/// Writes the `--stats` JSON.
-pub fn write_stats(path: &Path, value: &serde_json::Value) -> Result<()> {
+/// Writes JSON (`--stats`, a report), pretty, with a final newline.
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<()> {
     let text = serde_json::to_string_pretty(value).map_err(|e| Error::new(e.to_string()))?;
     write_file(path, format!("{text}\n").as_bytes())
 }

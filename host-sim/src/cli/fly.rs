@@ -152,11 +152,8 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
             }
         }
     }
-    if let (Some(id), Some(report)) = (report_out, &args.report) {
-        let text = serde_json::to_string_pretty(&flight.report_json(&options))
-            .map_err(|e| Error::new(e.to_string()))?;
-        std::fs::write(outputs.temporary(id), text + "\n")
-            .map_err(|e| Error::new(format!("cannot write --report {}: {e}", report.display())))?;
+    if let Some(id) = report_out {
+        crate::output::write_json(outputs.temporary(id), &flight.report_json(&options))?;
     }
     outputs.commit()?;
 
@@ -219,7 +216,7 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
 /// round((k + 1) × 100 / hz) cs, so the delays alternate (3 and 4 cs at
 /// 30 Hz) and their sum keeps the flight's clock to within a centisecond.
 /// A delay is at least 1 cs (players treat 0 as "as fast as you can").
-pub(crate) fn frame_delay_cs(k: usize, hz: f64) -> u32 {
+fn frame_delay_cs(k: usize, hz: f64) -> u32 {
     let end = |k: usize| (k as f64 * 100.0 / hz).round() as u32;
     (end(k + 1) - end(k)).max(1)
 }

@@ -10,7 +10,7 @@ use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
 use crate::board::{board_views, verify, write_scene};
 use crate::error::{Error, Result};
 use crate::kernel::{render_kernel_with, PixelRays};
-use crate::output::{stats_json, write_pfm, write_png, write_stats};
+use crate::output::{stats_json, write_json, write_pfm, write_png};
 use crate::outputs::{OutputId, Outputs};
 use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{load_pair, procedural, Scene};
@@ -444,23 +444,20 @@ fn render_command(args: RenderArgs) -> Result<()> {
         },
         ..camera
     };
-    // The kernel's terrain first: heights out of its range are the problem
-    // to report, before the camera placed over them.
-    let filter = args
-        .height_filter
-        .map_or_else(HeightFilter::default, Into::into);
-    let kernel = match args.method {
-        Method::Kernel => Some(scene.to_kernel_with(filter)?),
-        _ => None,
-    };
-    View::new(&checked, width, height).map_err(view_error)?;
+    let check_view = || View::new(&checked, width, height).map_err(view_error);
+    if args.method != Method::Kernel {
+        check_view()?;
+    }
     let (frame, stats) = match args.method {
         Method::Kernel => {
+            // The kernel's terrain first: heights out of its range are the
+            // problem to report, before the camera placed over them.
+            let kernel = scene.to_kernel_with(
+                args.height_filter
+                    .map_or_else(HeightFilter::default, Into::into),
+            )?;
+            check_view()?;
             let options = kernel_options(&args, sky);
-            let kernel = match kernel {
-                Some(kernel) => kernel,
-                None => scene.to_kernel_with(filter)?,
-            };
             render_kernel_with(
                 &kernel,
                 &camera,
@@ -492,10 +489,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
             march(&scene, &camera, width, height, &options)
         }
     };
-    let stats = files
-        .stats
-        .map(|id| (id, stats_json(&stats, width, height, frame.sky_pixels())));
-    files.write(&outputs, &frame, stats)?;
+    let stats = stats_json(&stats, width, height, frame.sky_pixels());
+    files.write(&outputs, &frame, &stats)?;
     outputs.commit()
 }
 
@@ -523,19 +518,20 @@ impl RenderFiles {
         })
     }
 
-    /// Writes the frame, its depth and `stats` into their temporaries.
+    /// Writes the frame, and its depth and `stats` where asked for, into
+    /// their temporaries.
     fn write(
         &self,
         outputs: &Outputs,
         frame: &crate::frame::Frame,
-        stats: Option<(OutputId, serde_json::Value)>,
+        stats: &serde_json::Value,
     ) -> Result<()> {
         write_png(outputs.temporary(self.image), frame)?;
         if let Some(id) = self.depth {
             write_pfm(outputs.temporary(id), frame)?;
         }
-        if let Some((id, json)) = stats {
-            write_stats(outputs.temporary(id), &json)?;
+        if let Some(id) = self.stats {
+            write_json(outputs.temporary(id), stats)?;
         }
         Ok(())
     }

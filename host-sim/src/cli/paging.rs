@@ -133,15 +133,9 @@ pub(super) fn render_tiled_command(
         &options,
         args.vertical_samples.1,
     )?;
-    let stats = match files.stats {
-        Some(id) => {
-            let mut json = stats_json(&stats, width, height, frame.sky_pixels());
-            json["tiles"] = serde_json::to_value(tiled).map_err(|e| Error::new(e.to_string()))?;
-            Some((id, json))
-        }
-        None => None,
-    };
-    files.write(&outputs, &frame, stats)?;
+    let mut json = stats_json(&stats, width, height, frame.sky_pixels());
+    json["tiles"] = serde_json::to_value(tiled).map_err(|e| Error::new(e.to_string()))?;
+    files.write(&outputs, &frame, &json)?;
     outputs.commit()?;
     if tiled.misses > 0 {
         eprintln!(
@@ -306,10 +300,8 @@ pub(super) fn page_command(args: PageArgs) -> Result<()> {
             report.frames.iter().filter(|f| f.rejected > 0).count()
         );
     }
-    if let (Some(id), Some(path)) = (report_out, &args.report) {
-        let json = serde_json::to_string_pretty(&report).map_err(|e| Error::new(e.to_string()))?;
-        std::fs::write(outputs.temporary(id), format!("{json}\n"))
-            .map_err(|e| Error::new(format!("cannot write --report {}: {e}", path.display())))?;
+    if let Some(id) = report_out {
+        crate::output::write_json(outputs.temporary(id), &report)?;
     }
     outputs.commit()
 }
