@@ -6,7 +6,13 @@
 //!   against coherence off;
 //! * `pitch`: the default pyramid and single resolution at pitch 2° to 90°
 //!   from one eye, with steps per pixel and the frame-time stability ratio
-//!   (slowest over fastest pitch) of each.
+//!   (slowest over fastest pitch) of each;
+//! * `per-line bound`: at pitch 0 from the same eye, the kernel (default and
+//!   single resolution), the column caster (`render_level_columns`, the
+//!   per-line design at its smallest; into the 12-byte sample buffer, and
+//!   into an RGB framebuffer to show what the sink costs) and Voxel Space,
+//!   with their speed against the kernel's and their PSNR against the exact
+//!   reference.
 //!
 //!     cargo bench -p terracast-sim --bench kernel
 //!
@@ -16,9 +22,13 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
 use terracast::{
-    render, Camera, Coherence, CountingProbe, NoProbe, RenderOptions, Resolution, View,
+    render, render_level_columns, Camera, Coherence, CountingProbe, NoProbe, RenderOptions,
+    Resolution, View,
 };
+use terracast_sim::baselines::{voxel_space, VoxelSpaceOptions};
 use terracast_sim::kernel::SampleBuffer;
+use terracast_sim::metrics::psnr;
+use terracast_sim::reference::{Reference, ReferenceOptions};
 use terracast_sim::scene::{load_pair, procedural, Scene};
 
 const SIZE: (u32, u32) = (640, 480);
@@ -111,6 +121,60 @@ fn main() {
         }
         group.finish();
     }
+    // The per-line bound: every renderer of a level view, in one run.
+    let level = camera(0.0);
+    let level_view = View::new(&level, SIZE.0, SIZE.1).expect("view");
+    let single = options(Coherence::DEFAULT, Resolution::Single, true);
+    let terrain = kernel.terrain().expect("terrain");
+    let voxel_options = VoxelSpaceOptions {
+        spacing_growth: 0.005,
+        sky: terracast::config::DEFAULT_SKY,
+    };
+    {
+        let mut group = criterion.benchmark_group("per-line bound");
+        group.throughput(Throughput::Elements(pixels));
+        group.sample_size(10);
+        let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+        let default = RenderOptions::default();
+        let (default_levels, single_levels) = (levels_for(&default), levels_for(&single));
+        group.bench_function(BenchmarkId::from_parameter("kernel"), |b| {
+            b.iter(|| {
+                render(
+                    &default_levels,
+                    &level_view,
+                    &default,
+                    &mut buffer,
+                    &mut NoProbe,
+                )
+            })
+        });
+        group.bench_function(BenchmarkId::from_parameter("kernel-single"), |b| {
+            b.iter(|| {
+                render(
+                    &single_levels,
+                    &level_view,
+                    &single,
+                    &mut buffer,
+                    &mut NoProbe,
+                )
+            })
+        });
+        group.bench_function(BenchmarkId::from_parameter("columns"), |b| {
+            b.iter(|| render_level_columns(&terrain, &level_view, &single, &mut buffer))
+        });
+        let mut rgb = vec![[0u8; 3]; pixels as usize];
+        group.bench_function(BenchmarkId::from_parameter("columns-rgb"), |b| {
+            b.iter(|| {
+                let mut frame =
+                    terracast::Framebuffer::new(&mut rgb, SIZE.0, SIZE.1).expect("frame");
+                render_level_columns(&terrain, &level_view, &single, &mut frame)
+            })
+        });
+        group.bench_function(BenchmarkId::from_parameter("voxelspace"), |b| {
+            b.iter(|| voxel_space(&scene, &level, SIZE.0, SIZE.1, &voxel_options))
+        });
+        group.finish();
+    }
     criterion.final_summary();
 
     let mean_ns = |group: &str, label: &str| -> Option<f64> {
@@ -185,6 +249,79 @@ fn main() {
                 .iter()
                 .fold((f64::MAX, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
             println!("{name}: frame time max/min across pitches = {:.2}", hi / lo);
+        }
+    }
+
+    per_line_bound_table(&scene, &kernel, &level, &out_dir, pixels);
+}
+
+/// The `per-line bound` group as a table: speed from this run's criterion
+/// estimates, PSNR against the exact reference (4 × 4 rays a pixel).
+fn per_line_bound_table(
+    scene: &Scene,
+    kernel: &terracast_sim::scene::KernelScene,
+    level: &Camera,
+    out_dir: &Path,
+    pixels: u64,
+) {
+    let (reference, _) =
+        Reference::new(scene).render(level, SIZE.0, SIZE.1, &ReferenceOptions::default());
+    let view = View::new(level, SIZE.0, SIZE.1).expect("view");
+    let colors = |buffer: &SampleBuffer| buffer.samples.iter().map(|s| s.color).collect::<Vec<_>>();
+    let kernel_colors = |options: &RenderOptions| {
+        let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+        let levels = kernel.pyramid_for(options).expect("pyramid");
+        render(&levels, &view, options, &mut buffer, &mut NoProbe);
+        colors(&buffer)
+    };
+    let single = options(Coherence::DEFAULT, Resolution::Single, true);
+    let mut columns = SampleBuffer::new(SIZE.0, SIZE.1);
+    let terrain = kernel.terrain().expect("terrain");
+    render_level_columns(&terrain, &view, &single, &mut columns).expect("a level view");
+    let voxel = voxel_space(
+        scene,
+        level,
+        SIZE.0,
+        SIZE.1,
+        &VoxelSpaceOptions {
+            spacing_growth: 0.005,
+            sky: terracast::config::DEFAULT_SKY,
+        },
+    )
+    .0
+    .colors;
+    let rows = [
+        ("kernel", kernel_colors(&RenderOptions::default())),
+        ("kernel-single", kernel_colors(&single)),
+        ("columns", colors(&columns)),
+        // The same image into an RGB framebuffer: what the sink costs.
+        ("columns-rgb", colors(&columns)),
+        ("voxelspace", voxel),
+    ];
+    let mean_ns = |label: &str| -> Option<f64> {
+        let path = out_dir
+            .join("per-line bound")
+            .join(label)
+            .join("new/estimates.json");
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
+        json["mean"]["point_estimate"].as_f64()
+    };
+    let kernel_ns = mean_ns("kernel");
+    println!(
+        "\nper-line bound, pitch 0, eye {:?} yaw {}:",
+        level.eye, level.yaw_deg
+    );
+    println!("\n| renderer | ns/pixel | speed vs the kernel | PSNR dB |");
+    println!("|---|---|---|---|");
+    for (label, image) in rows {
+        let db = psnr(&image, &reference.colors);
+        match (mean_ns(label), kernel_ns) {
+            (Some(ns), Some(base)) => println!(
+                "| {label} | {:.1} | {:.2}x | {db:.2} |",
+                ns / pixels as f64,
+                base / ns
+            ),
+            _ => println!("| {label} | (not measured in this run) | | {db:.2} |"),
         }
     }
 }

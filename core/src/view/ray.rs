@@ -163,15 +163,15 @@ pub(crate) struct Cursor {
 pub(crate) struct Plane {
     pub key: RayKey,
     /// Minor-axis increment per major-axis step, Q16 (within ±1).
-    dminor: i64,
+    pub dminor: i64,
     /// Major-axis grid coordinate of sample 0, the distance to it, and the
     /// minor coordinate there (see [`Ray`]).
-    major0: i64,
-    delta0: i64,
-    minor0: i64,
+    pub major0: i64,
+    pub delta0: i64,
+    pub minor0: i64,
     /// Samples inside the map: `first..=last` (`first` may be −1).
-    first: i64,
-    last: i64,
+    pub first: i64,
+    pub last: i64,
     /// Largest minor coordinate whose neighbour across the grid line is in
     /// the map, Q16.
     minor_max: i64,

@@ -1,0 +1,215 @@
+//! The per-line design at its smallest: level views (pitch 0), level 0
+//! only, subvoxel shading. It is the speed bound the kernel's per-pixel
+//! path is measured against (`cargo bench -p terracast-sim --bench
+//! kernel`, group `per-line bound`), and the shape that path is being
+//! rebuilt toward:
+//!
+//! - **Once a column**: its vertical plane ([`Plane`]: major axis,
+//!   direction, minor slope, the samples inside the map), its bottom ray's
+//!   slope and the slope's change a row.
+//! - **Once a ray**: its slope (a multiply-add) and its height where the
+//!   ray below it hit (a multiply). It resumes there: it is no lower than
+//!   that ray at any sample, so it is above the surface before it (Cohen-Or
+//!   §2, Figure 7), and the blended heights of the hit sample and the one
+//!   before are already at hand.
+//! - **Once a step**: the two heights across the minor grid line, blended
+//!   by shift and mask, compared with the ray's height.
+//! - **Once a hit**: the crossing placed by the clearances (one division),
+//!   and both grid lines' colors blended there by the subvoxel weights.
+//! - **Sky** above a column's last hit is one span, written without rays.
+//!
+//! Its images differ from the kernel's single-resolution ones only by
+//! rounding (the slope is stepped, not divided, and there is no color
+//! drift), so a pixel costs what the algorithm costs.
+
+use super::walk::lerp;
+use super::{crossing_fraction, sky, RenderOptions};
+use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BITS};
+use crate::divide::div_trunc;
+use crate::view::ray::Plane;
+use crate::{Rgb, Sample, Sink, Terrain, View};
+use core::fmt;
+
+/// Why [`render_level_columns`] cannot render a view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ColumnsError {
+    /// The view is pitched or rolled: its image columns are not the
+    /// images of vertical planes.
+    NotLevel,
+}
+
+impl fmt::Display for ColumnsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("the column caster renders level views (pitch 0, roll 0) only")
+    }
+}
+
+impl core::error::Error for ColumnsError {}
+
+/// Heights are U12.4; the walk compares them in Q16 (`HEIGHT_WEIGHT_BITS`).
+const HEIGHT_TO_Q16: u32 = COORD_FRAC_BITS - HEIGHT_FRAC_BITS;
+
+/// Renders a level `view` of `terrain` (level 0, subvoxel shading, the sky
+/// of `options`) column by column into `sink`.
+pub fn render_level_columns<S: Sink>(
+    terrain: &Terrain<'_>,
+    view: &View,
+    options: &RenderOptions,
+    sink: &mut S,
+) -> Result<(), ColumnsError> {
+    if view.per_row[0].to_bits() != 0 || view.per_row[1].to_bits() != 0 {
+        return Err(ColumnsError::NotLevel);
+    }
+    let columns = Columns::new(terrain, view, options);
+    for column in 0..view.width() {
+        columns.column(column, sink);
+    }
+    Ok(())
+}
+
+/// What every column of a frame shares.
+struct Columns<'t, 'v> {
+    heights: &'t [u16],
+    colors: &'t [Rgb],
+    width: isize,
+    top: i64,
+    view: &'v View,
+    extent: crate::Extent,
+    sky: Sample,
+}
+
+/// A column's walk: where its current sample is, and the blended height
+/// of that sample and of the one before it.
+#[derive(Clone, Copy)]
+struct At {
+    k: i64,
+    index: isize,
+    minor: i64,
+    height: i64,
+    before: i64,
+}
+
+impl<'t, 'v> Columns<'t, 'v> {
+    fn new(terrain: &Terrain<'t>, view: &'v View, options: &RenderOptions) -> Self {
+        Self {
+            heights: terrain.heights(),
+            colors: terrain.colors(),
+            width: terrain.width() as isize,
+            top: i64::from(terrain.max_height()) << HEIGHT_TO_Q16,
+            view,
+            extent: terrain.extent(),
+            sky: sky(options),
+        }
+    }
+
+    /// Height (Q16) at minor coordinate `minor` (Q16) of the grid line
+    /// starting at `index`, the neighbour `across` away.
+    #[inline(always)]
+    fn height(&self, index: isize, across: isize, minor: i64) -> i64 {
+        let i = (index + across * (minor >> COORD_FRAC_BITS) as isize) as usize;
+        let (h0, h1) = (self.heights[i], self.heights[i + across as usize]);
+        let weight = (minor as i32 & 0xFFFF) >> HEIGHT_FRAC_BITS;
+        i64::from((i32::from(h0) << HEIGHT_TO_Q16) + (i32::from(h1) - i32::from(h0)) * weight)
+    }
+
+    #[inline(always)]
+    fn color(&self, index: isize, across: isize, minor: i64) -> Rgb {
+        let i = (index + across * (minor >> COORD_FRAC_BITS) as isize) as usize;
+        let weight = (minor >> (COORD_FRAC_BITS - WEIGHT_BITS)) as u32 & 0xFF;
+        lerp(self.colors[i], self.colors[i + across as usize], weight)
+    }
+
+    fn column<S: Sink>(&self, column: u32, sink: &mut S) {
+        let view = self.view;
+        let (height_px, c) = (view.height(), i64::from(column));
+        let d = [0, 1, 2].map(|a| view.base[a].to_bits() + c * view.per_column[a].to_bits());
+        let plane = Plane::new(view, &self.extent, &d);
+        let x_major = plane.key.x_major;
+        let run = if x_major { d[0] } else { d[1] }.abs();
+        let (first, last) = (plane.first.max(0), plane.last);
+        // Grid strides: a step along the major axis, a grid line across.
+        let (major_stride, across) = if x_major {
+            (1, self.width)
+        } else {
+            (self.width, 1)
+        };
+        let step = if plane.key.forward {
+            major_stride
+        } else {
+            -major_stride
+        };
+        let put =
+            |sink: &mut S, row: u32, sample: Sample| sink.put(column, height_px - 1 - row, sample);
+        if first > last || run == 0 {
+            (0..height_px).for_each(|row| put(sink, row, self.sky));
+            return;
+        }
+        // The bottom ray's slope and its change a row, both Q32: the
+        // direction's height is I32F32 below 2^36, so the bottom slope is
+        // divided in Q24 and widened; a row's change is below 2^26.
+        let max_slope = i64::from(MAX_RAY_SLOPE) << COORD_FRAC_BITS;
+        let slope0 = div_trunc(d[2] << 24, run) << 8;
+        let per_row = div_trunc(view.per_row[2].to_bits() << 32, run);
+        let eye_z = view.eye[2].to_bits();
+
+        let index_at = |k: i64| {
+            ((plane.major0 + if plane.key.forward { k } else { -k }) as isize) * major_stride
+        };
+        let minor_at = |k: i64| plane.minor0 + k * plane.dminor;
+        let mut at = At {
+            k: first,
+            index: index_at(first),
+            minor: minor_at(first),
+            height: 0,
+            before: i64::MAX,
+        };
+        at.height = self.height(at.index, across, at.minor);
+        for row in 0..height_px {
+            let dz = ((slope0 + i64::from(row) * per_row) >> 16).clamp(-max_slope, max_slope);
+            let z0 = eye_z + ((plane.delta0 * dz) >> COORD_FRAC_BITS);
+            let mut z = z0 + at.k * dz;
+            // Climb to this ray (Figure 7): from the sample where the ray
+            // below hit, step while above the surface.
+            while z > at.height {
+                if at.k == last || (dz >= 0 && z > self.top) {
+                    // Left the map or rose above the highest terrain: so
+                    // do all the rays above it.
+                    (row..height_px).for_each(|row| put(sink, row, self.sky));
+                    return;
+                }
+                at.before = at.height;
+                at.k += 1;
+                at.index += step;
+                at.minor += plane.dminor;
+                at.height = self.height(at.index, across, at.minor);
+                z += dz;
+            }
+            put(sink, row, self.hit(&at, z, dz, across, step, &plane));
+        }
+    }
+
+    /// The sample of a ray at height `z` (Q16) at `at`, below the surface
+    /// there and above it at the sample before (when there is one).
+    #[inline(always)]
+    fn hit(&self, at: &At, z: i64, dz: i64, across: isize, step: isize, plane: &Plane) -> Sample {
+        let on_hit_line = self.color(at.index, across, at.minor);
+        let distance = plane.delta0 + (at.k << COORD_FRAC_BITS);
+        if at.before == i64::MAX {
+            return Sample {
+                color: on_hit_line,
+                distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
+                elevation: z as i32,
+            };
+        }
+        let above = (z - dz - at.before) as i32;
+        let below = (z - at.height) as i32;
+        let t = crossing_fraction(above, below);
+        let before = self.color(at.index - step, across, at.minor - plane.dminor);
+        let back = i64::from(256 - t);
+        Sample {
+            color: lerp(before, on_hit_line, t),
+            distance: (distance - (back << 8)).clamp(0, i64::from(Sample::SKY - 1)) as u32,
+            elevation: (z - ((back * dz) >> 8)) as i32,
+        }
+    }
+}
