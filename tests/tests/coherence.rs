@@ -18,12 +18,17 @@
 
 use terracast::{Camera, Coherence, RenderOptions, Resolution};
 use terracast_sim::metrics::{differing_pixels, psnr};
-use terracast_tests::{comanche, kernel_render};
+use terracast_tests::{comanche, data_dir, kernel_render};
 
 const SIZE: (u32, u32) = (640, 360);
 
 #[test]
 fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
+    let Some(data) =
+        data_dir("exact_coherence_is_bit_identical_and_default_stays_within_its_bound")
+    else {
+        return;
+    };
     let mut failures = Vec::new();
     let (mut off_steps, mut exact_steps, mut default_steps) = (0u64, 0u64, 0u64);
     for (color, height, resolution) in [
@@ -34,7 +39,7 @@ fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
         ("7W", "7", Resolution::DEFAULT),
         ("14", "14", Resolution::DEFAULT),
     ] {
-        let scene = comanche(color, height).to_kernel().unwrap();
+        let scene = comanche(&data, color, height).to_kernel().unwrap();
         let levels = if resolution == Resolution::Single {
             "single"
         } else {

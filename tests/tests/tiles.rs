@@ -129,9 +129,8 @@ fn packed_files_render_as_their_maps_bit_for_bit() {
     // Without a color map, colored by height and slope as `render` does.
     let default = HeightFilter::default();
     packed_equals_maps(&height, None, 1.0 / 16.0, default, "odd-gray.tiles");
-    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
-    let comanche = data.join("comanche");
-    if comanche.join("D7.png").exists() {
+    if let Some(data) = terracast_tests::data_dir("the Comanche and SRTM packs") {
+        let comanche = data.join("comanche");
         packed_equals_maps(
             &comanche.join("D7.png"),
             Some(&comanche.join("C7W.png")),
@@ -146,8 +145,6 @@ fn packed_files_render_as_their_maps_bit_for_bit() {
             default,
             "srtm.tiles",
         );
-    } else {
-        println!("../shared/data not found: Comanche and SRTM packs skipped");
     }
 }
 

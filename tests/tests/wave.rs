@@ -16,7 +16,7 @@ use terracast_sim::frame::Frame;
 use terracast_sim::metrics::{mean_abs_difference, row_mean_abs_difference};
 use terracast_sim::output::write_png;
 use terracast_sim::reference::Reference;
-use terracast_tests::{comanche, kernel_render, reference_view};
+use terracast_tests::{comanche, data_dir, kernel_render, reference_view};
 
 const SIZE: (u32, u32) = (320, 180);
 const FRAMES: usize = 60;
@@ -35,7 +35,10 @@ fn row_profile(frames: &[Frame]) -> Vec<f64> {
 
 #[test]
 fn level_switches_draw_no_wave() {
-    let scene = comanche("7W", "7");
+    let Some(data) = data_dir("level_switches_draw_no_wave") else {
+        return;
+    };
+    let scene = comanche(&data, "7W", "7");
     let kernel = scene.to_kernel().unwrap();
     let reference = Reference::new(&scene);
     let out = std::env::var_os("TERRACAST_WAVE_FRAMES").map(std::path::PathBuf::from);
