@@ -61,7 +61,7 @@ pub const MAX_VERTICAL_TANGENT: f32 = 64.0;
 pub const PITCH_RANGE_DEG: (f32, f32) = (-89.0, 90.0);
 
 /// Default sky color of the view contract.
-pub const DEFAULT_SKY: crate::Rgb = [135, 185, 235];
+pub const DEFAULT_SKY: crate::color::Rgb = [135, 185, 235];
 
 /// Default full horizontal field of view of the view contract, degrees.
 pub const DEFAULT_HFOV_DEG: f32 = 60.0;

@@ -42,6 +42,7 @@
 #![deny(rustdoc::broken_intra_doc_links)]
 
 mod caster;
+mod color;
 pub mod config;
 mod divide;
 mod pool;
@@ -55,8 +56,7 @@ pub mod tiles;
 mod view;
 mod warp;
 
-/// An 8-bit RGB color.
-pub type Rgb = [u8; 3];
+pub use color::Rgb;
 
 pub use caster::{
     render, render_by_footprint, render_level_columns, render_line, Coherence, ColumnsError,

@@ -51,11 +51,11 @@
 //! `const fn`s, so a board can size `static` buffers at compile time (or put
 //! a pyramid built on the host in flash and wrap it with [`Pyramid::new`]).
 
+use crate::color::Rgb;
 use crate::config::{MAX_LEVEL, MAX_MAP_SIDE};
 use crate::roughness::RoughnessSum;
 use crate::surface::{Extent, Surface};
 use crate::terrain::Terrain;
-use crate::Rgb;
 use core::fmt;
 use heapless::Vec;
 

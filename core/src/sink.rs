@@ -1,6 +1,6 @@
 //! Where finished pixels go.
 
-use crate::Rgb;
+use crate::color::Rgb;
 use core::fmt;
 
 /// What a ray saw: a color and how far away along the ray's major axis.

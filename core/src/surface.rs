@@ -8,7 +8,7 @@
 //! is monomorphized for each surface: rendering from a [`crate::Pyramid`]
 //! compiles to the same slice indexing as before the trait existed.
 
-use crate::Rgb;
+use crate::color::Rgb;
 
 /// The size of level 0 and its highest height: what clipping a ray to the
 /// map needs.

@@ -1,8 +1,8 @@
 //! The terrain: borrowed height and color slices of one grid.
 
+use crate::color::Rgb;
 use crate::config::{HEIGHT_FRAC_BITS, MAX_MAP_SIDE};
 use crate::surface::{Extent, Grid};
-use crate::Rgb;
 use core::fmt;
 
 /// A height field with a color per grid point, borrowed from the caller.

@@ -21,9 +21,9 @@
 //!    warp rarely samples outside it; where it does, the nearest edge pixel
 //!    is used.
 
+use crate::color::Rgb;
 use crate::sink::Sample;
 use crate::view::Camera;
-use crate::Rgb;
 use core::fmt;
 use glam::DVec3;
 

@@ -1,5 +1,6 @@
 //! The view contract's pinhole camera in `f64`: the rays every renderer and
-//! every check agree on (spec/view-contract.md).
+//! every check agree on (the view contract, `shared/spec/view-contract.md`
+//! beside the repository; `docs/command-line.md` says how `render` follows it).
 
 use terracast::Camera;
 

@@ -174,6 +174,8 @@ pub struct FlyOptions {
     pub margin: f32,
     /// Also render each warped frame's true view and compare.
     pub measure_warp: bool,
+    /// The kernel's settings (the governor moves their level bias).
+    pub render: RenderOptions,
 }
 
 impl Default for FlyOptions {
@@ -186,6 +188,7 @@ impl Default for FlyOptions {
             hfov: 60.0,
             margin: 1.2,
             measure_warp: true,
+            render: RenderOptions::default(),
         }
     }
 }
@@ -311,14 +314,16 @@ pub fn fly(
     if options.render_hz > options.display_hz {
         return Err(Error::new("the render rate cannot exceed the display rate"));
     }
-    let pyramid = kernel.pyramid()?;
+    let pyramid = kernel.pyramid_for(&options.render)?;
     let first = path.camera(0.0, options.hfov);
     let (_, render_size) = with_margin(&first, options.size, options.margin);
     // The budget: the rendering period's cycles on the workers, less the
     // rays' set-up and their most shading, in steps.
     let workers = f64::from(machine.processors - 1);
     let cycles_per_s = machine.clock_mhz * 1e6 * workers;
-    let rays = u64::from(render_size.0) * u64::from(render_size.1);
+    let rays = u64::from(render_size.0)
+        * u64::from(render_size.1)
+        * u64::from(options.render.vertical_samples.count());
     let period_cycles = cycles_per_s / options.render_hz;
     let c = &machine.cycles;
     let ray_cycles = (rays * (c.per_ray + u64::from(MAX_COLOR_FETCHES_A_RAY) * c.per_color)) as f64;
@@ -348,13 +353,7 @@ pub fn fly(
         let mut frame = Framebuffer::with_distances(&mut colors, &mut distances, size.0, size.1)
             .map_err(|e| Error::new(e.to_string()))?;
         let mut counts = CountingProbe::default();
-        let cost = governor.render(
-            &pyramid,
-            &view,
-            &RenderOptions::default(),
-            &mut frame,
-            &mut counts,
-        );
+        let cost = governor.render(&pyramid, &view, &options.render, &mut frame, &mut counts);
         let seconds = (rays * c.per_ray
             + counts.color_fetches * c.per_color
             + cost.steps * c.per_step) as f64
@@ -432,7 +431,10 @@ pub fn fly(
             }
         }
         let warp_psnr = (kind == Kind::Warped && options.measure_warp)
-            .then(|| true_view(kernel, &display, options.size).map(|truth| psnr(&image, &truth)))
+            .then(|| {
+                true_view(kernel, &display, options.size, &options.render)
+                    .map(|truth| psnr(&image, &truth))
+            })
             .transpose()?;
         frames.push(DisplayFrame {
             time,
@@ -459,9 +461,13 @@ pub fn fly(
 
 /// The kernel's render of `camera` at `size`, no budget: what a warped
 /// frame is measured against.
-fn true_view(kernel: &KernelScene, camera: &Camera, size: (u32, u32)) -> Result<Vec<Rgb>> {
-    let (frame, _) =
-        crate::kernel::render_kernel(kernel, camera, size.0, size.1, &RenderOptions::default())?;
+fn true_view(
+    kernel: &KernelScene,
+    camera: &Camera,
+    size: (u32, u32),
+    options: &RenderOptions,
+) -> Result<Vec<Rgb>> {
+    let (frame, _) = crate::kernel::render_kernel(kernel, camera, size.0, size.1, options)?;
     Ok(frame.colors)
 }
 

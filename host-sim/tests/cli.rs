@@ -278,3 +278,63 @@ fn a_tiles_file_renders_with_its_own_height_filter() {
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     assert!(err.contains("packed with --height-filter mean"), "{err}");
 }
+
+#[test]
+fn every_rendering_command_takes_the_kernel_settings_and_a_keyframed_path() {
+    let path = temp("keys.txt");
+    std::fs::write(&path, "0 500 100 200 90 10\n1 520 200 200 80 14\n").unwrap();
+    let gif = temp("kernel-flags.gif");
+    let runs: [&[&str]; 3] = [
+        &[
+            "fly",
+            "--frames",
+            "4",
+            "--size",
+            "32x24",
+            "--no-measure",
+            "--out",
+            s(&gif),
+        ],
+        &["sim", "--frames", "2", "--size", "32x24", "--threads", "1"],
+        &[
+            "page",
+            "--frames",
+            "2",
+            "--size",
+            "32x24",
+            "--terrain",
+            "procedural:4096",
+        ],
+    ];
+    for run in runs {
+        let with = |extra: &[&str]| -> Vec<String> {
+            run.iter().chain(extra).map(|a| a.to_string()).collect()
+        };
+        let sim = |args: Vec<String>| sim(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        for settings in [
+            &["--coherence", "off", "--resolution", "single"][..],
+            &["--shading", "nearest", "--vertical-samples", "2"][..],
+        ] {
+            let (code, _, err) = sim(with(settings));
+            assert_eq!(code, 0, "{run:?} {settings:?}: {err}");
+        }
+        let (code, _, err) = sim(with(&["--vertical-samples", "footprint"]));
+        assert_eq!(code, 1, "{run:?}");
+        assert!(err.contains("only `render`"), "{run:?}: {err}");
+        let (code, _, err) = sim(with(&["--path", s(&path)]));
+        assert_eq!(code, 0, "{run:?} --path: {err}");
+    }
+    // The path is an input like any other.
+    let (code, _, err) = sim(&[
+        "page",
+        "--frames",
+        "1",
+        "--path",
+        s(&path),
+        "--report",
+        s(&path),
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("is the input --path"), "{err}");
+    assert!(std::fs::read_to_string(&path).unwrap().starts_with("0 500"));
+}

@@ -276,6 +276,7 @@ fn flight(frames: u32, prefetch: bool) -> PageOptions {
         prefetch,
         lead_s: 0.25,
         options: RenderOptions::default(),
+        path: None,
     }
 }
 

@@ -304,7 +304,9 @@ mod tests {
 
     /// The coarser levels and bounds of `terrain`, built: the storage a
     /// pyramid over it borrows.
-    fn pyramid_storage(terrain: &Terrain) -> (vec::Vec<u16>, vec::Vec<crate::Rgb>, vec::Vec<u16>) {
+    fn pyramid_storage(
+        terrain: &Terrain,
+    ) -> (vec::Vec<u16>, vec::Vec<crate::color::Rgb>, vec::Vec<u16>) {
         let (side_x, side_y) = (terrain.width(), terrain.depth());
         let points = pyramid_points(side_x, side_y);
         let (mut h, mut c) = (vec![0u16; points], vec![[0u8; 3]; points]);
@@ -372,7 +374,7 @@ mod tests {
         let heights: vec::Vec<u16> = (0..side * side)
             .map(|i| ((i % side * 5 + i / side * 3) % 40) as u16 * 16)
             .collect();
-        let colors: vec::Vec<crate::Rgb> = (0..side * side)
+        let colors: vec::Vec<crate::color::Rgb> = (0..side * side)
             .map(|i| [(i % 251) as u8, (i % 97) as u8, 60])
             .collect();
         let terrain = Terrain::new(side, side, &heights, &colors).unwrap();

@@ -24,10 +24,11 @@
 
 use super::walk::lerp;
 use super::{crossing_fraction, sky, RenderOptions};
+use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BITS};
 use crate::divide::div_trunc;
 use crate::view::ray::Plane;
-use crate::{Rgb, Sample, Sink, Terrain, View};
+use crate::{Sample, Sink, Terrain, View};
 use core::fmt;
 
 /// Why [`render_level_columns`] cannot render a view.

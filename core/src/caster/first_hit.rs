@@ -1,4 +1,4 @@
-//! The hierarchical first hit (Cohen-Or §2, after Cohen & Shaked [5]): the
+//! The hierarchical first hit (Cohen-Or §2, after Cohen & Shaked \[5\]): the
 //! first ray of an image line cannot resume from a ray before it, so it goes
 //! top-down through the pyramid's height bounds instead of voxel by voxel.
 //!

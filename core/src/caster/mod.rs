@@ -16,7 +16,7 @@
 //! the hit is refined between that sample and the first one below by the
 //! ratio of their clearances. Near the eye the color is level 0's, blended
 //! across both grid lines; farther out it comes from the levels the pixel's
-//! footprint brackets, on a schedule of its own ([`footprint_color`]).
+//! footprint brackets, on a schedule of its own ([`mod@footprint_color`]).
 
 mod budget;
 mod columns;
@@ -34,7 +34,7 @@ use crate::surface::Surface;
 use crate::view::lines::Line;
 use crate::view::ray::{Clip, Cursor, Lod, LodPlan, Plane, Ray, RayKey};
 use crate::view::View;
-use crate::{config::DEFAULT_SKY, Rgb};
+use crate::{color::Rgb, config::DEFAULT_SKY};
 use first_hit::first_hit;
 use fixed::types::U8F8;
 use footprint_color::footprint_color;
@@ -619,7 +619,7 @@ fn sky(options: &RenderOptions) -> Sample {
 
 /// Casts one ray: from the eye, or from `resume` (see [`resume_at`]). With
 /// `first_hit_on`, a walk from the eye skips through the pyramid's bounds
-/// first. Within `allowance` (see [`Allowance`]) the ray takes at most
+/// first. Within `allowance` (see [`Allowances`]) the ray takes at most
 /// `4n + 2` steps; a ray cut short is shaded where it stopped. Returns what
 /// it saw and the sample up to which it is known to be above the surface
 /// (its hit, or one past its last).

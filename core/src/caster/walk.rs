@@ -13,13 +13,13 @@
 //! that turns an impossible out-of-map index into an exit instead of a
 //! panic.
 
+use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_WEIGHT_BITS, WEIGHT_BITS};
 #[cfg(test)]
 use crate::probe::NoProbe;
 use crate::probe::Probe;
 use crate::surface::{Grid, Surface};
 use crate::view::ray::{Cursor, Ray};
-use crate::Rgb;
 
 /// Everything a step on one level needs, fixed while the ray stays there.
 #[derive(Debug, Clone, Copy)]

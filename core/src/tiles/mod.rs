@@ -52,8 +52,8 @@ pub use footprint::{
 };
 pub use surface::{TiledGrid, TiledSurface};
 
+use crate::color::Rgb;
 use crate::pyramid::level_side;
-use crate::Rgb;
 use core::fmt;
 
 /// The size of a whole tiled terrain, which may be far larger than any map

@@ -3,8 +3,9 @@
 
 use super::footprint::{window_origin, WINDOW_SIDE};
 use super::{Tile, TileCache, TileKey, World};
+use crate::color::Rgb;
 use crate::surface::{Extent, Grid, Surface};
-use crate::{Camera, Rgb};
+use crate::Camera;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 /// log2 of the row stride of level 0 in a window: every level's grid fits

@@ -55,6 +55,8 @@ pub(super) struct FlyArgs {
     /// The report: a record per display frame, as JSON.
     #[arg(long, value_name = "REPORT.json")]
     report: Option<PathBuf>,
+    #[command(flatten)]
+    kernel: super::KernelArgs,
 }
 
 /// `fly --size`: the display is at most 2048 a side.
@@ -100,11 +102,7 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
         .transpose()?;
     let scene = load_scene(&args.scene)?;
     let path = match &args.path {
-        Some(file) => {
-            let text = std::fs::read_to_string(file)
-                .map_err(|e| Error::new(format!("cannot read {}: {e}", file.display())))?;
-            Path::parse(&text).map_err(|e| Error::new(format!("{}: {e}", file.display())))?
-        }
+        Some(file) => super::load_path(file)?,
         None => Path::scenic(&scene),
     };
     let frames = match args.frames {
@@ -119,8 +117,9 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
         hfov: args.hfov,
         margin: args.margin,
         measure_warp: !args.no_measure,
+        render: args.kernel.fixed_rays_options()?,
     };
-    let kernel = scene.to_kernel()?;
+    let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
     let bar = ProgressBar::new(u64::from(frames)).with_style(
         ProgressStyle::with_template("fly: {bar:30} {pos}/{len} display frames, {eta} left")
             .map_err(|e| Error::new(e.to_string()))?,

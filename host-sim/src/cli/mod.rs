@@ -1,4 +1,5 @@
-//! The `terracast-sim` command line (spec/view-contract.md).
+//! The `terracast-sim` command line (the view contract,
+//! `shared/spec/view-contract.md` beside the repository).
 
 mod bench;
 mod fly;
@@ -242,12 +243,13 @@ struct CameraArgs {
     /// edge, a little above the highest terrain].
     #[arg(long, value_parser = triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
     eye: Option<[f32; 3]>,
-    /// Heading in degrees, from +x toward +y.
-    #[arg(long, default_value_t = 90.0, value_parser = angle, allow_hyphen_values = true, value_name = "DEG")]
-    yaw: f32,
-    /// Degrees below the horizon (positive looks down), -89 to 90.
-    #[arg(long, default_value_t = 12.0, value_parser = pitch, allow_hyphen_values = true, value_name = "DEG")]
-    pitch: f32,
+    /// Heading in degrees, from +x toward +y [default: 90; `page`: 0].
+    #[arg(long, value_parser = angle, allow_hyphen_values = true, value_name = "DEG")]
+    yaw: Option<f32>,
+    /// Degrees below the horizon (positive looks down), -89 to 90
+    /// [default: 12; `page`: 20].
+    #[arg(long, value_parser = pitch, allow_hyphen_values = true, value_name = "DEG")]
+    pitch: Option<f32>,
     /// Full horizontal field of view in degrees, 1 to 160 [default: 60;
     /// `sim --table`: 30].
     #[arg(long, value_parser = hfov, allow_hyphen_values = true, value_name = "DEG")]
@@ -259,34 +261,38 @@ impl CameraArgs {
     fn hfov_or(&self, default_deg: f32) -> f32 {
         self.hfov.unwrap_or(default_deg)
     }
+
+    /// The camera these flags describe: `eye` where none is given, and the
+    /// command's defaults (heading, pitch, field of view) for the rest.
+    fn camera(&self, eye: [f32; 3], [yaw, pitch, hfov]: [f32; 3], roll_deg: f32) -> Camera {
+        Camera {
+            eye: self.eye.unwrap_or(eye),
+            yaw_deg: self.yaw.unwrap_or(yaw),
+            pitch_deg: self.pitch.unwrap_or(pitch),
+            roll_deg,
+            hfov_deg: self.hfov_or(hfov),
+        }
+    }
+}
+
+/// The heading and pitch a camera takes by default (`render`, `sim`).
+const DEFAULT_YAW_PITCH: [f32; 2] = [90.0, 12.0];
+
+/// `--path PATH.txt`: one keyframe a line, `t x y z yaw pitch` (seconds,
+/// voxels, degrees); `fly`, `sim` and `page` fly it.
+fn load_path(file: &Path) -> Result<crate::fly::Path> {
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| Error::new(format!("cannot read --path {}: {e}", file.display())))?;
+    crate::fly::Path::parse(&text).map_err(|e| Error::new(format!("{}: {e}", file.display())))
 }
 
 /// The side of the built-in scene given no --procedural-size.
 const DEFAULT_PROCEDURAL_SIDE: u32 = 1024;
 
+/// The kernel's settings: every command that renders with the kernel takes
+/// them (`bench` compares them all instead).
 #[derive(Debug, clap::Args)]
-struct RenderArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
-    /// Render from a tiled terrain through the kernel's tile cache instead:
-    /// a file from `pack`, or `procedural:SIZE` (SIZE voxels a side,
-    /// e.g. procedural:131072). Kernel method only.
-    #[arg(long, value_name = "T.tiles|procedural:SIZE", conflicts_with_all = ["height", "color"])]
-    terrain: Option<String>,
-    #[command(flatten)]
-    camera: CameraArgs,
-    /// Bank in degrees, positive = right wing down.
-    #[arg(long, default_value_t = 0.0, value_parser = angle, allow_hyphen_values = true, value_name = "DEG")]
-    roll: f32,
-    /// Image size.
-    #[arg(long, default_value = "640x360", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
-    size: (u32, u32),
-    /// Sky color.
-    #[arg(long, value_parser = values::rgb, allow_hyphen_values = true, value_name = "R,G,B")]
-    sky: Option<Rgb>,
-    /// Renderer.
-    #[arg(long, value_enum, default_value_t = Method::Kernel)]
-    method: Method,
+struct KernelArgs {
     /// Kernel: vertical ray coherence along each image line. `exact` gives
     /// the same image as `off` (every ray cast from the eye); `across-levels`
     /// also resumes where the ray before stepped on other pyramid levels,
@@ -326,6 +332,33 @@ struct RenderArgs {
     /// nearest voxel.
     #[arg(long, value_enum, default_value_t = ShadingArg::Subvoxel)]
     shading: ShadingArg,
+}
+
+#[derive(Debug, clap::Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Render from a tiled terrain through the kernel's tile cache instead:
+    /// a file from `pack`, or `procedural:SIZE` (SIZE voxels a side,
+    /// e.g. procedural:131072). Kernel method only.
+    #[arg(long, value_name = "T.tiles|procedural:SIZE", conflicts_with_all = ["height", "color"])]
+    terrain: Option<String>,
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// Bank in degrees, positive = right wing down.
+    #[arg(long, default_value_t = 0.0, value_parser = angle, allow_hyphen_values = true, value_name = "DEG")]
+    roll: f32,
+    /// Image size.
+    #[arg(long, default_value = "640x360", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
+    size: (u32, u32),
+    /// Sky color.
+    #[arg(long, value_parser = values::rgb, allow_hyphen_values = true, value_name = "R,G,B")]
+    sky: Option<Rgb>,
+    /// Renderer.
+    #[arg(long, value_enum, default_value_t = Method::Kernel)]
+    method: Method,
+    #[command(flatten)]
+    kernel: KernelArgs,
     /// Voxel Space: growth of the slice spacing each slice.
     #[arg(long, default_value_t = 0.005, value_name = "G",
           value_parser = number(0.0f64, 10.0), allow_hyphen_values = true)]
@@ -426,13 +459,12 @@ fn render_command(args: RenderArgs) -> Result<()> {
         return paging::render_tiled_command(&args, spec, outputs, files);
     }
     let scene = load_scene(&args.scene)?;
-    let camera = Camera {
-        eye: args.camera.eye.unwrap_or_else(|| scene.default_eye()),
-        yaw_deg: args.camera.yaw,
-        pitch_deg: args.camera.pitch,
-        roll_deg: args.roll,
-        hfov_deg: args.camera.hfov_or(DEFAULT_HFOV_DEG),
-    };
+    let [yaw, pitch] = DEFAULT_YAW_PITCH;
+    let camera = args.camera.camera(
+        scene.default_eye(),
+        [yaw, pitch, DEFAULT_HFOV_DEG],
+        args.roll,
+    );
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
     // The reference can roll; every other method shares the kernel's
     // camera limits.
@@ -452,19 +484,16 @@ fn render_command(args: RenderArgs) -> Result<()> {
         Method::Kernel => {
             // The kernel's terrain first: heights out of its range are the
             // problem to report, before the camera placed over them.
-            let kernel = scene.to_kernel_with(
-                args.height_filter
-                    .map_or_else(HeightFilter::default, Into::into),
-            )?;
+            let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
             check_view()?;
-            let options = kernel_options(&args, sky);
+            let options = args.kernel.options(sky);
             render_kernel_with(
                 &kernel,
                 &camera,
                 width,
                 height,
                 &options,
-                args.vertical_samples.1,
+                args.kernel.vertical_samples.1,
             )?
         }
         Method::Reference => {
@@ -537,31 +566,50 @@ impl RenderFiles {
     }
 }
 
-/// The kernel's options from the flags (each checked by its parser).
-fn kernel_options(args: &RenderArgs, sky: Rgb) -> RenderOptions {
-    let coherence = match args.coherence {
-        CoherenceArg::Off => Coherence::Off,
-        CoherenceArg::Exact => Coherence::Exact,
-        CoherenceArg::AcrossLevels => Coherence::AcrossLevels,
-    };
-    let resolution = match args.resolution {
-        ResolutionArg::Single => Resolution::Single,
-        ResolutionArg::Multi => Resolution::Multi {
-            pixel_to_voxel: U8F8::from_num(args.pixel_to_voxel),
-        },
-    };
-    let (vertical_samples, _) = args.vertical_samples;
-    RenderOptions {
-        coherence,
-        resolution,
-        hierarchical_first_hit: args.first_hit == FirstHitArg::Hierarchical,
-        vertical_samples,
-        shading: match args.shading {
-            ShadingArg::Subvoxel => Shading::Subvoxel,
-            ShadingArg::Nearest => Shading::Nearest,
-        },
-        terrain_fit: args.terrain_fit == TerrainFitArg::On,
-        sky,
+impl KernelArgs {
+    /// The kernel's options (each flag checked by its parser), with `sky`.
+    fn options(&self, sky: Rgb) -> RenderOptions {
+        let coherence = match self.coherence {
+            CoherenceArg::Off => Coherence::Off,
+            CoherenceArg::Exact => Coherence::Exact,
+            CoherenceArg::AcrossLevels => Coherence::AcrossLevels,
+        };
+        let resolution = match self.resolution {
+            ResolutionArg::Single => Resolution::Single,
+            ResolutionArg::Multi => Resolution::Multi {
+                pixel_to_voxel: U8F8::from_num(self.pixel_to_voxel),
+            },
+        };
+        RenderOptions {
+            coherence,
+            resolution,
+            hierarchical_first_hit: self.first_hit == FirstHitArg::Hierarchical,
+            vertical_samples: self.vertical_samples.0,
+            shading: match self.shading {
+                ShadingArg::Subvoxel => Shading::Subvoxel,
+                ShadingArg::Nearest => Shading::Nearest,
+            },
+            terrain_fit: self.terrain_fit == TerrainFitArg::On,
+            sky,
+        }
+    }
+
+    /// The height filter asked for, or the default.
+    fn height_filter(&self) -> HeightFilter {
+        self.height_filter
+            .map_or_else(HeightFilter::default, Into::into)
+    }
+
+    /// The options of a command that casts a fixed number of rays a pixel
+    /// (every command but `render`): `--vertical-samples footprint` is
+    /// refused there.
+    fn fixed_rays_options(&self) -> Result<RenderOptions> {
+        if self.vertical_samples.1 == PixelRays::ByFootprint {
+            return Err(Error::new(
+                "--vertical-samples footprint: only `render` gives a pixel rays by its footprint; give 1, 2, 4 or 8",
+            ));
+        }
+        Ok(self.options(terracast::config::DEFAULT_SKY))
     }
 }
 

@@ -1,8 +1,8 @@
 //! `terracast-sim pack`, `terracast-sim page`, and `render --terrain`:
 //! tiled terrain on the command line.
 
-use super::values::{hfov, number, pitch, positive, seed, size, triple};
-use super::{kernel_options, view_error, Method, RenderArgs, RenderFiles};
+use super::values::{number, positive, seed, size};
+use super::{view_error, Method, RenderArgs, RenderFiles};
 use crate::error::{Error, Result};
 use crate::output::{stats_json, write_png};
 use crate::outputs::Outputs;
@@ -12,7 +12,7 @@ use crate::tiles::{
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use terracast::tiles::{Tile, TileSource, World, WINDOW_SIDE};
-use terracast::{Camera, HeightFilter, RenderOptions, View};
+use terracast::{Camera, HeightFilter, View};
 
 #[derive(Debug, clap::Args)]
 pub(super) struct PackArgs {
@@ -95,19 +95,18 @@ pub(super) fn render_tiled_command(
     }
     let mut terrain = Terrain::open(spec, args.scene.seed)?;
     let world = terrain.world();
-    let camera = Camera {
-        eye: args.camera.eye.unwrap_or_else(|| default_eye(&world)),
-        yaw_deg: args.camera.yaw,
-        pitch_deg: args.camera.pitch,
-        roll_deg: args.roll,
-        hfov_deg: args.camera.hfov_or(terracast::config::DEFAULT_HFOV_DEG),
-    };
+    let [yaw, pitch] = super::DEFAULT_YAW_PITCH;
+    let camera = args.camera.camera(
+        default_eye(&world),
+        [yaw, pitch, terracast::config::DEFAULT_HFOV_DEG],
+        args.roll,
+    );
     let (width, height) = args.size;
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
-    let options = kernel_options(args, sky);
+    let options = args.kernel.options(sky);
     // A file's levels are built already: it renders with its own filter,
     // and asking for another is an error rather than a silent substitute.
-    if let (Terrain::File(file), Some(wanted)) = (&terrain, args.height_filter) {
+    if let (Terrain::File(file), Some(wanted)) = (&terrain, args.kernel.height_filter) {
         if file.filter() != HeightFilter::from(wanted) {
             let packed = super::HeightFilterArg::from(file.filter()).name();
             return Err(Error::new(format!(
@@ -131,7 +130,7 @@ pub(super) fn render_tiled_command(
         width,
         height,
         &options,
-        args.vertical_samples.1,
+        args.kernel.vertical_samples.1,
     )?;
     let mut json = stats_json(&stats, width, height, frame.sky_pixels());
     json["tiles"] = serde_json::to_value(tiled).map_err(|e| Error::new(e.to_string()))?;
@@ -167,9 +166,14 @@ pub(super) struct PageArgs {
     /// Image size.
     #[arg(long, default_value = "320x240", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
-    /// Horizontal field of view, degrees.
-    #[arg(long, default_value_t = 60.0, value_name = "DEG", value_parser = hfov, allow_hyphen_values = true)]
-    hfov: f32,
+    /// The flight's first camera (it turns and flies along its heading).
+    #[command(flatten)]
+    camera: super::CameraArgs,
+    /// Fly this keyframed path instead of turning (see `fly --path`).
+    #[arg(long, value_name = "PATH.txt", conflicts_with_all = ["turn", "speed", "eye", "yaw", "pitch"])]
+    path: Option<PathBuf>,
+    #[command(flatten)]
+    kernel: super::KernelArgs,
     /// Heading change, degrees a second [default: one field of view a
     /// second].
     #[arg(long, value_name = "DEG", value_parser = number(-3600.0f32, 3600.0), allow_hyphen_values = true)]
@@ -177,13 +181,6 @@ pub(super) struct PageArgs {
     /// Ground speed, voxels a second.
     #[arg(long, default_value_t = 300.0, value_name = "V", value_parser = number(0.0f32, 1e5), allow_hyphen_values = true)]
     speed: f32,
-    /// Start eye position [default: over the middle, above the highest
-    /// terrain].
-    #[arg(long, value_parser = triple, allow_hyphen_values = true, value_name = "X,Y,Z")]
-    eye: Option<[f32; 3]>,
-    /// Degrees below the horizon.
-    #[arg(long, default_value_t = 20.0, value_name = "DEG", value_parser = pitch, allow_hyphen_values = true)]
-    pitch: f32,
     /// Tiles the loader may fetch during one frame [default: the PVS
     /// disk's 70 MB/s over a frame].
     #[arg(long, value_name = "N", value_parser = number(1u32, 1_000_000), allow_hyphen_values = true)]
@@ -206,6 +203,9 @@ pub(super) struct PageArgs {
 pub(super) fn page_command(args: PageArgs) -> Result<()> {
     let mut outputs = Outputs::new();
     outputs.input("--terrain", std::path::Path::new(&args.terrain));
+    if let Some(path) = &args.path {
+        outputs.input("--path", path);
+    }
     if let Some(dir) = &args.frames_dir {
         outputs.folder("--frames-dir", dir)?;
     }
@@ -216,13 +216,12 @@ pub(super) fn page_command(args: PageArgs) -> Result<()> {
         .transpose()?;
     let mut terrain = Terrain::open(&args.terrain, args.seed)?;
     let world = terrain.world();
-    let start = Camera {
-        eye: args.eye.unwrap_or_else(|| default_eye(&world)),
-        yaw_deg: 0.0,
-        pitch_deg: args.pitch,
-        roll_deg: 0.0,
-        hfov_deg: args.hfov,
-    };
+    let start = args.camera.camera(
+        default_eye(&world),
+        [0.0, 20.0, terracast::config::DEFAULT_HFOV_DEG],
+        0.0,
+    );
+    let path = args.path.as_deref().map(super::load_path).transpose()?;
     View::new(
         &Camera {
             eye: [0.0, 0.0, start.eye[2]],
@@ -240,13 +239,14 @@ pub(super) fn page_command(args: PageArgs) -> Result<()> {
         size: args.size,
         frames: args.frames,
         fps: args.fps,
-        turn_deg_per_s: args.turn.unwrap_or(args.hfov),
+        turn_deg_per_s: args.turn.unwrap_or(start.hfov_deg),
         speed: args.speed,
         start,
         load_budget,
         prefetch: !args.no_prefetch,
         lead_s: args.lead,
-        options: RenderOptions::default(),
+        options: args.kernel.fixed_rays_options()?,
+        path,
     };
     let bar = ProgressBar::new(u64::from(args.frames)).with_style(
         ProgressStyle::with_template("page {bar:40} {pos}/{len} frames {elapsed} {msg}")

@@ -40,6 +40,13 @@ pub(super) struct SimArgs {
     /// Frames of the flight.
     #[arg(long, default_value_t = 8, value_name = "N", value_parser = number(1u32, 100_000), allow_hyphen_values = true)]
     frames: u32,
+    /// Fly this keyframed path instead (see `fly --path`): the flight's
+    /// frames at even times over it.
+    #[arg(long, value_name = "PATH.txt", conflicts_with_all = ["speed", "table"])]
+    path: Option<PathBuf>,
+    /// The kernel's settings (Table 1 keeps the defaults).
+    #[command(flatten)]
+    kernel: super::KernelArgs,
     /// Voxels the eye advances a frame.
     #[arg(long, default_value_t = 4.0, value_name = "V", value_parser = number(-1e4f32, 1e4), allow_hyphen_values = true)]
     speed: f32,
@@ -98,8 +105,10 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
     }
     let mut outputs = Outputs::new();
     args.scene.name_inputs(&mut outputs);
-    if let Some(path) = &args.machine {
-        outputs.input("--machine", path);
+    for (flag, path) in [("--machine", &args.machine), ("--path", &args.path)] {
+        if let Some(path) = path {
+            outputs.input(flag, path);
+        }
     }
     let chart = args
         .chart
@@ -114,17 +123,25 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
         (DEFAULT_PROCEDURAL_SIDE, DEFAULT_HFOV_DEG)
     };
     let scene = load_scene_or(&args.scene, side)?;
-    let kernel = scene.to_kernel()?;
-    let start = Camera {
-        eye: args.camera.eye.unwrap_or_else(|| scene.default_eye()),
-        yaw_deg: args.camera.yaw,
-        pitch_deg: args.camera.pitch,
-        roll_deg: 0.0,
-        hfov_deg: args.camera.hfov_or(hfov),
+    let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
+    let [yaw, pitch] = super::DEFAULT_YAW_PITCH;
+    let start = args
+        .camera
+        .camera(scene.default_eye(), [yaw, pitch, hfov], 0.0);
+    let options = args.kernel.fixed_rays_options()?;
+    let cameras = match &args.path {
+        Some(file) => {
+            let path = super::load_path(file)?;
+            // The frames at even times over the path.
+            let last = f64::from(args.frames.max(2) - 1);
+            (0..args.frames)
+                .map(|i| path.camera(path.duration() * f64::from(i) / last, start.hfov_deg))
+                .collect()
+        }
+        None => flight(&start, args.frames, args.speed),
     };
-    let options = RenderOptions::default();
     if !args.threads.is_empty() {
-        return threads_command(&kernel, &start, &args, &options);
+        return threads_command(&kernel, &cameras, &args, &options);
     }
     if args.table {
         let [x, y, z] = start.eye;
@@ -161,7 +178,6 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let cameras = flight(&start, args.frames, args.speed);
     let traces = record_flight(&kernel, &cameras, args.size, &options, &machine, |done| {
         eprint!(
             "\rrecording the kernel's work: frame {done}/{}",
@@ -233,11 +249,10 @@ fn report(machine: &Machine, result: &SimResult) -> String {
 
 fn threads_command(
     kernel: &KernelScene,
-    start: &Camera,
+    cameras: &[Camera],
     args: &SimArgs,
     options: &RenderOptions,
 ) -> Result<()> {
-    let cameras = flight(start, args.frames, args.speed);
     let available = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!(
         "{} frames of {}x{} on the line pool; this machine has {available} cores",
@@ -248,7 +263,7 @@ fn threads_command(
     println!("threads  Mpx/s  speed-up vs {} thread(s)", args.threads[0]);
     let mut baseline: Option<(f64, Vec<Vec<terracast::Rgb>>)> = None;
     for &threads in &args.threads {
-        let run = render_threads(kernel, &cameras, args.size, options, threads)?;
+        let run = render_threads(kernel, cameras, args.size, options, threads)?;
         let mpx = run.mpx_per_s(args.size);
         let (base, frames) = baseline.get_or_insert_with(|| (mpx, run.frames.clone()));
         if *frames != run.frames {

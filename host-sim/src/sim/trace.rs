@@ -14,16 +14,9 @@ use terracast::{
     level_side, render_line, Camera, Probe, Pyramid, RenderOptions, Sample, Sink, View,
 };
 
-/// A terrain tile: pyramid level and tile coordinates on that level.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct TileKey {
-    /// Pyramid level.
-    pub level: u8,
-    /// Tile column.
-    pub x: u32,
-    /// Tile row.
-    pub y: u32,
-}
+/// A terrain tile: pyramid level and tile coordinates on that level (the
+/// kernel's own key; the simulated machine's tiles are `tiles.side` a side).
+pub use terracast::tiles::TileKey;
 
 /// Work, then fetches from one tile.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

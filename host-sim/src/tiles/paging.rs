@@ -182,6 +182,9 @@ pub struct PageOptions {
     pub lead_s: f32,
     /// Kernel options.
     pub options: RenderOptions,
+    /// A keyframed path to fly instead of the turn (`fly`'s format; its
+    /// field of view is `start`'s).
+    pub path: Option<crate::fly::Path>,
 }
 
 /// One frame of a paged flight.
@@ -278,6 +281,9 @@ impl PageReport {
 /// The camera `t` seconds into the flight: turning at a steady rate,
 /// moving along its heading.
 pub fn flight_camera(options: &PageOptions, t: f32) -> Camera {
+    if let Some(path) = &options.path {
+        return path.camera(f64::from(t), options.start.hfov_deg);
+    }
     let start = &options.start;
     let turn = options.turn_deg_per_s.to_radians();
     let yaw0 = start.yaw_deg.to_radians();
