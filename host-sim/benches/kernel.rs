@@ -12,7 +12,9 @@
 //!   per-line design at its smallest; into the 12-byte sample buffer, and
 //!   into an RGB framebuffer to show what the sink costs) and Voxel Space,
 //!   with their speed against the kernel's and their PSNR against the exact
-//!   reference.
+//!   reference; the line caster (`render_level0_lines`, any pitch) beside
+//!   them; and `per-line bound by pitch`, the line caster against the
+//!   kernel at single resolution at pitch 2° to 90°.
 //!
 //!     cargo bench -p terracast-sim --bench kernel
 //!
@@ -22,8 +24,8 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
 use terracast::{
-    render, render_level_columns, Camera, Coherence, CountingProbe, NoProbe, RenderOptions,
-    Resolution, View,
+    render, render_level0_lines, render_level_columns, Camera, Coherence, CountingProbe, NoProbe,
+    RenderOptions, Resolution, View,
 };
 use terracast_sim::baselines::{voxel_space, VoxelSpaceOptions};
 use terracast_sim::kernel::SampleBuffer;
@@ -159,6 +161,9 @@ fn main() {
                 )
             })
         });
+        group.bench_function(BenchmarkId::from_parameter("lines"), |b| {
+            b.iter(|| render_level0_lines(&terrain, &level_view, &single, &mut buffer))
+        });
         group.bench_function(BenchmarkId::from_parameter("columns"), |b| {
             b.iter(|| render_level_columns(&terrain, &level_view, &single, &mut buffer))
         });
@@ -173,6 +178,21 @@ fn main() {
         group.bench_function(BenchmarkId::from_parameter("voxelspace"), |b| {
             b.iter(|| voxel_space(&scene, &level, SIZE.0, SIZE.1, &voxel_options))
         });
+        group.finish();
+        // Under pitch: the line caster against the kernel at single
+        // resolution, whose image it renders.
+        let mut group = criterion.benchmark_group("per-line bound by pitch");
+        group.throughput(Throughput::Elements(pixels));
+        group.sample_size(10);
+        for pitch in PITCHES {
+            let view = View::new(&camera(pitch), SIZE.0, SIZE.1).expect("view");
+            group.bench_function(BenchmarkId::new("kernel-single", pitch), |b| {
+                b.iter(|| render(&single_levels, &view, &single, &mut buffer, &mut NoProbe))
+            });
+            group.bench_function(BenchmarkId::new("lines", pitch), |b| {
+                b.iter(|| render_level0_lines(&terrain, &view, &single, &mut buffer))
+            });
+        }
         group.finish();
     }
     criterion.final_summary();
@@ -293,6 +313,11 @@ fn per_line_bound_table(
     let rows = [
         ("kernel", kernel_colors(&RenderOptions::default())),
         ("kernel-single", kernel_colors(&single)),
+        ("lines", {
+            let mut lines = SampleBuffer::new(SIZE.0, SIZE.1);
+            render_level0_lines(&terrain, &view, &single, &mut lines);
+            colors(&lines)
+        }),
         ("columns", colors(&columns)),
         // The same image into an RGB framebuffer: what the sink costs.
         ("columns-rgb", colors(&columns)),
@@ -322,6 +347,29 @@ fn per_line_bound_table(
                 base / ns
             ),
             _ => println!("| {label} | (not measured in this run) | | {db:.2} |"),
+        }
+    }
+    let group = out_dir.join("per-line bound by pitch");
+    let estimate = |setting: &str, pitch: f32| -> Option<f64> {
+        let path = group
+            .join(setting)
+            .join(pitch.to_string())
+            .join("new/estimates.json");
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
+        json["mean"]["point_estimate"].as_f64()
+    };
+    println!("\n| pitch | kernel single ns/pixel | lines ns/pixel | speed-up |");
+    println!("|---|---|---|---|");
+    for pitch in PITCHES {
+        if let (Some(kernel), Some(lines)) =
+            (estimate("kernel-single", pitch), estimate("lines", pitch))
+        {
+            println!(
+                "| {pitch} | {:.1} | {:.1} | {:.2}x |",
+                kernel / pixels as f64,
+                lines / pixels as f64,
+                kernel / lines
+            );
         }
     }
 }

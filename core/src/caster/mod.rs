@@ -19,13 +19,13 @@
 //! footprint brackets, on a schedule of its own ([`mod@footprint_color`]).
 
 mod budget;
-mod columns;
 mod first_hit;
 mod footprint_color;
+mod per_line;
 pub(crate) mod walk;
 
 pub use budget::{FrameCost, Governor};
-pub use columns::{render_level_columns, ColumnsError};
+pub use per_line::{render_level0_lines, render_level_columns, ColumnsError};
 
 use crate::probe::Probe;
 use crate::roughness::terrain_fit;

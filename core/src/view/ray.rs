@@ -174,7 +174,7 @@ pub(crate) struct Plane {
     pub last: i64,
     /// Largest minor coordinate whose neighbour across the grid line is in
     /// the map, Q16.
-    minor_max: i64,
+    pub minor_max: i64,
     /// `across_minor − dminor·across_major` (see [`Plane::with_across`]);
     /// 0 until set.
     across: i64,

@@ -1,8 +1,10 @@
-//! The per-line design at its smallest: level views (pitch 0), level 0
-//! only, subvoxel shading. It is the speed bound the kernel's per-pixel
-//! path is measured against (`cargo bench -p terracast-sim --bench
-//! kernel`, group `per-line bound`), and the shape that path is being
-//! rebuilt toward:
+//! The per-line design at its smallest: level 0 only, subvoxel shading.
+//! [`render_level_columns`] takes level views (pitch 0), whose image lines
+//! are the columns; [`render_level0_lines`] any pitch, along the kernel's
+//! image lines through the vertical's vanishing point. They are the speed
+//! bound the kernel's per-pixel path is measured against (`cargo bench -p
+//! terracast-sim --bench kernel`, group `per-line bound`), and the shape
+//! that path is being rebuilt toward:
 //!
 //! - **Once a column**: its vertical plane ([`Plane`]: major axis,
 //!   direction, minor slope, the samples inside the map), its bottom ray's
@@ -18,9 +20,11 @@
 //!   and both grid lines' colors blended there by the subvoxel weights.
 //! - **Sky** above a column's last hit is one span, written without rays.
 //!
-//! Its images differ from the kernel's single-resolution ones only by
-//! rounding (the slope is stepped, not divided, and there is no color
-//! drift), so a pixel costs what the algorithm costs.
+//! Their images differ from the kernel's single-resolution ones only by
+//! rounding (the column caster steps the slope instead of dividing it, and
+//! leaves out the color drift of rays beside their pixel's center, which
+//! at pitch 0 are none), so a pixel costs what the algorithm costs. Under
+//! pitch a ray's slope is a ratio, one division a ray.
 
 use super::walk::lerp;
 use super::{crossing_fraction, sky, RenderOptions};
@@ -68,6 +72,21 @@ pub fn render_level_columns<S: Sink>(
     Ok(())
 }
 
+/// Renders `view` of `terrain` (any pitch; level 0, subvoxel shading, the
+/// sky of `options`) line by line along its image lines through the
+/// vertical's vanishing point into `sink`.
+pub fn render_level0_lines<S: Sink>(
+    terrain: &Terrain<'_>,
+    view: &View,
+    options: &RenderOptions,
+    sink: &mut S,
+) {
+    let frame = Columns::new(terrain, view, options);
+    for line in 0..view.lines() {
+        frame.line(line, sink);
+    }
+}
+
 /// What every column of a frame shares.
 struct Columns<'t, 'v> {
     heights: &'t [u16],
@@ -88,6 +107,16 @@ struct At {
     minor: i64,
     height: i64,
     before: i64,
+}
+
+/// How a line's walk moves through the grid.
+struct Walk {
+    /// Index step to the neighbour across the minor grid line.
+    across: isize,
+    /// Index step of one sample along the major axis.
+    step: isize,
+    /// The line's last sample inside the map.
+    last: i64,
 }
 
 impl<'t, 'v> Columns<'t, 'v> {
@@ -168,33 +197,132 @@ impl<'t, 'v> Columns<'t, 'v> {
         for row in 0..height_px {
             let dz = ((slope0 + i64::from(row) * per_row) >> 16).clamp(-max_slope, max_slope);
             let z0 = eye_z + ((plane.delta0 * dz) >> COORD_FRAC_BITS);
-            let mut z = z0 + at.k * dz;
-            // Climb to this ray (Figure 7): from the sample where the ray
-            // below hit, step while above the surface.
-            while z > at.height {
-                if at.k == last || (dz >= 0 && z > self.top) {
-                    // Left the map or rose above the highest terrain: so
-                    // do all the rays above it.
-                    (row..height_px).for_each(|row| put(sink, row, self.sky));
-                    return;
-                }
-                at.before = at.height;
-                at.k += 1;
-                at.index += step;
-                at.minor += plane.dminor;
-                at.height = self.height(at.index, across, at.minor);
-                z += dz;
-            }
-            put(sink, row, self.hit(&at, z, dz, across, step, &plane));
+            let z = z0 + at.k * dz;
+            let walk = Walk { across, step, last };
+            let Some(z) = self.climb(&mut at, z, dz, &walk, &plane) else {
+                // Left the map or rose above the highest terrain: so do
+                // all the rays above it.
+                (row..height_px).for_each(|row| put(sink, row, self.sky));
+                return;
+            };
+            put(sink, row, self.hit(&at, z, dz, &walk, &plane, 0));
         }
     }
 
-    /// The sample of a ray at height `z` (Q16) at `at`, below the surface
-    /// there and above it at the sample before (when there is one).
+    /// One image line: a ray a pixel, by rising elevation, each resuming
+    /// where the one before it hit.
+    fn line<S: Sink>(&self, index: u32, sink: &mut S) {
+        let view = self.view;
+        let Some(line) = view.line(index) else {
+            return;
+        };
+        let plane =
+            Plane::new(view, &self.extent, &line.reference).with_across(&view.across(&line));
+        let (first, last) = (plane.first.max(0), plane.last);
+        let x_major = plane.key.x_major;
+        let (major_stride, across) = if x_major {
+            (1, self.width)
+        } else {
+            (self.width, 1)
+        };
+        let step = if plane.key.forward {
+            major_stride
+        } else {
+            -major_stride
+        };
+        let walk = Walk { across, step, last };
+        let start = || {
+            let index = ((plane.major0 + if plane.key.forward { first } else { -first }) as isize)
+                * major_stride;
+            let minor = plane.minor0 + first * plane.dminor;
+            At {
+                k: first,
+                index,
+                minor,
+                height: self.height(index, across, minor),
+                before: i64::MAX,
+            }
+        };
+        let mut at: Option<At> = None;
+        // The slope of the ray before, and of the lowest that left the
+        // terrain: rays no lower than that one see sky without a walk.
+        let (mut previous_dz, mut sky_from_dz) = (i64::MIN, i64::MAX);
+        for pixel in line.pixels(view.height()) {
+            let d = view.direction_of(&line, &pixel);
+            let (dz, _) = View::slope(&d, &plane);
+            if first > last || dz >= sky_from_dz {
+                sink.put(pixel.x, pixel.y, self.sky);
+                continue;
+            }
+            // A ray lower than the one before (by rounding, near the
+            // vanishing point) cannot resume where it hit.
+            if dz < previous_dz {
+                at = None;
+            }
+            previous_dz = dz;
+            let at = at.get_or_insert_with(start);
+            let z0 = view.eye[2].to_bits() + ((plane.delta0 * dz) >> COORD_FRAC_BITS);
+            let sample = match self.climb(at, z0 + at.k * dz, dz, &walk, &plane) {
+                Some(z) => self.hit(at, z, dz, &walk, &plane, plane.drift(&d, pixel.offset)),
+                None => {
+                    sky_from_dz = dz;
+                    self.sky
+                }
+            };
+            sink.put(pixel.x, pixel.y, sample);
+        }
+    }
+
+    /// Climbs to a ray at height `z` (Q16) at `at`, `dz` a step (Cohen-Or's
+    /// Figure 7): from the sample where the ray below hit, steps while
+    /// above the surface. Returns the ray's height at its hit, or `None`
+    /// when it leaves the map or rises above the highest terrain (and so
+    /// does every ray of the line above it).
     #[inline(always)]
-    fn hit(&self, at: &At, z: i64, dz: i64, across: isize, step: isize, plane: &Plane) -> Sample {
-        let on_hit_line = self.color(at.index, across, at.minor);
+    fn climb(&self, at: &mut At, mut z: i64, dz: i64, walk: &Walk, plane: &Plane) -> Option<i64> {
+        while z > at.height {
+            if at.k == walk.last || (dz >= 0 && z > self.top) {
+                return None;
+            }
+            at.before = at.height;
+            at.k += 1;
+            at.index += walk.step;
+            at.minor += plane.dminor;
+            at.height = self.height(at.index, walk.across, at.minor);
+            z += dz;
+        }
+        Some(z)
+    }
+
+    /// The color at minor coordinate `minor` of the grid line at `index`,
+    /// `distance` (Q16) from the eye, moved aside by `drift` (Q16 a major
+    /// step; see `Plane::drift`) over that distance.
+    #[inline(always)]
+    fn color_aside(
+        &self,
+        index: isize,
+        across: isize,
+        minor: i64,
+        distance: i64,
+        drift: i64,
+        plane: &Plane,
+    ) -> Rgb {
+        let minor = if drift == 0 {
+            minor
+        } else {
+            (minor + ((drift * distance) >> COORD_FRAC_BITS)).clamp(0, plane.minor_max)
+        };
+        self.color(index, across, minor)
+    }
+
+    /// The sample of a ray at height `z` (Q16) at `at`, below the surface
+    /// there and above it at the sample before (when there is one); its
+    /// colors looked up `drift` aside.
+    #[inline(always)]
+    fn hit(&self, at: &At, z: i64, dz: i64, walk: &Walk, plane: &Plane, drift: i64) -> Sample {
+        let (across, step) = (walk.across, walk.step);
         let distance = plane.delta0 + (at.k << COORD_FRAC_BITS);
+        let on_hit_line = self.color_aside(at.index, across, at.minor, distance, drift, plane);
         if at.before == i64::MAX {
             return Sample {
                 color: on_hit_line,
@@ -205,7 +333,14 @@ impl<'t, 'v> Columns<'t, 'v> {
         let above = (z - dz - at.before) as i32;
         let below = (z - at.height) as i32;
         let t = crossing_fraction(above, below);
-        let before = self.color(at.index - step, across, at.minor - plane.dminor);
+        let before = self.color_aside(
+            at.index - step,
+            across,
+            at.minor - plane.dminor,
+            distance - (1 << COORD_FRAC_BITS),
+            drift,
+            plane,
+        );
         let back = i64::from(256 - t);
         Sample {
             color: lerp(before, on_hit_line, t),
