@@ -65,7 +65,7 @@ pub fn render_level_columns<S: Sink>(
     if view.per_row[0].to_bits() != 0 || view.per_row[1].to_bits() != 0 {
         return Err(ColumnsError::NotLevel);
     }
-    let columns = Columns::new(terrain, view, options);
+    let columns = FrameCaster::new(terrain, view, options);
     for column in 0..view.width() {
         columns.column(column, sink);
     }
@@ -81,14 +81,14 @@ pub fn render_level0_lines<S: Sink>(
     options: &RenderOptions,
     sink: &mut S,
 ) {
-    let frame = Columns::new(terrain, view, options);
+    let frame = FrameCaster::new(terrain, view, options);
     for line in 0..view.lines() {
         frame.line(line, sink);
     }
 }
 
-/// What every column of a frame shares.
-struct Columns<'t, 'v> {
+/// What every line of a frame shares: the terrain, the view and the sky.
+struct FrameCaster<'t, 'v> {
     heights: &'t [u16],
     colors: &'t [Rgb],
     width: isize,
@@ -113,13 +113,38 @@ struct At {
 struct Walk {
     /// Index step to the neighbour across the minor grid line.
     across: isize,
-    /// Index step of one sample along the major axis.
+    /// Index step of one sample along the major axis, and of one grid line
+    /// of the major axis.
     step: isize,
-    /// The line's last sample inside the map.
+    major_stride: isize,
+    /// The line's samples inside the map: `first..=last`.
+    first: i64,
     last: i64,
 }
 
-impl<'t, 'v> Columns<'t, 'v> {
+impl Walk {
+    /// The walk of `plane`'s rays over a map `width` points wide.
+    fn new(plane: &Plane, width: isize) -> Self {
+        let (major_stride, across) = if plane.key.x_major {
+            (1, width)
+        } else {
+            (width, 1)
+        };
+        Self {
+            across,
+            step: if plane.key.forward {
+                major_stride
+            } else {
+                -major_stride
+            },
+            major_stride,
+            first: plane.first.max(0),
+            last: plane.last,
+        }
+    }
+}
+
+impl<'t, 'v> FrameCaster<'t, 'v> {
     fn new(terrain: &Terrain<'t>, view: &'v View, options: &RenderOptions) -> Self {
         Self {
             heights: terrain.heights(),
@@ -154,23 +179,11 @@ impl<'t, 'v> Columns<'t, 'v> {
         let (height_px, c) = (view.height(), i64::from(column));
         let d = [0, 1, 2].map(|a| view.base[a].to_bits() + c * view.per_column[a].to_bits());
         let plane = Plane::new(view, &self.extent, &d);
-        let x_major = plane.key.x_major;
-        let run = if x_major { d[0] } else { d[1] }.abs();
-        let (first, last) = (plane.first.max(0), plane.last);
-        // Grid strides: a step along the major axis, a grid line across.
-        let (major_stride, across) = if x_major {
-            (1, self.width)
-        } else {
-            (self.width, 1)
-        };
-        let step = if plane.key.forward {
-            major_stride
-        } else {
-            -major_stride
-        };
+        let run = if plane.key.x_major { d[0] } else { d[1] }.abs();
+        let walk = Walk::new(&plane, self.width);
         let put =
             |sink: &mut S, row: u32, sample: Sample| sink.put(column, height_px - 1 - row, sample);
-        if first > last || run == 0 {
+        if walk.first > walk.last || run == 0 {
             (0..height_px).for_each(|row| put(sink, row, self.sky));
             return;
         }
@@ -182,23 +195,11 @@ impl<'t, 'v> Columns<'t, 'v> {
         let per_row = div_trunc(view.per_row[2].to_bits() << 32, run);
         let eye_z = view.eye[2].to_bits();
 
-        let index_at = |k: i64| {
-            ((plane.major0 + if plane.key.forward { k } else { -k }) as isize) * major_stride
-        };
-        let minor_at = |k: i64| plane.minor0 + k * plane.dminor;
-        let mut at = At {
-            k: first,
-            index: index_at(first),
-            minor: minor_at(first),
-            height: 0,
-            before: i64::MAX,
-        };
-        at.height = self.height(at.index, across, at.minor);
+        let mut at = self.start(&plane, &walk);
         for row in 0..height_px {
             let dz = ((slope0 + i64::from(row) * per_row) >> 16).clamp(-max_slope, max_slope);
             let z0 = eye_z + ((plane.delta0 * dz) >> COORD_FRAC_BITS);
             let z = z0 + at.k * dz;
-            let walk = Walk { across, step, last };
             let Some(z) = self.climb(&mut at, z, dz, &walk, &plane) else {
                 // Left the map or rose above the highest terrain: so do
                 // all the rays above it.
@@ -218,31 +219,7 @@ impl<'t, 'v> Columns<'t, 'v> {
         };
         let plane =
             Plane::new(view, &self.extent, &line.reference).with_across(&view.across(&line));
-        let (first, last) = (plane.first.max(0), plane.last);
-        let x_major = plane.key.x_major;
-        let (major_stride, across) = if x_major {
-            (1, self.width)
-        } else {
-            (self.width, 1)
-        };
-        let step = if plane.key.forward {
-            major_stride
-        } else {
-            -major_stride
-        };
-        let walk = Walk { across, step, last };
-        let start = || {
-            let index = ((plane.major0 + if plane.key.forward { first } else { -first }) as isize)
-                * major_stride;
-            let minor = plane.minor0 + first * plane.dminor;
-            At {
-                k: first,
-                index,
-                minor,
-                height: self.height(index, across, minor),
-                before: i64::MAX,
-            }
-        };
+        let walk = Walk::new(&plane, self.width);
         let mut at: Option<At> = None;
         // The slope of the ray before, and of the lowest that left the
         // terrain: rays no lower than that one see sky without a walk.
@@ -250,7 +227,7 @@ impl<'t, 'v> Columns<'t, 'v> {
         for pixel in line.pixels(view.height()) {
             let d = view.direction_of(&line, &pixel);
             let (dz, _) = View::slope(&d, &plane);
-            if first > last || dz >= sky_from_dz {
+            if walk.first > walk.last || dz >= sky_from_dz {
                 sink.put(pixel.x, pixel.y, self.sky);
                 continue;
             }
@@ -260,7 +237,7 @@ impl<'t, 'v> Columns<'t, 'v> {
                 at = None;
             }
             previous_dz = dz;
-            let at = at.get_or_insert_with(start);
+            let at = at.get_or_insert_with(|| self.start(&plane, &walk));
             let z0 = view.eye[2].to_bits() + ((plane.delta0 * dz) >> COORD_FRAC_BITS);
             let sample = match self.climb(at, z0 + at.k * dz, dz, &walk, &plane) {
                 Some(z) => self.hit(at, z, dz, &walk, &plane, plane.drift(&d, pixel.offset)),
@@ -270,6 +247,22 @@ impl<'t, 'v> Columns<'t, 'v> {
                 }
             };
             sink.put(pixel.x, pixel.y, sample);
+        }
+    }
+
+    /// The walk's first sample inside the map, with nothing known before it.
+    #[inline(always)]
+    fn start(&self, plane: &Plane, walk: &Walk) -> At {
+        let first = walk.first;
+        let major = plane.major0 + if plane.key.forward { first } else { -first };
+        let index = major as isize * walk.major_stride;
+        let minor = plane.minor0 + first * plane.dminor;
+        At {
+            k: first,
+            index,
+            minor,
+            height: self.height(index, walk.across, minor),
+            before: i64::MAX,
         }
     }
 
