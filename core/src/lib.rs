@@ -34,7 +34,9 @@
 //!
 //! assert_eq!(pixels[8 * 5 + 4], [0, 200, 0]); // bottom middle sees the ground
 //! assert_eq!(pixels[4], [135, 185, 235]);     // top middle sees sky
-//! assert_eq!(probe.rays, 48);
+//! // A ray a pixel, but for the sky above each line's last hit, which is
+//! // written without one.
+//! assert!(probe.rays < 48);
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 #![cfg_attr(not(test), no_std)]

@@ -14,7 +14,9 @@
 //!   with their speed against the kernel's and their PSNR against the exact
 //!   reference; the line caster (`render_level0_lines`, any pitch) beside
 //!   them; and `per-line bound by pitch`, the line caster against the
-//!   kernel at single resolution at pitch 2° to 90°.
+//!   kernel at single resolution at pitch 2° to 90°;
+//! * `sky against terrain`: the default kernel from above the map's top,
+//!   45° up (all sky) against 45° down (all terrain), and their ratio.
 //!
 //!     cargo bench -p terracast-sim --bench kernel
 //!
@@ -45,6 +47,19 @@ fn scene() -> (Scene, &'static str) {
         Ok(scene) => (scene, "C7W/D7"),
         Err(_) => (procedural(1024, 1), "procedural 1024"),
     }
+}
+
+/// Criterion's mean estimate (ns) in `path` (a benchmark's directory), if
+/// this run measured it: an estimate left by an earlier run (a filtered
+/// run skips groups) is not this run's.
+fn estimate_ns(path: &Path, run_started: std::time::SystemTime) -> Option<f64> {
+    let path = path.join("new/estimates.json");
+    let modified = std::fs::metadata(&path).ok()?.modified().ok()?;
+    if modified < run_started {
+        return None;
+    }
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
+    json["mean"]["point_estimate"].as_f64()
 }
 
 fn camera(pitch: f32) -> Camera {
@@ -99,6 +114,7 @@ fn cases() -> Vec<Case> {
 }
 
 fn main() {
+    let run_started = std::time::SystemTime::now();
     let (scene, name) = scene();
     let kernel = scene.to_kernel().expect("kernel scene");
     let pixels = u64::from(SIZE.0 * SIZE.1);
@@ -195,13 +211,32 @@ fn main() {
         }
         group.finish();
     }
+    // The sky against the terrain: the default kernel from above the
+    // highest point of the map's middle, looking 45° up (every pixel sky)
+    // and 45° down (every pixel terrain).
+    let top = f32::from(terrain.max_height()) / 16.0;
+    let sky_cameras = [("sky", -45.0), ("terrain", 45.0)].map(|(label, pitch)| {
+        let camera = Camera::looking([512.0, 512.0, top + 40.0], 20.0, pitch);
+        (label, View::new(&camera, SIZE.0, SIZE.1).expect("view"))
+    });
+    {
+        let mut group = criterion.benchmark_group("sky against terrain");
+        group.throughput(Throughput::Elements(pixels));
+        group.sample_size(10);
+        let default = RenderOptions::default();
+        let levels = levels_for(&default);
+        let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+        for (label, view) in &sky_cameras {
+            group.bench_function(BenchmarkId::from_parameter(label), |b| {
+                b.iter(|| render(&levels, view, &default, &mut buffer, &mut NoProbe))
+            });
+        }
+        group.finish();
+    }
     criterion.final_summary();
 
-    let mean_ns = |group: &str, label: &str| -> Option<f64> {
-        let path = out_dir.join(group).join(label).join("new/estimates.json");
-        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
-        json["mean"]["point_estimate"].as_f64()
-    };
+    let mean_ns =
+        |group: &str, label: &str| estimate_ns(&out_dir.join(group).join(label), run_started);
     let steps_per_pixel = |case: &Case| {
         let view = View::new(&case.camera, SIZE.0, SIZE.1).expect("view");
         let mut probe = CountingProbe::default();
@@ -272,7 +307,37 @@ fn main() {
         }
     }
 
-    per_line_bound_table(&scene, &kernel, &level, &out_dir, pixels);
+    per_line_bound_table(&scene, &kernel, &level, &out_dir, pixels, run_started);
+
+    println!("\n| frame (default kernel, eye above the map's top) | sky pixels | ns/pixel |");
+    println!("|---|---|---|");
+    let mut ns = Vec::new();
+    for (label, view) in &sky_cameras {
+        let default = RenderOptions::default();
+        let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+        render(
+            &levels_for(&default),
+            view,
+            &default,
+            &mut buffer,
+            &mut NoProbe,
+        );
+        let sky = buffer.samples.iter().filter(|s| s.is_sky()).count();
+        let share = 100.0 * sky as f64 / pixels as f64;
+        match mean_ns("sky against terrain", label) {
+            Some(time) => {
+                ns.push(time);
+                println!("| {label} | {share:.1} % | {:.1} |", time / pixels as f64);
+            }
+            None => println!("| {label} | {share:.1} % | (not measured in this run) |"),
+        }
+    }
+    if let [sky, terrain] = ns[..] {
+        println!(
+            "an all-sky frame renders {:.2}x as fast as an all-terrain one",
+            terrain / sky
+        );
+    }
 }
 
 /// The `per-line bound` group as a table: speed from this run's criterion
@@ -283,6 +348,7 @@ fn per_line_bound_table(
     level: &Camera,
     out_dir: &Path,
     pixels: u64,
+    run_started: std::time::SystemTime,
 ) {
     let (reference, _) =
         Reference::new(scene).render(level, SIZE.0, SIZE.1, &ReferenceOptions::default());
@@ -323,14 +389,8 @@ fn per_line_bound_table(
         ("columns-rgb", colors(&columns)),
         ("voxelspace", voxel),
     ];
-    let mean_ns = |label: &str| -> Option<f64> {
-        let path = out_dir
-            .join("per-line bound")
-            .join(label)
-            .join("new/estimates.json");
-        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
-        json["mean"]["point_estimate"].as_f64()
-    };
+    let mean_ns =
+        |label: &str| estimate_ns(&out_dir.join("per-line bound").join(label), run_started);
     let kernel_ns = mean_ns("kernel");
     println!(
         "\nper-line bound, pitch 0, eye {:?} yaw {}:",
@@ -350,13 +410,8 @@ fn per_line_bound_table(
         }
     }
     let group = out_dir.join("per-line bound by pitch");
-    let estimate = |setting: &str, pitch: f32| -> Option<f64> {
-        let path = group
-            .join(setting)
-            .join(pitch.to_string())
-            .join("new/estimates.json");
-        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
-        json["mean"]["point_estimate"].as_f64()
+    let estimate = |setting: &str, pitch: f32| {
+        estimate_ns(&group.join(setting).join(pitch.to_string()), run_started)
     };
     println!("\n| pitch | kernel single ns/pixel | lines ns/pixel | speed-up |");
     println!("|---|---|---|---|");

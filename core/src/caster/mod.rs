@@ -210,6 +210,15 @@ struct Frame {
     /// Resume only between rays with equal level schedules.
     same_schedule: bool,
     first_hit: bool,
+    /// Once a ray of a line sees the sky, so does every ray after it:
+    /// each is no lower at any sample than the one before (see
+    /// [`resume_at`]; the pixels' directions step linearly along the line,
+    /// so their slopes rise with it, by rounding too), so it clears the
+    /// surface wherever that one did. Exact where the rays step on the
+    /// same levels (single resolution); across levels the approximation
+    /// [`Coherence::AcrossLevels`] makes when it resumes. Off for
+    /// [`Coherence::Off`], and for [`Coherence::Exact`] on the pyramid.
+    sky_above_sky: bool,
 }
 
 impl Frame {
@@ -228,11 +237,13 @@ impl Frame {
             Coherence::Exact => (true, true),
             Coherence::AcrossLevels => (true, false),
         };
+        let single = matches!(options.resolution, Resolution::Single);
         Self {
             lod,
             resume,
             same_schedule,
             first_hit: options.hierarchical_first_hit && surface.has_bounds(),
+            sky_above_sky: resume && (single || !same_schedule),
         }
     }
 }
@@ -502,7 +513,16 @@ fn line_rays<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances, R: RaysPerPi
     let mut recent = Recent::default();
     // Sub-rays go by rising elevation too: the way the line is walked.
     let step = i64::from(line.sector.step);
+    // Set once a ray of the line sees the sky (see `Frame::sky_above_sky`):
+    // the rest of the line is sky, written without rays.
+    let mut sky_from_here = false;
     for pixel in line.pixels(view.height()) {
+        if sky_from_here {
+            let sky = sky(options);
+            rays_per_pixel.rendered(&sky, pixel.s);
+            sink.put(pixel.x, pixel.y, sky);
+            continue;
+        }
         let log2 = rays_per_pixel.log2();
         let samples = 1i64 << log2;
         let mut sum = [0u32; 3];
@@ -510,15 +530,26 @@ fn line_rays<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances, R: RaysPerPi
         for sub in 0..samples {
             // Sub-ray centers, in sixteenths of a pixel from the pixel center.
             let offset = (((2 * sub + 1 - samples) * 8) >> log2) * step;
+            if sky_from_here {
+                let sky = sky(options);
+                for (s, v) in sum.iter_mut().zip(sky.color) {
+                    *s += u32::from(v);
+                }
+                if sub == samples / 2 {
+                    center = sky;
+                }
+                continue;
+            }
             probe.ray();
             let d = if offset == 0 {
-                view.direction_of(&line, &pixel)
+                pixel.direction
             } else {
-                view.direction_on(&line, pixel.s, offset)
+                View::direction_beside(&line, &pixel, offset)
             };
             let clip = view.clip(&extent, &d, &plane);
             let allowance = allowances.next();
             let sample = if clip.start > clip.end {
+                sky_from_here = frame.sky_above_sky;
                 sky(options)
             } else if allowance == 0 {
                 // No step left in the budget: repeat the ray before.
@@ -535,6 +566,7 @@ fn line_rays<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances, R: RaysPerPi
                     dz: clip.dz as i32,
                     ..a
                 });
+                sky_from_here = frame.sky_above_sky;
                 sky(options)
             } else {
                 let mut ray = view.ray_with(&extent, &frame.lod, &plane, &clip);
@@ -561,6 +593,9 @@ fn line_rays<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances, R: RaysPerPi
                     dminor: ray.dminor.to_bits(),
                     dz: ray.dz.to_bits(),
                 });
+                // `cast` gives the sky only to a ray that left the terrain
+                // (one cut short by its allowance is shaded where it stopped).
+                sky_from_here = frame.sky_above_sky && sample.is_sky();
                 sample
             };
             previous = Some(sample);

@@ -225,7 +225,7 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         // terrain: rays no lower than that one see sky without a walk.
         let (mut previous_dz, mut sky_from_dz) = (i64::MIN, i64::MAX);
         for pixel in line.pixels(view.height()) {
-            let d = view.direction_of(&line, &pixel);
+            let d = pixel.direction;
             let (dz, _) = View::slope(&d, &plane);
             if walk.first > walk.last || dz >= sky_from_dz {
                 sink.put(pixel.x, pixel.y, self.sky);

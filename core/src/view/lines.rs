@@ -35,7 +35,7 @@
 
 use super::View;
 use crate::config::COORD_FRAC_BITS;
-use crate::divide::{div_ceil, div_trunc};
+use crate::divide::div_trunc;
 
 /// Fractional bits of image-plane positions in the ownership tests.
 const IMG_FRAC: u32 = 8;
@@ -200,11 +200,13 @@ fn line_range(
     // for fixed s that grows with t, and along each edge of the sector's
     // pixels it is monotone in s, so its extremes are at the axis ends.
     let (mut k_min, mut k_max) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut ends_without_pixels = 0;
     for s in [lo, hi] {
         let a = (f64::from(s) - s_v).abs();
         let t_lo = (t_v - a).max(0.0);
         let t_hi = (t_v + a).min(f64::from(cross_len - 1));
         if t_lo > t_hi {
+            ends_without_pixels += 1;
             // No pixel at this end: the sector's pixels start on its edges.
             k_min = k_min.min(t_v - b);
             k_max = k_max.max(t_v + b);
@@ -215,6 +217,11 @@ fn line_range(
             k_min = k_min.min(k);
             k_max = k_max.max(k);
         }
+    }
+    // The cone widens steadily along the axis: if it misses the image at
+    // both ends, it misses every row between.
+    if ends_without_pixels == 2 {
+        return None;
     }
     let (k_min, k_max) = (k_min.max(t_v - b), k_max.min(t_v + b));
     if k_min > k_max {
@@ -240,23 +247,16 @@ pub(crate) struct Line {
     /// Direction of the line's far-edge point (I32F32): every ray of the
     /// line takes its horizontal direction from it.
     pub reference: [i64; 3],
+    /// The direction's change a unit of axis coordinate along the line
+    /// (I32F32): a pixel's ray steps to the next row's by one add.
+    per_axis: [i64; 3],
     /// Cross coordinate per unit of axis, Q32 (`(K − t_V) / (s_ref − s_V)`).
     slope: i64,
     /// The ownership test's per-line terms (see [`Line::owns`]), Q8:
-    /// `|s_ref − s_V|`, and `K ∓ ½ − t_V`.
+    /// `|s_ref − s_V|`, and `K − ½ − t_V`.
     far: i64,
     nearest_from: i64,
-    nearest_to: i64,
-    /// The row skip's terms (see [`OwnedPixels::holds_no_pixel`]): rows
-    /// nearer the vanishing point than `skip_within` (Q8, `far / 2`; 0 for
-    /// no skip) are tested, with `2^30 / far` rounded up.
-    skip_within: u32,
-    inverse_far: u32,
 }
-
-/// The most a line's point ([`Line::cross_at`], Q16) is off the exact
-/// line: the slope's truncation and the shift's, with room to spare.
-const CROSS_ERROR_Q16: i64 = 4;
 
 /// A pixel a line owns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -269,8 +269,8 @@ pub(crate) struct Owned {
     /// The pixel's center less its line's point there, along the cross
     /// coordinate, Q16 pixels (within ±1/2).
     pub offset: i64,
-    /// The line's point there: its cross coordinate, Q16.
-    pub cross: i64,
+    /// The direction through the line's point there (I32F32 bits).
+    pub direction: [i64; 3],
 }
 
 impl View {
@@ -304,58 +304,37 @@ impl View {
                 }
             }
         };
+        // Along the line the cross coordinate moves `slope` a unit of axis:
+        // the direction moves by the axis step plus `slope` cross steps
+        // (once a line, in 128 bits: a step is below 2^41, the slope 2^34).
+        let (axis_step, cross_step) = if sector.along_rows {
+            (&self.per_row, &self.per_column)
+        } else {
+            (&self.per_column, &self.per_row)
+        };
+        let per_axis = core::array::from_fn(|i| {
+            let cross = (i128::from(cross_step[i].to_bits()) * i128::from(slope)) >> 32;
+            axis_step[i].to_bits() + cross as i64
+        });
         let (s_v, t_v) = sector.vanishing.unwrap_or((0, 0));
         let k_t = (i64::from(k) << IMG_FRAC) - t_v;
         let far = ((i64::from(sector.s_ref) << IMG_FRAC) - s_v).abs();
-        // Both under 2^31: one 32-bit divide on a 32-bit core.
-        let (skip_within, inverse_far) = match sector.vanishing {
-            Some(_) if (1..1 << 30).contains(&far) => {
-                ((far / 2) as u32, div_ceil(1 << 30, far) as u32)
-            }
-            _ => (0, 0),
-        };
         Some(Line {
             sector,
             k,
             reference,
+            per_axis,
             slope,
             far,
             nearest_from: k_t - IMG_ONE / 2,
-            nearest_to: k_t + IMG_ONE / 2,
-            skip_within,
-            inverse_far,
         })
     }
 
-    /// The direction through the point of `line` at axis coordinate `s`
-    /// plus `offset16` sixteenths (I32F32 bits).
+    /// The direction `offset16` sixteenths of a pixel along `line` from
+    /// `pixel`'s (a sub-ray's; I32F32 bits).
     #[inline]
-    pub(crate) fn direction_on(&self, line: &Line, s: i32, offset16: i64) -> [i64; 3] {
-        let s_q16 = (i64::from(s) << COORD_FRAC_BITS) + (offset16 << (COORD_FRAC_BITS - 4));
-        self.direction_at(line, s_q16, line.cross_at(s_q16))
-    }
-
-    /// The direction through the pixel `pixel` of `line` looks along: the
-    /// line's point at its axis coordinate, worked out when it was found.
-    #[inline]
-    pub(crate) fn direction_of(&self, line: &Line, pixel: &Owned) -> [i64; 3] {
-        self.direction_at(line, i64::from(pixel.s) << COORD_FRAC_BITS, pixel.cross)
-    }
-
-    /// The direction through image-plane point (`s_q16`, `t_q16`): axis
-    /// and cross coordinates of `line`'s sector, Q16.
-    #[inline]
-    fn direction_at(&self, line: &Line, s_q16: i64, t_q16: i64) -> [i64; 3] {
-        let (u, v) = if line.sector.along_rows {
-            (t_q16, s_q16)
-        } else {
-            (s_q16, t_q16)
-        };
-        core::array::from_fn(|i| {
-            self.base[i].to_bits()
-                + scale(self.per_column[i].to_bits(), u)
-                + scale(self.per_row[i].to_bits(), v)
-        })
+    pub(crate) fn direction_beside(line: &Line, pixel: &Owned, offset16: i64) -> [i64; 3] {
+        core::array::from_fn(|i| pixel.direction[i] + ((line.per_axis[i] * offset16) >> 4))
     }
 }
 
@@ -373,13 +352,6 @@ impl View {
     }
 }
 
-/// `v · q / 2^16` for a Q16 `q`, split so that neither product overflows:
-/// `v` is a direction step (below 2^40 in I32F32 bits) and `|q|` below 2^30.
-#[inline]
-fn scale(v: i64, q: i64) -> i64 {
-    v * (q >> COORD_FRAC_BITS) + ((v * (q & ((1 << COORD_FRAC_BITS) - 1))) >> COORD_FRAC_BITS)
-}
-
 impl Line {
     /// How far apart (in pixels, Q16) the centers of two of the line's
     /// pixels on neighbouring rows are: `√(1 + slope²)`, from 1 for a line
@@ -390,8 +362,9 @@ impl Line {
         ((1u64 << 32) + slope * slope).isqrt()
     }
 
-    /// The line's cross coordinate at axis coordinate `s_q16` (Q16 both).
-    #[inline]
+    /// The line's cross coordinate at axis coordinate `s_q16` (Q16 both):
+    /// the point [`OwnedPixels`] steps along, bit for bit.
+    #[cfg(test)]
     fn cross_at(&self, s_q16: i64) -> i64 {
         match self.sector.vanishing {
             None => i64::from(self.k) << COORD_FRAC_BITS,
@@ -408,7 +381,8 @@ impl Line {
     /// this line's: inside the image and the sector, and nearer this line
     /// than any other of the sector. Exact integer arithmetic, so the lines
     /// of a sector share out its pixels with none left over or repeated.
-    #[inline]
+    /// [`OwnedPixels`] steps this test along the line.
+    #[cfg(test)]
     fn owns(&self, t: i32, s: i32) -> bool {
         if !(0..self.sector.cross_len).contains(&t) {
             return false;
@@ -427,99 +401,176 @@ impl Line {
             dt.abs() < a
         };
         // Nearest line: (K − ½ − t_V)·a <= (t − t_V)·b < (K + ½ − t_V)·a.
-        inside && self.nearest_from * a <= dt * b && dt * b < self.nearest_to * a
+        let nearest_to = self.nearest_from + IMG_ONE;
+        inside && self.nearest_from * a <= dt * b && dt * b < nearest_to * a
+    }
+
+    /// The rows (axis coordinates) where the line's point is within half
+    /// a pixel of the image, with a row to spare at each end, in the
+    /// order rays are cast: `first` up to `end` (exclusive; `first == end`
+    /// for none). A pixel the line owns is within half a pixel of its
+    /// point, so no other row holds one.
+    fn rows_in_image(&self) -> (i32, i32) {
+        let sector = &self.sector;
+        let (first, last, step) = (sector.first, sector.last, sector.step);
+        let Some((s_v, t_v)) = sector.vanishing else {
+            return (first, last + step);
+        };
+        let (low, high) = (
+            -IMG_ONE / 2,
+            (i64::from(sector.cross_len) << IMG_FRAC) - IMG_ONE / 2,
+        );
+        if self.slope == 0 {
+            return if (low..=high).contains(&t_v) {
+                (first, last + step)
+            } else {
+                (first, first)
+            };
+        }
+        // Where the point crosses the two edges: s = s_V + (t − t_V)/slope
+        // (Q8; the Q32 slope is at least 2^−32, the quotient clamps).
+        let s_at = |t: i64| s_v + div_trunc((t - t_v) << 32, self.slope);
+        let (a, b) = (s_at(low), s_at(high));
+        let (lo, hi) = (floor_q8(a.min(b)) - 1, ceil_q8(a.max(b)) + 1);
+        let (lo, hi) = (lo.max(first.min(last)), hi.min(first.max(last)));
+        if lo > hi {
+            return (first, first);
+        }
+        if step > 0 {
+            (lo, hi + 1)
+        } else {
+            (hi, lo - 1)
+        }
     }
 
     /// The pixels this line owns, in the order their rays are cast.
     pub fn pixels(&self, height: u32) -> OwnedPixels {
-        OwnedPixels {
-            line: *self,
-            s: self.sector.first,
-            entered: false,
-            top_row: height as i32 - 1,
-        }
+        OwnedPixels::new(self, height)
     }
 }
 
-/// Iterator over a line's pixels (see [`Line::pixels`]).
+/// Iterator over a line's pixels (see [`Line::pixels`]): the ownership
+/// test of [`Line::owns`] stepped row by row by adds.
+///
+/// On row `s` the line owns pixel `t` when `(K − ½ − t_V)·a ≤ (t − t_V)·b <
+/// (K + ½ − t_V)·a` (`a` the row's distance from the vanishing point, `b`
+/// the far edge's) and `t` is inside the image and the sector. The window's
+/// start moves by a constant a row and its width, `a`, too; `(t − t_V)·b`
+/// moves by `b` a pixel. The window is at most a pixel wide (`a ≤ b`), so
+/// the candidate `t`, the smallest at or past its start, is the only pixel
+/// the row can give the line, and it moves by about the line's slope a
+/// row. Near the vanishing point the lines are closer than a pixel and
+/// most rows give a line none: such a row costs a few adds and compares.
+/// The direction and the offset are worked out for the pixels owned only.
 #[derive(Debug, Clone)]
 pub(crate) struct OwnedPixels {
     line: Line,
     s: i32,
-    entered: bool,
+    end: i32,
     top_row: i32,
+    /// The window on row `s`: its start `(K − ½ − t_V)·a` and width `a`
+    /// (Q16, `a` times one pixel), and their change a row.
+    from: i64,
+    from_step: i64,
+    width: i64,
+    width_step: i64,
+    /// The candidate pixel, `(t − t_V)·b` (Q16), and its change a pixel.
+    t: i32,
+    t_b: i64,
+    b_step: i64,
 }
 
 impl OwnedPixels {
-    /// Whether row `s` holds none of the line's pixels, by one product:
-    /// a pixel the line owns lies within its share of the row, `a / far`
-    /// pixels wide and centered on the line's point `t_q16` (`a` the row's
-    /// distance from the vanishing point; [`Line::owns`]). So if even the
-    /// pixel `nearest` to the point lies outside, no pixel does. Near the
-    /// vanishing point the lines are closer than a pixel and most rows hold
-    /// none, so this spares them the exact test; it never rejects a row
-    /// the exact test would not (the share is rounded up, the point's
-    /// error allowed for). Rows where the share is half a pixel or more
-    /// mostly hold a pixel and go straight to the exact test.
-    #[inline(always)]
-    fn holds_no_pixel(&self, s: i32, t_q16: i64, nearest: i32) -> bool {
-        let Some((s_v, _)) = self.line.sector.vanishing else {
-            return false;
+    fn new(line: &Line, height: u32) -> Self {
+        let sector = line.sector;
+        let (first, end) = line.rows_in_image();
+        let first = i64::from(first);
+        // Parallel lines (pitch 0) own every pixel of their column: a
+        // window from K − ½ to K + ½, `a = b = 1`, none outside the sector.
+        let (s_v, t_v, b, a, a_step, nearest_from) = match sector.vanishing {
+            Some((s_v, t_v)) => {
+                let ds = (first << IMG_FRAC) - s_v;
+                let a_step = ds.signum() * i64::from(sector.step) * IMG_ONE;
+                (s_v, t_v, line.far, ds.abs(), a_step, line.nearest_from)
+            }
+            None => (0, i64::from(line.k) << IMG_FRAC, 1, 1, 0, -IMG_ONE / 2),
         };
-        let a = ((i64::from(s) << IMG_FRAC) - s_v).unsigned_abs();
-        if a >= u64::from(self.line.skip_within) {
-            return false;
+        // The candidate starts at the line's point on the first row.
+        let point = (t_v << 32) + line.slope * ((first << IMG_FRAC) - s_v);
+        let t = (point >> 40).clamp(-(1 << 24), 1 << 24) as i32;
+        Self {
+            line: *line,
+            s: first as i32,
+            end,
+            top_row: height as i32 - 1,
+            from: nearest_from * a,
+            from_step: nearest_from * a_step,
+            width: IMG_ONE * a,
+            width_step: IMG_ONE * a_step,
+            t,
+            t_b: ((i64::from(t) << IMG_FRAC) - t_v) * b,
+            b_step: IMG_ONE * b,
         }
-        // Half the share, Q16: 2^15 · a / far, rounded up (a < 2^29: one
-        // 32 × 32-bit product).
-        let half_share = ((a * u64::from(self.line.inverse_far)) >> 15) as i64 + 1;
-        let miss = ((i64::from(nearest) << COORD_FRAC_BITS) - t_q16).abs();
-        miss > half_share + CROSS_ERROR_Q16
+    }
+
+    /// The pixel the line owns at cross coordinate `t` on row `s`.
+    #[inline(always)]
+    fn owned(&self, t: i32, s: i32) -> Owned {
+        let line = &self.line;
+        let sector = &line.sector;
+        let (x, row) = if sector.along_rows { (t, s) } else { (s, t) };
+        let (s_v, t_v) = sector
+            .vanishing
+            .unwrap_or((0, i64::from(line.k) << IMG_FRAC));
+        // The line's point, Q16: Q32 slope times Q8 distance.
+        let point = (t_v << (COORD_FRAC_BITS - IMG_FRAC))
+            + ((line.slope * ((i64::from(s) << IMG_FRAC) - s_v))
+                >> (32 + IMG_FRAC - COORD_FRAC_BITS));
+        let along = i64::from(s - sector.s_ref);
+        Owned {
+            x: x as u32,
+            y: (self.top_row - row) as u32,
+            s,
+            offset: (i64::from(t) << COORD_FRAC_BITS) - point,
+            direction: core::array::from_fn(|i| line.reference[i] + line.per_axis[i] * along),
+        }
     }
 }
 
 impl Iterator for OwnedPixels {
     type Item = Owned;
 
+    #[inline]
     fn next(&mut self) -> Option<Owned> {
-        let sector = self.line.sector;
-        let end = sector.last + sector.step;
-        let limit = i64::from(sector.cross_len) << COORD_FRAC_BITS;
-        while self.s != end {
-            let s = self.s;
-            self.s += sector.step;
-            let t_q16 = self.line.cross_at(i64::from(s) << COORD_FRAC_BITS);
-            // More than a pixel outside the image: no pixel of this row is
-            // the line's. The line runs straight, so once it has been
-            // inside and leaves, it is done.
-            if t_q16 < -(1 << COORD_FRAC_BITS) || t_q16 > limit {
-                if self.entered {
-                    self.s = end;
+        let step = self.line.sector.step;
+        let cross_len = self.line.sector.cross_len;
+        while self.s != self.end {
+            let (s, from, width) = (self.s, self.from, self.width);
+            self.s += step;
+            self.from += self.from_step;
+            self.width += self.width_step;
+            // The smallest t at or past the window's start.
+            while self.t_b < from {
+                self.t += 1;
+                self.t_b += self.b_step;
+            }
+            while self.t_b - self.b_step >= from {
+                self.t -= 1;
+                self.t_b -= self.b_step;
+            }
+            let t = self.t;
+            if self.t_b - from >= width || !(0..cross_len).contains(&t) {
+                continue;
+            }
+            // Inside the sector: |t − t_V| <= a (< a for the sectors left
+            // and right of V), Q8; parallel lines have no sector bound.
+            if let Some((_, t_v)) = self.line.sector.vanishing {
+                let (dt, a) = (((i64::from(t) << IMG_FRAC) - t_v).abs(), width >> IMG_FRAC);
+                if dt > a || (dt == a && !self.line.sector.along_rows) {
+                    continue;
                 }
-                continue;
             }
-            self.entered = true;
-            // The owned pixel is within half a pixel of the line, so it is
-            // the nearest one or (by rounding) a neighbour.
-            let nearest = ((t_q16 + (1 << (COORD_FRAC_BITS - 1))) >> COORD_FRAC_BITS) as i32;
-            if self.holds_no_pixel(s, t_q16, nearest) {
-                continue;
-            }
-            let other = if t_q16 >= i64::from(nearest) << COORD_FRAC_BITS {
-                nearest + 1
-            } else {
-                nearest - 1
-            };
-            if let Some(t) = [nearest, other].into_iter().find(|&t| self.line.owns(t, s)) {
-                let (x, row) = if sector.along_rows { (t, s) } else { (s, t) };
-                return Some(Owned {
-                    x: x as u32,
-                    y: (self.top_row - row) as u32,
-                    s,
-                    offset: (i64::from(t) << COORD_FRAC_BITS) - t_q16,
-                    cross: t_q16,
-                });
-            }
+            return Some(self.owned(t, s));
         }
         None
     }
@@ -580,37 +631,40 @@ mod tests {
     }
 
     #[test]
-    fn the_row_skip_passes_every_row_that_holds_a_pixel_of_the_line() {
+    fn the_stepped_pixels_are_the_exact_tests_pixels() {
+        // Every row of every line: the pixel the iterator gives (if any)
+        // is the one pixel of the row `Line::owns` accepts.
         for (pitch, size) in [
+            (0.0, (16, 8)),
             (30.0, (64, 48)),
             (60.0, (63, 47)),
             (89.9, (64, 48)),
-            (90.0, (640, 480)),
+            (90.0, (160, 120)),
+            (-45.0, (40, 90)),
         ] {
             let view = view(pitch, 25.0, size, 60.0);
-            let (mut rows, mut skipped) = (0u32, 0u32);
             for index in 0..view.lines() {
                 let line = view.line(index).unwrap();
-                let pixels = line.pixels(size.1);
                 let sector = line.sector;
+                let mut exact = vec::Vec::new();
                 let mut s = sector.first;
                 while s != sector.last + sector.step {
-                    let t_q16 = line.cross_at(i64::from(s) << COORD_FRAC_BITS);
-                    let nearest =
-                        ((t_q16 + (1 << (COORD_FRAC_BITS - 1))) >> COORD_FRAC_BITS) as i32;
-                    let holds = (nearest - 1..=nearest + 1).any(|t| line.owns(t, s));
-                    if pixels.holds_no_pixel(s, t_q16, nearest) {
-                        assert!(!holds, "pitch {pitch}: line {index} row {s} skipped");
-                        skipped += 1;
-                    }
-                    rows += 1;
+                    let owned: vec::Vec<i32> = (-2..sector.cross_len + 2)
+                        .filter(|&t| line.owns(t, s))
+                        .collect();
+                    assert!(owned.len() <= 1, "pitch {pitch} line {index} row {s}");
+                    exact.extend(owned.into_iter().map(|t| (t, s)));
                     s += sector.step;
                 }
-            }
-            // Straight down, most of a line's rows near the center are
-            // another line's: the skip spares their exact test.
-            if pitch == 90.0 {
-                assert!(skipped * 3 > rows, "{skipped} of {rows} rows skipped");
+                let stepped: vec::Vec<(i32, i32)> = line
+                    .pixels(size.1)
+                    .map(|p| {
+                        let row = size.1 as i32 - 1 - p.y as i32;
+                        let t = if sector.along_rows { p.x as i32 } else { row };
+                        (t, p.s)
+                    })
+                    .collect();
+                assert_eq!(stepped, exact, "pitch {pitch} line {index}");
             }
         }
     }
@@ -705,20 +759,48 @@ mod tests {
 
     #[test]
     fn a_pixels_direction_is_its_lines_direction_at_the_pixel() {
-        // The caster takes a one-ray pixel's direction from the point the
-        // pixel iterator found, not by working it out again.
+        // The iterator steps the direction by adds; it stays within
+        // rounding of the direction through the line's point, worked out
+        // from the view's vectors in floating point.
         for pitch in [0.0, 10.0, 45.0, 90.0, -60.0] {
-            let view = view(pitch, 33.0, (40, 30), 70.0);
+            let view = view(pitch, 33.0, (400, 300), 70.0);
+            let q32 = |v: i64| v as f64 / 4294967296.0;
+            let mut worst = 0.0f64;
             for index in 0..view.lines() {
                 let line = view.line(index).unwrap();
-                for p in line.pixels(30) {
-                    assert_eq!(
-                        view.direction_of(&line, &p),
-                        view.direction_on(&line, p.s, 0),
-                        "pitch {pitch} line {index} pixel {p:?}"
-                    );
+                for p in line.pixels(300) {
+                    let point = line.cross_at(i64::from(p.s) << COORD_FRAC_BITS) as f64 / 65536.0;
+                    let (u, v) = if line.sector.along_rows {
+                        (point, f64::from(p.s))
+                    } else {
+                        (f64::from(p.s), point)
+                    };
+                    for i in 0..3 {
+                        let exact = q32(view.base[i].to_bits())
+                            + q32(view.per_column[i].to_bits()) * u
+                            + q32(view.per_row[i].to_bits()) * v;
+                        worst = worst.max((q32(p.direction[i]) - exact).abs());
+                    }
+                    if pitch == 0.0 {
+                        assert_eq!(p.offset, 0);
+                    }
                 }
             }
+            // A ray's direction is about 1 long, a slope Q16: 2^-21 (the
+            // point's own Q16 rounding is most of it) is 1/32 of a slope's
+            // last bit.
+            assert!(worst < 1.0 / 2097152.0, "pitch {pitch}: {worst}");
         }
+    }
+
+    #[test]
+    fn a_sector_whose_cone_misses_the_image_has_no_lines() {
+        // At 12° down the vanishing point is far below the image: the
+        // sectors left and right of it hold no pixel, and only the sector
+        // above it has lines (one a column, and a few that end in a
+        // corner).
+        let view = view(12.0, 0.0, (320, 240), 60.0);
+        assert!(view.lines() < 400, "{} lines", view.lines());
+        assert!((0..view.lines()).all(|i| view.line(i).unwrap().sector.along_rows));
     }
 }
