@@ -6,11 +6,15 @@
 //!
 //! * `Coherence::Exact` resumes only between rays on the same levels: the
 //!   image must equal the from-eye image bit for bit, on every view.
-//! * `Coherence::DEFAULT` resumes across level switches too, where the ray
-//!   before may have cleared another level's surface. The bound stated for
-//!   it (README) and tested here: at most 0.1 % of pixels differ from the
-//!   from-eye image, and the two are within 38 dB, on every view; at single
-//!   resolution and at pitch 0° it too must be bit-identical.
+//! * `Coherence::DEFAULT` is the line caster (`caster/line_caster.rs`):
+//!   the rays of a stretch of a line step on one level schedule, its
+//!   least ray's, so a ray may switch levels up to a quarter nearer than
+//!   its own depth says, and it ends between a level's grid lines where
+//!   that level's grid line says. The bound stated for it
+//!   (docs/kernel.md) and tested here: at most 1.5 % of pixels differ
+//!   from the from-eye image and the two are within 40 dB on every view;
+//!   at most 0.01 % at pitch 0°, where every ray of a line has the same
+//!   schedule; at single resolution it must be bit-identical.
 //!
 //! Both hold at single resolution and on the pyramid. The pyramid runs
 //! with the terrain fit off: on these rugged 1024² maps the fit keeps most
@@ -81,8 +85,9 @@ fn exact_coherence_is_bit_identical_and_default_stays_within_its_bound() {
                         "exact: C{color} {levels} yaw {yaw} pitch {pitch}: {exact_differ} px"
                     ));
                 }
-                let must_match = pitch == 0.0 || resolution == Resolution::Single;
-                if fraction > 0.001 || p < 38.0 || (must_match && default_differ != 0) {
+                let must_match = resolution == Resolution::Single;
+                let most = if pitch == 0.0 { 0.0001 } else { 0.015 };
+                if fraction > most || p < 40.0 || (must_match && default_differ != 0) {
                     failures.push(format!(
                         "default: C{color} {levels} yaw {yaw} pitch {pitch}: {default_differ} px, {p:.1} dB"
                     ));

@@ -88,7 +88,12 @@ pub(crate) fn footprint_color<T: Surface + ?Sized, P: Probe>(
 /// ray, or `distance / σ` on a surface steeper than the ray by `σ > 1`
 /// (the clearances change by `σ` voxels a voxel between the two samples
 /// `steps` apart).
-fn narrower_side(distance: i64, steps: i32, above: Option<(i32, i32)>, below: i32) -> i64 {
+pub(super) fn narrower_side(
+    distance: i64,
+    steps: i32,
+    above: Option<(i32, i32)>,
+    below: i32,
+) -> i64 {
     let Some((_, above)) = above else {
         return distance;
     };
@@ -109,7 +114,7 @@ fn narrower_side(distance: i64, steps: i32, above: Option<(i32, i32)>, below: i3
 /// into level `l` by `t`/256, from 0 at `reach << (l − 1)` to 1 at
 /// `reach << l`; past level `top`'s end, `(top, 256)`. `None` before
 /// `reach` (level 0 alone) and when there is no level 1.
-fn color_level(width: i64, reach: i64, top: u8) -> Option<(u8, u32)> {
+pub(super) fn color_level(width: i64, reach: i64, top: u8) -> Option<(u8, u32)> {
     if width < reach || top == 0 {
         return None;
     }
@@ -135,7 +140,7 @@ fn fraction(num: i64, den: i64) -> u32 {
 /// The color at world point `point` (Q16) on `level`: its four grid points
 /// blended by the point's fraction of the level's spacing on each axis.
 /// Reported to `probe` as one color fetch, of a square.
-fn bilinear<T: Surface + ?Sized, P: Probe>(
+pub(super) fn bilinear<T: Surface + ?Sized, P: Probe>(
     surface: &T,
     level: u8,
     point: [i64; 2],

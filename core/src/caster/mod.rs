@@ -21,6 +21,7 @@
 mod budget;
 mod first_hit;
 mod footprint_color;
+mod line_caster;
 mod per_line;
 pub(crate) mod walk;
 
@@ -256,6 +257,13 @@ pub fn render<T: Surface + ?Sized, S: Sink, P: Probe>(
     sink: &mut S,
     probe: &mut P,
 ) {
+    if line_caster::takes(options) {
+        let caster = line_caster::LineCaster::new(surface, view, options);
+        for line in 0..view.lines() {
+            caster.line(line, sink, probe);
+        }
+        return;
+    }
     let frame = Frame::new(surface, view, options);
     for line in 0..view.lines() {
         line_with(
@@ -353,6 +361,10 @@ pub fn render_line<T: Surface + ?Sized, S: Sink, P: Probe>(
     sink: &mut S,
     probe: &mut P,
 ) {
+    if line_caster::takes(options) {
+        line_caster::LineCaster::new(surface, view, options).line(line, sink, probe);
+        return;
+    }
     let frame = Frame::new(surface, view, options);
     line_with(
         surface,

@@ -443,6 +443,21 @@ impl Line {
         }
     }
 
+    /// The directions through the line's points on the first and the last
+    /// of the rows where it may own pixels (its reference direction twice
+    /// when it has none): along the line a direction's components change
+    /// linearly, so these bound them.
+    pub(crate) fn end_directions(&self) -> [[i64; 3]; 2] {
+        let (first, end) = self.rows_in_image();
+        if first == end {
+            return [self.reference; 2];
+        }
+        [first, end - self.sector.step].map(|s| {
+            let along = i64::from(s - self.sector.s_ref);
+            core::array::from_fn(|i| self.reference[i] + self.per_axis[i] * along)
+        })
+    }
+
     /// The pixels this line owns, in the order their rays are cast.
     pub fn pixels(&self, height: u32) -> OwnedPixels {
         OwnedPixels::new(self, height)

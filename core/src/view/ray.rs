@@ -44,7 +44,7 @@ pub(crate) struct LodPlan {
     /// Depth where level 1 begins, Q16 voxels.
     level1_depth: i64,
     /// Highest level the frame may use.
-    top: u8,
+    pub top: u8,
     /// Depth where colors begin to come from level 1, Q16: the ratio as
     /// given, not scaled by the terrain fit (colors have no height error
     /// to keep small; see [`Ray::color_reach`]).
@@ -63,6 +63,26 @@ impl LodPlan {
             level1_depth: (view.focal << 24) / ratio,
             top: top.min(MAX_WALK_LEVEL as u8),
             color_level1_depth: (view.focal << 8) / pixel_to_voxel,
+        }
+    }
+
+    /// The major-axis distance (Q16) where level 1's heights begin for a
+    /// ray whose direction's major-axis component is `run` (I32F32 bits):
+    /// the depth where they begin times `run`.
+    pub fn height_reach(&self, run: i64) -> i64 {
+        clamp_in_place(
+            (self.level1_depth.min(1 << 40) * (run >> 16)) >> 16,
+            1,
+            1 << 40,
+        )
+    }
+
+    /// The major-axis distance (Q16) where colors begin to come from level
+    /// 1 for a ray of major-axis component `run` (see [`Ray::color_reach`]).
+    pub fn color_reach(&self, run: i64) -> i64 {
+        match self.color_level1_depth {
+            i64::MAX => i64::MAX,
+            depth => clamp_in_place((depth.min(1 << 40) * (run >> 16)) >> 16, 1, 1 << 40),
         }
     }
 
@@ -381,10 +401,7 @@ impl View {
             minor_max: minor_max.clamp(0, i64::from(i32::MAX)) as i32,
             color_drift: 0,
             lod: Lod::new(plan, run, dz, delta0, end),
-            color_reach: match plan.color_level1_depth {
-                i64::MAX => i64::MAX,
-                depth => clamp_in_place((depth.min(1 << 40) * (run >> 16)) >> 16, 1, 1 << 40),
-            },
+            color_reach: plan.color_reach(run),
             color_top: plan.top,
             begins: [i32::MAX; LEVEL_SLOTS],
             known: 1,
@@ -483,11 +500,7 @@ impl Lod {
         }
         // reach = D1·|d_major|: Q16 times Q32 (taken as Q16), in range for
         // every depth and direction View accepts.
-        let reach = clamp_in_place(
-            (plan.level1_depth.min(1 << 40) * (run >> 16)) >> 16,
-            1,
-            1 << 40,
-        );
+        let reach = plan.height_reach(run);
         // A ray that ends before level 1 can begin steps on level 0 only:
         // it needs no schedule. It samples exactly as with the levels it
         // never reaches.

@@ -1,0 +1,624 @@
+//! The per-line caster on the pyramid: what is the same for every ray of
+//! an image line is set up once for the line, and a ray differs from the
+//! one before it by its slope.
+//!
+//! - **Once a frame**: the surface's level grids, the level plan (where
+//!   height levels and color levels begin, by the pixel-to-voxel ratio and
+//!   the terrain fit) and the sky.
+//! - **Once a line**: its vertical plane ([`Plane`]), the index steps of
+//!   each level's grid, and the level schedule along the major axis: level
+//!   `l` begins at the first sample of its grid (an even step of level
+//!   `l − 1`, Cohen-Or §2) at or past `2^(l−1)` times the reach: the
+//!   depth where a voxel gets narrower than a pixel, along the major axis.
+//!   That distance depends on a ray's major-axis component, which changes
+//!   along the line, so a line is cast in stretches of rays whose
+//!   components are within a third of each other, scheduled once a
+//!   stretch (see [`LineCaster::line`]). Every ray of a stretch steps on
+//!   the same levels at the same samples.
+//! - **Once a ray**: its slope (one division) and its height where the ray
+//!   before it hit. It resumes there: it is no lower than that ray at any
+//!   sample, and both step on the same levels, so it is above the surface
+//!   wherever that ray was (Cohen-Or Figure 7). The heights of the hit
+//!   sample and of the sample before it are at hand. A line's first ray
+//!   skips through the pyramid's height bounds to where it may hit.
+//! - **Once a step**: the two heights across the minor grid line of the
+//!   step's level, blended by shift and mask, compared with the ray.
+//! - **Once a hit**: the crossing placed between the last sample above and
+//!   the hit by their clearances (one division). Near the eye its color is
+//!   level 0's, both grid lines' blended by the subvoxel weights; past the
+//!   ray's color reach (or on a coarse height level) it comes from the two
+//!   levels the pixel's footprint brackets, blended by depth
+//!   ([`super::footprint_color`]'s levels, the soft transition).
+//! - **Sky** above a line's last hit is written without rays.
+//!
+//! [`super::render`] takes this path for [`Coherence::AcrossLevels`] with
+//! one ray a pixel and subvoxel shading (the defaults); at single
+//! resolution its image is the one [`Coherence::Exact`] gives, bit for bit.
+//!
+//! [`Coherence::AcrossLevels`]: super::Coherence::AcrossLevels
+//! [`Coherence::Exact`]: super::Coherence::Exact
+
+use super::first_hit::first_hit;
+use super::footprint_color::{bilinear, color_level, narrower_side};
+use super::walk::lerp;
+use super::{crossing_fraction, sky, Coherence, Frame, RenderOptions, Shading, VerticalSamples};
+use crate::color::Rgb;
+use crate::config::{
+    COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_WALK_LEVEL, WEIGHT_BITS,
+};
+use crate::divide::div_ceil;
+use crate::probe::Probe;
+use crate::surface::{Extent, Grid, Surface};
+use crate::view::lines::Line;
+use crate::view::ray::{LodPlan, Plane};
+use crate::{Sample, Sink, View};
+
+/// Heights are U12.4; the walk compares them in Q16.
+const HEIGHT_TO_Q16: u32 = COORD_FRAC_BITS - HEIGHT_FRAC_BITS;
+const ONE: i64 = 1 << COORD_FRAC_BITS;
+/// Levels a walk may step on: 0 to `MAX_WALK_LEVEL`.
+const LEVELS: usize = MAX_WALK_LEVEL as usize + 1;
+
+/// Whether [`super::render`] renders `options` with the line caster.
+pub(crate) fn takes(options: &RenderOptions) -> bool {
+    options.coherence == Coherence::AcrossLevels
+        && options.vertical_samples == VerticalSamples::One
+        && options.shading == Shading::Subvoxel
+}
+
+/// What every line of a frame shares.
+pub(crate) struct LineCaster<'s, 'v, T: Surface + ?Sized + 's> {
+    surface: &'s T,
+    /// Each level's grid and row stride (level 0's past the surface's top,
+    /// never stepped on).
+    grids: [T::Grid<'s>; LEVELS],
+    strides: [isize; LEVELS],
+    view: &'v View,
+    extent: Extent,
+    /// The highest height, Q16: a rising ray above it sees the sky.
+    top: i64,
+    plan: LodPlan,
+    /// A line's first ray skips through the pyramid's height bounds.
+    first_hit: bool,
+    sky: Sample,
+}
+
+/// One line's walk through the grids.
+struct LineWalk {
+    plane: Plane,
+    /// The line's samples inside the map: `first..=last`.
+    first: i64,
+    last: i64,
+    /// `begins[l]`: the first sample of level `l`; `i64::MAX` past the
+    /// line's last level.
+    begins: [i64; LEVELS + 1],
+    /// Index change per major grid line and across a minor grid line, on
+    /// each level.
+    major_stride: [isize; LEVELS],
+    across: [isize; LEVELS],
+    /// Index change of one step on each level (a major grid line of the
+    /// level, forward or back).
+    step: [isize; LEVELS],
+}
+
+/// Where a line's walk is: a sample, its level and its blended height, and
+/// the sample visited before it and its height (on its own level).
+#[derive(Clone, Copy)]
+struct At {
+    k: i64,
+    level: u8,
+    /// The index of the sample's major grid line on its level, and its
+    /// minor coordinate (Q16, world voxels).
+    index: isize,
+    minor: i64,
+    height: i64,
+    before_k: i64,
+    before: Option<i64>,
+}
+
+impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
+    pub fn new(surface: &'s T, view: &'v View, options: &RenderOptions) -> Self {
+        let frame = Frame::new(surface, view, options);
+        let extent = surface.extent();
+        let grids =
+            core::array::from_fn(|l| surface.grid(l as u8).unwrap_or_else(|| surface.base()));
+        let strides = core::array::from_fn(|l| surface.stride(l as u8).unwrap_or(1));
+        Self {
+            surface,
+            grids,
+            strides,
+            view,
+            extent,
+            top: i64::from(extent.max_height) << HEIGHT_TO_Q16,
+            plan: frame.lod,
+            first_hit: frame.first_hit,
+            sky: sky(options),
+        }
+    }
+
+    /// The walk of `line`'s rays: its plane and the index steps of each
+    /// level's grid, with no levels scheduled yet (see
+    /// [`LineCaster::schedule`]).
+    fn line_walk(&self, line: &Line) -> LineWalk {
+        let view = self.view;
+        let plane = Plane::new(view, &self.extent, &line.reference).with_across(&view.across(line));
+        let (first, last) = (plane.first.max(0), plane.last);
+        let mut begins = [i64::MAX; LEVELS + 1];
+        begins[0] = first;
+        let x_major = plane.key.x_major;
+        let major_stride = core::array::from_fn(|l| if x_major { 1 } else { self.strides[l] });
+        let across = core::array::from_fn(|l| if x_major { self.strides[l] } else { 1 });
+        let sign = if plane.key.forward { 1 } else { -1 };
+        let step = major_stride.map(|stride| sign * stride);
+        LineWalk {
+            plane,
+            first,
+            last,
+            begins,
+            major_stride,
+            across,
+            step,
+        }
+    }
+
+    /// Schedules `walk`'s levels for rays whose direction's major-axis
+    /// component is at most `run`: level `l` begins at the first sample
+    /// of its grid at or past `2^(l−1)` times the reach of `run`, and at
+    /// or past level `l − 1`'s beginning (an even step of that level).
+    fn schedule(&self, walk: &mut LineWalk, run: i64) {
+        let plane = &walk.plane;
+        let top = usize::from(self.plan.top.min(self.surface.top()));
+        let reach = self.plan.height_reach(run);
+        for level in 1..=LEVELS {
+            walk.begins[level] = i64::MAX;
+            if level > top || walk.begins[level - 1] > walk.last {
+                continue;
+            }
+            let threshold = ((reach << (level - 1)) - plane.delta0 + ONE - 1) >> COORD_FRAC_BITS;
+            let k = align_up(plane, walk.begins[level - 1].max(threshold), level as u32);
+            walk.begins[level] = if k > walk.last { i64::MAX } else { k };
+        }
+    }
+
+    /// Renders image line `index` into `sink`.
+    ///
+    /// On the pyramid the line is walked in stretches whose rays' major-axis
+    /// components lie within a third of the stretch's least (along a line
+    /// they change steadily; at steep pitch by a large factor): a stretch
+    /// schedules its levels for its least component, so each of its rays
+    /// switches levels no farther than its own depth says, and no nearer
+    /// than three quarters of that. A level is never read past where the
+    /// ray's own schedule leaves it, so a tile footprint
+    /// ([`crate::tiles::footprint`]), which holds every level from the
+    /// eye out, holds what the stretch reads. A line's first ray walks
+    /// from the eye, through the height bounds; a stretch's first ray
+    /// starts where the stretch before left off; the others resume.
+    pub fn line<S: Sink, P: Probe>(&self, index: u32, sink: &mut S, probe: &mut P) {
+        let view = self.view;
+        let Some(line) = view.line(index) else {
+            return;
+        };
+        let mut walk = self.line_walk(&line);
+        let levels = self.plan.top.min(self.surface.top()) > 0;
+        let [first_run, last_run] = line
+            .end_directions()
+            .map(|d| View::slope(&d, &walk.plane).1);
+        let mut at: Option<At> = None;
+        // The least major-axis component of the stretch's rays, which its
+        // levels are scheduled by: they hold up to a third more.
+        let mut stretch_run = 0;
+        // The slope of the ray before; set when a ray leaves the terrain:
+        // every ray after it does.
+        let (mut previous_dz, mut sky_from_here) = (i64::MIN, walk.first > walk.last);
+        for pixel in line.pixels(view.height()) {
+            if sky_from_here {
+                sink.put(pixel.x, pixel.y, self.sky);
+                continue;
+            }
+            probe.ray();
+            let d = pixel.direction;
+            let (dz, run) = View::slope(&d, &walk.plane);
+            // A ray lower than the one before (only where the slope
+            // saturates) cannot resume where it hit; nor can one outside
+            // the stretch's levels.
+            // Where the stretch before left off: a new stretch's first ray
+            // is above the surface of the stretch before wherever that
+            // stretch's last ray was, and starts there (the approximation
+            // `AcrossLevels` makes: the surfaces differ where the levels
+            // do).
+            let mut resume_from = None;
+            if dz < previous_dz {
+                at = None;
+            } else if levels && !(stretch_run..=stretch_run + stretch_run / 3).contains(&run) {
+                resume_from = at.map(|at| at.before_k);
+                at = None;
+            }
+            previous_dz = dz;
+            let z0 = view.eye[2].to_bits() + ((walk.plane.delta0 * dz) >> COORD_FRAC_BITS);
+            if at.is_none() {
+                if levels {
+                    // Along the line the component rises (or falls)
+                    // steadily: this ray's is the stretch's least (or
+                    // largest, and the least is a quarter less, or the
+                    // line's last).
+                    stretch_run = if last_run > first_run {
+                        run
+                    } else {
+                        last_run.max(run - run / 4).min(run)
+                    };
+                    self.schedule(&mut walk, stretch_run);
+                }
+                at = resume_from
+                    .or_else(|| self.clear_until(&walk, &d, probe))
+                    .and_then(|from| self.start(&walk, from, z0, dz, probe));
+            }
+            let Some(at) = at.as_mut() else {
+                sky_from_here = true;
+                sink.put(pixel.x, pixel.y, self.sky);
+                continue;
+            };
+            let sample = match self.climb(&walk, at, z0, dz, probe) {
+                Some(z) => {
+                    let drift = walk.plane.drift(&d, pixel.offset);
+                    self.hit(&walk, at, z, dz, run, drift, probe)
+                }
+                None => {
+                    sky_from_here = true;
+                    self.sky
+                }
+            };
+            sink.put(pixel.x, pixel.y, sample);
+        }
+    }
+
+    /// Where a walk from the eye starts for a ray whose height at sample 0
+    /// is `z0` (Q16), `dz` a sample, known to clear the surface before
+    /// sample `from`: the last sample of its level's grid before `from`
+    /// and before it sinks below the highest terrain, with nothing known
+    /// before it. The samples before it are above the
+    /// terrain, and so outside the slab a tile footprint loads. `None`
+    /// when the ray never comes down to the terrain or the map has no
+    /// height there.
+    fn start<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        from: i64,
+        z0: i64,
+        dz: i64,
+        probe: &mut P,
+    ) -> Option<At> {
+        let mut k = from.max(walk.first);
+        if z0 + k * dz > self.top {
+            if dz >= 0 {
+                return None;
+            }
+            // The first sample at or below the top, less one.
+            let below_top = div_ceil(z0 - self.top, -dz);
+            k = k.max(below_top - 1);
+            if k > walk.last {
+                return None;
+            }
+        }
+        let mut level = 0;
+        while walk.begins[level + 1] <= k {
+            level += 1;
+        }
+        let (k, level) = (align_down(&walk.plane, k, level as u32), level as u8);
+        let (index, minor) = self.position(walk, k, level);
+        Some(At {
+            k,
+            level,
+            index,
+            minor,
+            height: self.height(walk, index, minor, level, probe)?,
+            before_k: k,
+            before: None,
+        })
+    }
+
+    /// The sample before which the ray along `d` clears every level of
+    /// the surface, by the hierarchical first hit through the pyramid's
+    /// height bounds (the line's first sample without them); `None` when
+    /// it cannot hit at all. Its bounds cover every level, so the skip
+    /// holds whatever levels the walk steps on.
+    fn clear_until<P: Probe>(&self, walk: &LineWalk, d: &[i64; 3], probe: &mut P) -> Option<i64> {
+        if !self.first_hit {
+            return Some(walk.first);
+        }
+        let (view, plane) = (self.view, &walk.plane);
+        let clip = view.clip(&self.extent, d, plane);
+        if clip.start > clip.end {
+            return None;
+        }
+        let mut ray = view.ray_with(&self.extent, &self.plan, plane, &clip);
+        ray.schedule();
+        let k = first_hit(self.surface, &ray, ray.start, ray.end, u32::MAX, probe)?;
+        Some(i64::from(k) - 1)
+    }
+
+    /// Where sample `k` of `walk` is on `level`: the index of its major
+    /// grid line there, and its minor coordinate (Q16, world voxels).
+    #[inline(always)]
+    fn position(&self, walk: &LineWalk, k: i64, level: u8) -> (isize, i64) {
+        let plane = &walk.plane;
+        let major = if plane.key.forward {
+            plane.major0 + k
+        } else {
+            plane.major0 - k
+        };
+        let index = (major >> level) as isize * walk.major_stride[usize::from(level)];
+        (index, plane.minor0 + k * plane.dminor)
+    }
+
+    /// The blended height (Q16) at the point of `level`'s major grid line
+    /// `index` at minor coordinate `minor`: the two heights across the
+    /// level's minor grid line, weighted by the minor coordinate's fraction
+    /// of the level's spacing. `None` outside the level's grid.
+    #[inline(always)]
+    fn height<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        index: isize,
+        minor: i64,
+        level: u8,
+        probe: &mut P,
+    ) -> Option<i64> {
+        let (l, shift) = (usize::from(level), u32::from(level));
+        let across = walk.across[l];
+        let index = index + (minor >> (COORD_FRAC_BITS + shift)) as isize * across;
+        let (h0, h1) = self.grids[l].height_pair(index, across)?;
+        probe.visit(level, index as usize);
+        let weight_shift = COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + shift;
+        let weight = ((minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1)) as i32;
+        Some(i64::from(
+            (i32::from(h0) << HEIGHT_TO_Q16) + (i32::from(h1) - i32::from(h0)) * weight,
+        ))
+    }
+
+    /// Climbs to a ray whose height at sample 0 is `z0` (Q16), `dz` a
+    /// sample: from `at`, where the ray before hit, steps on the line's
+    /// schedule while above the surface. Returns the ray's height at its
+    /// hit, or `None` when it leaves the map or rises above the highest
+    /// terrain (and so does every ray of the line after it).
+    #[inline(always)]
+    fn climb<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        at: &mut At,
+        z0: i64,
+        dz: i64,
+        probe: &mut P,
+    ) -> Option<i64> {
+        let mut z = z0 + at.k * dz;
+        while z > at.height {
+            if at.k >= walk.last || (dz >= 0 && z > self.top) {
+                return None;
+            }
+            let level = at.level;
+            let next = at.k + (1 << level);
+            let (next, level, index, minor) =
+                if next < walk.begins[usize::from(level) + 1] && next <= walk.last {
+                    // On along this level: its index and minor step.
+                    let step = walk.step[usize::from(level)];
+                    (
+                        next,
+                        level,
+                        at.index + step,
+                        at.minor + (walk.plane.dminor << level),
+                    )
+                } else {
+                    let (next, level) = if next > walk.last {
+                        // The map ends between this level's grid lines: its
+                        // last sample is tested, on level 0 where the map's
+                        // edge is the terrain's (the edge keeps its
+                        // silhouette), else against this level's grid line
+                        // at or before it (a window of a larger world holds
+                        // level 0 no farther than its schedule needs).
+                        (walk.last, if self.extent.real_edges { 0 } else { level })
+                    } else {
+                        (next, level + 1)
+                    };
+                    let (index, minor) = self.position(walk, next, level);
+                    (next, level, index, minor)
+                };
+            let height = self.height(walk, index, minor, level, probe)?;
+            *at = At {
+                k: next,
+                level,
+                index,
+                minor,
+                height,
+                before_k: at.k,
+                before: Some(at.height),
+            };
+            z = z0 + next * dz;
+        }
+        Some(z)
+    }
+
+    /// The sample of a ray at height `z` (Q16) at `at`, below the surface
+    /// there and above it at the sample before (when there is one); `run`
+    /// is its direction's major-axis component and `drift` its colors'
+    /// sideways drift (see [`Plane::drift`]).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn hit<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        at: &At,
+        z: i64,
+        dz: i64,
+        run: i64,
+        drift: i64,
+        probe: &mut P,
+    ) -> Sample {
+        probe.hit(at.level);
+        let plane = &walk.plane;
+        let span = at.k - at.before_k;
+        // The crossing, `t`/256 of the way from the sample before to the
+        // hit, and the clearances either side.
+        let below = (z - at.height) as i32;
+        let (t, above) = match at.before {
+            Some(before) if span > 0 => {
+                let above = (z - dz * span - before) as i32;
+                (crossing_fraction(above, below), Some(above))
+            }
+            _ => (256, None),
+        };
+        let back = i64::from(256 - t) * span;
+        let distance = plane.delta0 + (at.k << COORD_FRAC_BITS) - (back << 8);
+        let sample = |color| Sample {
+            color,
+            distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
+            elevation: (z - ((back * dz) >> 8)) as i32,
+        };
+        let color_reach = self.plan.color_reach(run);
+        if distance >= color_reach || at.level > 0 {
+            let above = above.map(|above| (at.before_k as i32, above));
+            let width = narrower_side(distance, span as i32, above, below);
+            let levels = match color_level(width, color_reach, self.plan.top) {
+                Some((level, t)) if level >= at.level => Some((level, t)),
+                _ if at.level > 0 => Some((at.level, 0)),
+                _ => None,
+            };
+            if let Some((level, t)) = levels {
+                // The crossing, in 1/256 of a sample.
+                let crossing = (at.k << 8) - back;
+                if let Some(color) =
+                    self.footprint(walk, crossing, distance, drift, level, t, probe)
+                {
+                    return sample(color);
+                }
+            }
+        }
+        // Level 0's grid lines at the hit and the sample before, blended
+        // at the crossing.
+        let hit_distance = plane.delta0 + (at.k << COORD_FRAC_BITS);
+        let on_hit = self.line_color(
+            walk,
+            at.level,
+            at.index,
+            at.minor,
+            hit_distance,
+            drift,
+            probe,
+        );
+        if at.level > 0 {
+            // A coarse hit whose footprint found no color (at the map's
+            // edge): its own level's grid line.
+            return sample(on_hit);
+        }
+        let color = match at.before {
+            Some(_) if span > 0 && t < 256 => {
+                let before = self.line_color(
+                    walk,
+                    0,
+                    at.index - walk.step[0],
+                    at.minor - plane.dminor,
+                    hit_distance - ONE,
+                    drift,
+                    probe,
+                );
+                lerp(before, on_hit, t)
+            }
+            _ => on_hit,
+        };
+        sample(color)
+    }
+
+    /// The color of `level` where the sample on its major grid line
+    /// `index` at minor coordinate `minor` crosses its minor grid line,
+    /// `distance` (Q16) from the eye, looked up `drift` aside: the two
+    /// voxels across the line blended by the subvoxel weight.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn line_color<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        level: u8,
+        index: isize,
+        mut minor: i64,
+        distance: i64,
+        drift: i64,
+        probe: &mut P,
+    ) -> Rgb {
+        if drift != 0 {
+            minor =
+                (minor + ((drift * distance) >> COORD_FRAC_BITS)).clamp(0, walk.plane.minor_max);
+        }
+        let (l, shift) = (usize::from(level), u32::from(level));
+        let index = index + (minor >> (COORD_FRAC_BITS + shift)) as isize * walk.across[l];
+        let weight =
+            (minor >> (COORD_FRAC_BITS - WEIGHT_BITS + shift)) as u32 & ((1 << WEIGHT_BITS) - 1);
+        probe.color(level, index as usize);
+        match self.grids[l].color_pair(index, walk.across[l]) {
+            Some((c0, c1)) => lerp(c0, c1, weight),
+            None => self.sky.color,
+        }
+    }
+
+    /// The color at the crossing `crossing`/256 samples along the line,
+    /// `distance` (Q16) from the eye, from levels `level − 1` and `level`
+    /// blended by `t`/256; `None` where neither has a color.
+    #[allow(clippy::too_many_arguments)]
+    fn footprint<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        crossing: i64,
+        distance: i64,
+        drift: i64,
+        level: u8,
+        t: u32,
+        probe: &mut P,
+    ) -> Option<Rgb> {
+        let plane = &walk.plane;
+        let along = crossing << (COORD_FRAC_BITS - 8);
+        let major =
+            (plane.major0 << COORD_FRAC_BITS) + if plane.key.forward { along } else { -along };
+        let minor = plane.minor0
+            + ((crossing * plane.dminor) >> 8)
+            + ((drift * distance) >> COORD_FRAC_BITS);
+        let minor = minor.clamp(0, plane.minor_max);
+        let point = if plane.key.x_major {
+            [major, minor]
+        } else {
+            [minor, major]
+        };
+        let finer = (t < 1 << WEIGHT_BITS)
+            .then(|| bilinear(self.surface, level - 1, point, probe))
+            .flatten();
+        let coarser = (t > 0)
+            .then(|| bilinear(self.surface, level, point, probe))
+            .flatten();
+        match (finer, coarser) {
+            (Some(finer), Some(coarser)) => Some(lerp(finer, coarser, t)),
+            (Some(color), None) | (None, Some(color)) => Some(color),
+            (None, None) => None,
+        }
+    }
+}
+
+/// The last sample at or before `k` on a grid line of `level` (major
+/// coordinate a multiple of `2^level`).
+fn align_down(plane: &Plane, k: i64, level: u32) -> i64 {
+    let mask = (1i64 << level) - 1;
+    if plane.key.forward {
+        ((plane.major0 + k) & !mask) - plane.major0
+    } else {
+        let m = plane.major0 - k;
+        plane.major0 - ((m + mask) & !mask)
+    }
+}
+
+/// The first sample at or after `k` on a grid line of `level` (major
+/// coordinate a multiple of `2^level`).
+fn align_up(plane: &Plane, k: i64, level: u32) -> i64 {
+    let mask = (1i64 << level) - 1;
+    if plane.key.forward {
+        let m = plane.major0 + k;
+        ((m + mask) & !mask) - plane.major0
+    } else {
+        let m = plane.major0 - k;
+        plane.major0 - (m & !mask)
+    }
+}
