@@ -7,14 +7,14 @@
 //! * `pitch`: the default pyramid and single resolution at pitch 2° to 90°
 //!   from one eye, with steps per pixel and the frame-time stability ratio
 //!   (slowest over fastest pitch) of each;
-//! * `per-line bound`: at pitch 0 from the same eye, the kernel (default and
-//!   single resolution), the column caster (`render_level_columns`, the
-//!   per-line design at its smallest; into the 12-byte sample buffer, and
-//!   into an RGB framebuffer to show what the sink costs) and Voxel Space,
-//!   with their speed against the kernel's and their PSNR against the exact
-//!   reference; the line caster (`render_level0_lines`, any pitch) beside
-//!   them; and `per-line bound by pitch`, the line caster against the
-//!   kernel at single resolution at pitch 2° to 90°;
+//! * `per-line bound`: at pitch 0 from the same eye, the kernel (the
+//!   default, which is the line caster; `Exact`, which sets every ray up
+//!   in full; single resolution), the per-line design at its smallest
+//!   (`render_level0_lines`, and `render_level_columns` into the 12-byte
+//!   sample buffer and into an RGB framebuffer to show what the sink
+//!   costs) and Voxel Space, with their speed against the kernel's and
+//!   their PSNR against the exact reference; and `per-line bound by
+//!   pitch`, the default against `Exact` at pitch 2° to 90°;
 //! * `sky against terrain`: the default kernel from above the map's top,
 //!   45° up (all sky) against 45° down (all terrain), and their ratio.
 //!
@@ -166,6 +166,21 @@ fn main() {
                 )
             })
         });
+        let exact_at_0 = RenderOptions {
+            coherence: Coherence::Exact,
+            ..default
+        };
+        group.bench_function(BenchmarkId::from_parameter("kernel-exact"), |b| {
+            b.iter(|| {
+                render(
+                    &default_levels,
+                    &level_view,
+                    &exact_at_0,
+                    &mut buffer,
+                    &mut NoProbe,
+                )
+            })
+        });
         group.bench_function(BenchmarkId::from_parameter("kernel-single"), |b| {
             b.iter(|| {
                 render(
@@ -195,18 +210,22 @@ fn main() {
             b.iter(|| voxel_space(&scene, &level, SIZE.0, SIZE.1, &voxel_options))
         });
         group.finish();
-        // Under pitch: the line caster against the kernel at single
-        // resolution, whose image it renders.
+        // Under pitch: the default (the line caster) against `Exact`, which
+        // sets every ray up in full, on the pyramid.
+        let exact = RenderOptions {
+            coherence: Coherence::Exact,
+            ..default
+        };
         let mut group = criterion.benchmark_group("per-line bound by pitch");
         group.throughput(Throughput::Elements(pixels));
         group.sample_size(10);
         for pitch in PITCHES {
             let view = View::new(&camera(pitch), SIZE.0, SIZE.1).expect("view");
-            group.bench_function(BenchmarkId::new("kernel-single", pitch), |b| {
-                b.iter(|| render(&single_levels, &view, &single, &mut buffer, &mut NoProbe))
+            group.bench_function(BenchmarkId::new("kernel", pitch), |b| {
+                b.iter(|| render(&default_levels, &view, &default, &mut buffer, &mut NoProbe))
             });
-            group.bench_function(BenchmarkId::new("lines", pitch), |b| {
-                b.iter(|| render_level0_lines(&terrain, &view, &single, &mut buffer))
+            group.bench_function(BenchmarkId::new("kernel-exact", pitch), |b| {
+                b.iter(|| render(&default_levels, &view, &exact, &mut buffer, &mut NoProbe))
             });
         }
         group.finish();
@@ -378,6 +397,13 @@ fn per_line_bound_table(
     .colors;
     let rows = [
         ("kernel", kernel_colors(&RenderOptions::default())),
+        (
+            "kernel-exact",
+            kernel_colors(&RenderOptions {
+                coherence: Coherence::Exact,
+                ..RenderOptions::default()
+            }),
+        ),
         ("kernel-single", kernel_colors(&single)),
         ("lines", {
             let mut lines = SampleBuffer::new(SIZE.0, SIZE.1);
@@ -413,17 +439,17 @@ fn per_line_bound_table(
     let estimate = |setting: &str, pitch: f32| {
         estimate_ns(&group.join(setting).join(pitch.to_string()), run_started)
     };
-    println!("\n| pitch | kernel single ns/pixel | lines ns/pixel | speed-up |");
+    println!("\n| pitch | kernel (line caster) ns/pixel | every ray in full (exact) ns/pixel | speed-up |");
     println!("|---|---|---|---|");
     for pitch in PITCHES {
-        if let (Some(kernel), Some(lines)) =
-            (estimate("kernel-single", pitch), estimate("lines", pitch))
+        if let (Some(kernel), Some(exact)) =
+            (estimate("kernel", pitch), estimate("kernel-exact", pitch))
         {
             println!(
                 "| {pitch} | {:.1} | {:.1} | {:.2}x |",
                 kernel / pixels as f64,
-                lines / pixels as f64,
-                kernel / lines
+                exact / pixels as f64,
+                exact / kernel
             );
         }
     }

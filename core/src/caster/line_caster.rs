@@ -207,68 +207,63 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // The least major-axis component of the stretch's rays, which its
         // levels are scheduled by: they hold up to a third more.
         let mut stretch_run = 0;
-        // The slope of the ray before; set when a ray leaves the terrain:
-        // every ray after it does.
-        let (mut previous_dz, mut sky_from_here) = (i64::MIN, walk.first > walk.last);
-        for pixel in line.pixels(view.height()) {
-            if sky_from_here {
-                sink.put(pixel.x, pixel.y, self.sky);
-                continue;
-            }
-            probe.ray();
-            let d = pixel.direction;
-            let (dz, run) = View::slope(&d, &walk.plane);
-            // A ray lower than the one before (only where the slope
-            // saturates) cannot resume where it hit; nor can one outside
-            // the stretch's levels.
-            // Where the stretch before left off: a new stretch's first ray
-            // is above the surface of the stretch before wherever that
-            // stretch's last ray was, and starts there (the approximation
-            // `AcrossLevels` makes: the surfaces differ where the levels
-            // do).
-            let mut resume_from = None;
-            if dz < previous_dz {
-                at = None;
-            } else if levels && !(stretch_run..=stretch_run + stretch_run / 3).contains(&run) {
-                resume_from = at.map(|at| at.before_k);
-                at = None;
-            }
-            previous_dz = dz;
-            let z0 = view.eye[2].to_bits() + ((walk.plane.delta0 * dz) >> COORD_FRAC_BITS);
-            if at.is_none() {
-                if levels {
-                    // Along the line the component rises (or falls)
-                    // steadily: this ray's is the stretch's least (or
-                    // largest, and the least is a quarter less, or the
-                    // line's last).
-                    stretch_run = if last_run > first_run {
-                        run
-                    } else {
-                        last_run.max(run - run / 4).min(run)
-                    };
-                    self.schedule(&mut walk, stretch_run);
+        let mut pixels = line.pixels(view.height());
+        let mut previous_dz = i64::MIN;
+        if walk.first <= walk.last {
+            for pixel in pixels.by_ref() {
+                probe.ray();
+                let d = pixel.direction;
+                let (dz, run) = View::slope(&d, &walk.plane);
+                // A ray lower than the one before (only where the slope
+                // saturates) cannot resume where it hit. A ray outside the
+                // stretch's levels starts a stretch where the stretch
+                // before left off: it is above that stretch's surface
+                // wherever the stretch's last ray was (the approximation
+                // `AcrossLevels` makes: the surfaces differ where the levels
+                // do).
+                let mut resume_from = None;
+                if dz < previous_dz {
+                    at = None;
+                } else if levels && !(stretch_run..=stretch_run + stretch_run / 3).contains(&run) {
+                    resume_from = at.map(|at| at.before_k);
+                    at = None;
                 }
-                at = resume_from
-                    .or_else(|| self.clear_until(&walk, &d, probe))
-                    .and_then(|from| self.start(&walk, from, z0, dz, probe));
-            }
-            let Some(at) = at.as_mut() else {
-                sky_from_here = true;
-                sink.put(pixel.x, pixel.y, self.sky);
-                continue;
-            };
-            let sample = match self.climb(&walk, at, z0, dz, probe) {
-                Some(z) => {
+                previous_dz = dz;
+                let z0 = view.eye[2].to_bits() + ((walk.plane.delta0 * dz) >> COORD_FRAC_BITS);
+                if at.is_none() {
+                    if levels {
+                        // Along the line the component rises (or falls)
+                        // steadily: this ray's is the stretch's least (or
+                        // largest, and the least is a quarter less, or the
+                        // line's last).
+                        stretch_run = if last_run > first_run {
+                            run
+                        } else {
+                            last_run.max(run - run / 4).min(run)
+                        };
+                        self.schedule(&mut walk, stretch_run);
+                    }
+                    at = resume_from
+                        .or_else(|| self.clear_until(&walk, &d, probe))
+                        .and_then(|from| self.start(&walk, from, z0, dz, probe));
+                }
+                let hit = at.as_mut().and_then(|at| {
+                    let z = self.climb(&walk, at, z0, dz, probe)?;
                     let drift = walk.plane.drift(&d, pixel.offset);
-                    self.hit(&walk, at, z, dz, run, drift, probe)
+                    Some(self.hit(&walk, at, z, dz, run, drift, probe))
+                });
+                match hit {
+                    Some(sample) => sink.put(pixel.x, pixel.y, sample),
+                    None => {
+                        // It left the terrain: so does every ray after it.
+                        sink.put(pixel.x, pixel.y, self.sky);
+                        break;
+                    }
                 }
-                None => {
-                    sky_from_here = true;
-                    self.sky
-                }
-            };
-            sink.put(pixel.x, pixel.y, sample);
+            }
         }
+        // The sky above the line's last hit: no rays.
+        pixels.for_each_position(|x, y| sink.put(x, y, self.sky));
     }
 
     /// Where a walk from the eye starts for a ray whose height at sample 0

@@ -552,11 +552,10 @@ impl OwnedPixels {
     }
 }
 
-impl Iterator for OwnedPixels {
-    type Item = Owned;
-
-    #[inline]
-    fn next(&mut self) -> Option<Owned> {
+impl OwnedPixels {
+    /// The next pixel's cross and axis coordinates.
+    #[inline(always)]
+    fn advance(&mut self) -> Option<(i32, i32)> {
         let step = self.line.sector.step;
         let cross_len = self.line.sector.cross_len;
         while self.s != self.end {
@@ -585,9 +584,34 @@ impl Iterator for OwnedPixels {
                     continue;
                 }
             }
-            return Some(self.owned(t, s));
+            return Some((t, s));
         }
         None
+    }
+
+    /// Calls `put` with the image position (x, y from the top) of each
+    /// pixel left: what a caster needs of the pixels it fills without
+    /// rays (the sky above a line's last hit).
+    #[inline]
+    pub fn for_each_position(mut self, mut put: impl FnMut(u32, u32)) {
+        while let Some((t, s)) = self.advance() {
+            let (x, row) = if self.line.sector.along_rows {
+                (t, s)
+            } else {
+                (s, t)
+            };
+            put(x as u32, (self.top_row - row) as u32);
+        }
+    }
+}
+
+impl Iterator for OwnedPixels {
+    type Item = Owned;
+
+    #[inline]
+    fn next(&mut self) -> Option<Owned> {
+        let (t, s) = self.advance()?;
+        Some(self.owned(t, s))
     }
 }
 
