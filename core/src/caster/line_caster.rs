@@ -28,7 +28,7 @@
 //!   level 0's, both grid lines' blended by the subvoxel weights; past the
 //!   ray's color reach (or on a coarse height level) it comes from the two
 //!   levels the pixel's footprint brackets, blended by depth
-//!   ([`super::footprint_color`]'s levels, the soft transition).
+//!   ([`mod@super::footprint_color`]'s levels, the soft transition).
 //! - **Sky** above a line's last hit is written without rays.
 //!
 //! [`super::render`] takes this path for [`Coherence::AcrossLevels`] with

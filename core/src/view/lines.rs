@@ -252,7 +252,7 @@ pub(crate) struct Line {
     per_axis: [i64; 3],
     /// Cross coordinate per unit of axis, Q32 (`(K − t_V) / (s_ref − s_V)`).
     slope: i64,
-    /// The ownership test's per-line terms (see [`Line::owns`]), Q8:
+    /// The ownership test's per-line terms (see `Line::owns`), Q8:
     /// `|s_ref − s_V|`, and `K − ½ − t_V`.
     far: i64,
     nearest_from: i64,
@@ -465,7 +465,7 @@ impl Line {
 }
 
 /// Iterator over a line's pixels (see [`Line::pixels`]): the ownership
-/// test of [`Line::owns`] stepped row by row by adds.
+/// test of `Line::owns` stepped row by row by adds.
 ///
 /// On row `s` the line owns pixel `t` when `(K − ½ − t_V)·a ≤ (t − t_V)·b <
 /// (K + ½ − t_V)·a` (`a` the row's distance from the vanishing point, `b`
