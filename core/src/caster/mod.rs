@@ -1,6 +1,10 @@
 //! The caster: each image line through the vertical's vanishing point,
 //! one ray after another by rising elevation (see [`crate::View::lines`]).
 //!
+//! With the default settings [`render`] and [`render_line`] take the line
+//! caster (`line_caster.rs`): a line is set up once and a ray is its slope.
+//! The other settings set every ray up in full, as described below.
+//!
 //! The rays of a line lie in one vertical plane and share their horizontal
 //! direction bit for bit, so each ray can start at the sample where the ray
 //! before it hit (Cohen-Or §2): it is no lower than that ray at any sample,
@@ -52,10 +56,16 @@ pub enum Coherence {
     /// switch levels at different samples, so under pitch most are cast
     /// from the eye.
     Exact,
-    /// As [`Coherence::Exact`], and across different level schedules too:
-    /// near a switch the ray before may have cleared a coarser (or finer)
-    /// surface than this ray's, so a hit within a level's difference of it
-    /// can be missed (the bound measured in the coherence tests).
+    /// The line caster's (`caster/line_caster.rs`), with one ray a pixel
+    /// and subvoxel shading: the rays of a stretch of a line share one
+    /// level schedule, its least ray's, so every ray resumes where the ray
+    /// before it hit; a ray switches levels up to a quarter nearer than
+    /// its own depth says, and a new stretch starts where the stretch
+    /// before left off, whose surface may differ from this one's by a
+    /// level (the bound measured in the coherence tests). With more rays
+    /// a pixel or nearest shading: as [`Coherence::Exact`], and across
+    /// different level schedules too. At single resolution, the image of
+    /// [`Coherence::Exact`] bit for bit.
     AcrossLevels,
 }
 
