@@ -2,9 +2,9 @@
 //! [`render_level_columns`] takes level views (pitch 0), whose image lines
 //! are the columns; [`render_level0_lines`] any pitch, along the kernel's
 //! image lines through the vertical's vanishing point. They are the speed
-//! bound the kernel's per-pixel path is measured against (`cargo bench -p
-//! terracast-sim --bench kernel`, group `per-line bound`), and the shape
-//! that path is being rebuilt toward:
+//! bound the kernel's line caster (`line_caster.rs`, the same design on
+//! the pyramid) is measured against (`cargo bench -p terracast-sim --bench
+//! kernel`, group `per-line bound`):
 //!
 //! - **Once a column**: its vertical plane ([`Plane`]: major axis,
 //!   direction, minor slope, the samples inside the map), its bottom ray's
