@@ -291,10 +291,7 @@ fn run() -> Result<(), &'static str> {
         let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
             .map_err(|_| "framebuffer too small")?;
         let start = ticks();
-        #[cfg(not(feature = "line-caster"))]
         render(&pyramid, &view, &options, &mut framebuffer, &mut NoProbe);
-        #[cfg(feature = "line-caster")]
-        terracast::render_level0_lines(&terrain, &view, &options, &mut framebuffer);
         let kernel_ticks = ticks() - start;
 
         let bus = CaptureBus::new(capture);

@@ -10,7 +10,7 @@
 //! * `per-line bound`: at pitch 0 from the same eye, the kernel (the
 //!   default, which is the line caster; `Exact`, which sets every ray up
 //!   in full; single resolution), the per-line design at its smallest
-//!   (`render_level0_lines`, and `render_level_columns` into the 12-byte
+//!   (`render_level_columns`, level 0 on a `Terrain`, into the 12-byte
 //!   sample buffer and into an RGB framebuffer to show what the sink
 //!   costs) and Voxel Space, with their speed against the kernel's and
 //!   their PSNR against the exact reference; and `per-line bound by
@@ -26,8 +26,8 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
 use terracast::{
-    render, render_level0_lines, render_level_columns, Camera, Coherence, CountingProbe, NoProbe,
-    RenderOptions, Resolution, View,
+    render, render_level_columns, Camera, Coherence, CountingProbe, NoProbe, RenderOptions,
+    Resolution, View,
 };
 use terracast_sim::baselines::{voxel_space, VoxelSpaceOptions};
 use terracast_sim::kernel::SampleBuffer;
@@ -191,9 +191,6 @@ fn main() {
                     &mut NoProbe,
                 )
             })
-        });
-        group.bench_function(BenchmarkId::from_parameter("lines"), |b| {
-            b.iter(|| render_level0_lines(&terrain, &level_view, &single, &mut buffer))
         });
         group.bench_function(BenchmarkId::from_parameter("columns"), |b| {
             b.iter(|| render_level_columns(&terrain, &level_view, &single, &mut buffer))
@@ -405,11 +402,6 @@ fn per_line_bound_table(
             }),
         ),
         ("kernel-single", kernel_colors(&single)),
-        ("lines", {
-            let mut lines = SampleBuffer::new(SIZE.0, SIZE.1);
-            render_level0_lines(&terrain, &view, &single, &mut lines);
-            colors(&lines)
-        }),
         ("columns", colors(&columns)),
         // The same image into an RGB framebuffer: what the sink costs.
         ("columns-rgb", colors(&columns)),

@@ -1,11 +1,11 @@
-//! The per-line casters (the design at its smallest) render what the kernel
-//! renders at single resolution, as accurately against the exact
-//! reference: the column caster on level views (it refuses a pitched one),
-//! the line caster at any pitch (bit for bit on these views).
+//! The per-line designs render what setting every ray up in full renders at
+//! single resolution: the column caster (the design at its smallest) on
+//! level views, as accurately against the exact reference (it refuses a
+//! pitched one); the line caster, the kernel's default, at any pitch bit
+//! for bit (`Coherence::Exact` is the full set-up).
 
 use terracast::{
-    render_level0_lines, render_level_columns, Camera, ColumnsError, RenderOptions, Resolution,
-    Rgb, View,
+    render_level_columns, Camera, Coherence, ColumnsError, RenderOptions, Resolution, Rgb, View,
 };
 use terracast_sim::kernel::{render_kernel_with, PixelRays, SampleBuffer};
 use terracast_sim::metrics::psnr;
@@ -18,7 +18,7 @@ fn colors(buffer: &SampleBuffer) -> Vec<Rgb> {
     buffer.samples.iter().map(|s| s.color).collect()
 }
 
-/// The kernel at single resolution: the image the per-line casters render.
+/// The kernel at single resolution (the line caster).
 fn single() -> RenderOptions {
     RenderOptions {
         resolution: Resolution::Single,
@@ -114,11 +114,14 @@ fn a_pitched_view_is_refused() {
 }
 
 #[test]
-fn the_line_caster_matches_the_kernel_at_single_resolution_at_every_pitch() {
+fn the_line_caster_renders_exacts_image_at_single_resolution_at_every_pitch() {
     let scene = procedural(256, 5);
     let kernel_scene = scene.to_kernel().unwrap();
-    let terrain = kernel_scene.terrain().unwrap();
-    let single = single();
+    // Every ray set up in full and resumed only where exact.
+    let exact = RenderOptions {
+        coherence: Coherence::Exact,
+        ..single()
+    };
     let top = scene.max_height();
     for (eye, yaw, pitch) in [
         ([128.0, 10.0, scene.height(128, 10) + 30.0], 90.0, 0.0),
@@ -129,12 +132,21 @@ fn the_line_caster_matches_the_kernel_at_single_resolution_at_every_pitch() {
         ([128.0, 20.0, scene.height(128, 20) + 8.0], 95.0, -20.0),
     ] {
         let camera = Camera::looking(eye, yaw, pitch);
-        let view = View::new(&camera, SIZE.0, SIZE.1).unwrap();
-        let mut lines = SampleBuffer::new(SIZE.0, SIZE.1);
-        render_level0_lines(&terrain, &view, &single, &mut lines);
-        // The same walk, the same crossing, the same color drift: the
-        // kernel's single-resolution image, bit for bit.
-        let compared = compare(&scene, &kernel_scene, &camera, &colors(&lines));
-        assert!(compared.identical, "pitch {pitch}: not the kernel's image");
+        let (full, _) = render_kernel_with(
+            &kernel_scene,
+            &camera,
+            SIZE.0,
+            SIZE.1,
+            &exact,
+            PixelRays::Fixed,
+        )
+        .unwrap();
+        // The same walk, the same crossing, the same color drift: the line
+        // caster's image (the default's at single resolution), bit for bit.
+        let compared = compare(&scene, &kernel_scene, &camera, &full.colors);
+        assert!(
+            compared.identical,
+            "pitch {pitch}: not the line caster's image"
+        );
     }
 }

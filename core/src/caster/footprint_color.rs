@@ -67,7 +67,19 @@ pub(crate) fn footprint_color<T: Surface + ?Sized, P: Probe>(
         _ if hit.level > 0 => (hit.level, 0),
         _ => return None,
     };
-    let point = ray.color_point(k, distance);
+    levels_color(surface, level, t, ray.color_point(k, distance), probe)
+}
+
+/// The color at world point `point` (Q16) of levels `level − 1` and
+/// `level` blended by `t`/256 (see [`color_level`]); `None` where neither
+/// has a color.
+pub(super) fn levels_color<T: Surface + ?Sized, P: Probe>(
+    surface: &T,
+    level: u8,
+    t: u32,
+    point: [i64; 2],
+    probe: &mut P,
+) -> Option<Rgb> {
     // Weight 0 or 1 reads one level only. A level that finds no color (at
     // the map's edge) leaves the other's: once a fetch is reported, the
     // caller must not make two more (`MAX_COLOR_FETCHES_A_RAY`).
@@ -140,7 +152,7 @@ fn fraction(num: i64, den: i64) -> u32 {
 /// The color at world point `point` (Q16) on `level`: its four grid points
 /// blended by the point's fraction of the level's spacing on each axis.
 /// Reported to `probe` as one color fetch, of a square.
-pub(super) fn bilinear<T: Surface + ?Sized, P: Probe>(
+fn bilinear<T: Surface + ?Sized, P: Probe>(
     surface: &T,
     level: u8,
     point: [i64; 2],

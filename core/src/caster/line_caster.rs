@@ -39,13 +39,11 @@
 //! [`Coherence::Exact`]: super::Coherence::Exact
 
 use super::first_hit::first_hit;
-use super::footprint_color::{bilinear, color_level, narrower_side};
-use super::walk::lerp;
+use super::footprint_color::{color_level, levels_color, narrower_side};
+use super::walk::{lerp, line_color};
 use super::{crossing_fraction, sky, Coherence, Frame, RenderOptions, Shading, VerticalSamples};
 use crate::color::Rgb;
-use crate::config::{
-    COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_WALK_LEVEL, WEIGHT_BITS,
-};
+use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_WALK_LEVEL};
 use crate::divide::div_ceil;
 use crate::probe::Probe;
 use crate::surface::{Extent, Grid, Surface};
@@ -76,7 +74,7 @@ pub(crate) struct LineCaster<'s, 'v, T: Surface + ?Sized + 's> {
     view: &'v View,
     extent: Extent,
     /// The highest height, Q16: a rising ray above it sees the sky.
-    top: i64,
+    highest: i64,
     plan: LodPlan,
     /// A line's first ray skips through the pyramid's height bounds.
     first_hit: bool,
@@ -129,7 +127,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             strides,
             view,
             extent,
-            top: i64::from(extent.max_height) << HEIGHT_TO_Q16,
+            highest: i64::from(extent.max_height) << HEIGHT_TO_Q16,
             plan: frame.lod,
             first_hit: frame.first_hit,
             sky: sky(options),
@@ -161,13 +159,14 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         }
     }
 
-    /// Schedules `walk`'s levels for rays whose direction's major-axis
-    /// component is at most `run`: level `l` begins at the first sample
+    /// Schedules `walk`'s levels for a ray whose direction's major-axis
+    /// component is `run`: level `l` begins at the first sample
     /// of its grid at or past `2^(l−1)` times the reach of `run`, and at
     /// or past level `l − 1`'s beginning (an even step of that level).
     fn schedule(&self, walk: &mut LineWalk, run: i64) {
         let plane = &walk.plane;
-        let top = usize::from(self.plan.top.min(self.surface.top()));
+        // (The plan's top is the surface's, at most `MAX_WALK_LEVEL`.)
+        let top = usize::from(self.plan.top);
         let reach = self.plan.height_reach(run);
         for level in 1..=LEVELS {
             walk.begins[level] = i64::MAX;
@@ -199,7 +198,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             return;
         };
         let mut walk = self.line_walk(&line);
-        let levels = self.plan.top.min(self.surface.top()) > 0;
+        let levels = self.plan.top > 0;
         let [first_run, last_run] = line
             .end_directions()
             .map(|d| View::slope(&d, &walk.plane).1);
@@ -214,8 +213,10 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 probe.ray();
                 let d = pixel.direction;
                 let (dz, run) = View::slope(&d, &walk.plane);
-                // A ray lower than the one before (only where the slope
-                // saturates) cannot resume where it hit. A ray outside the
+                // A ray lower than the one before (directions are linear
+                // along the line, so only next to the vanishing point,
+                // where a ray's horizontal part rounds to nothing) cannot
+                // resume where it hit. A ray outside the
                 // stretch's levels starts a stretch where the stretch
                 // before left off: it is above that stretch's surface
                 // wherever the stretch's last ray was (the approximation
@@ -270,8 +271,8 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// is `z0` (Q16), `dz` a sample, known to clear the surface before
     /// sample `from`: the last sample of its level's grid before `from`
     /// and before it sinks below the highest terrain, with nothing known
-    /// before it. The samples before it are above the
-    /// terrain, and so outside the slab a tile footprint loads. `None`
+    /// before it. The samples before it are above the terrain, and so
+    /// outside the slab a tile footprint loads. `None`
     /// when the ray never comes down to the terrain or the map has no
     /// height there.
     fn start<P: Probe>(
@@ -283,12 +284,12 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         probe: &mut P,
     ) -> Option<At> {
         let mut k = from.max(walk.first);
-        if z0 + k * dz > self.top {
+        if z0 + k * dz > self.highest {
             if dz >= 0 {
                 return None;
             }
             // The first sample at or below the top, less one.
-            let below_top = div_ceil(z0 - self.top, -dz);
+            let below_top = div_ceil(z0 - self.highest, -dz);
             k = k.max(below_top - 1);
             if k > walk.last {
                 return None;
@@ -386,7 +387,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     ) -> Option<i64> {
         let mut z = z0 + at.k * dz;
         while z > at.height {
-            if at.k >= walk.last || (dz >= 0 && z > self.top) {
+            if at.k >= walk.last || (dz >= 0 && z > self.highest) {
                 return None;
             }
             let level = at.level;
@@ -524,7 +525,8 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// The color of `level` where the sample on its major grid line
     /// `index` at minor coordinate `minor` crosses its minor grid line,
     /// `distance` (Q16) from the eye, looked up `drift` aside: the two
-    /// voxels across the line blended by the subvoxel weight.
+    /// voxels across the line blended by the subvoxel weight (the sky's
+    /// color where the map has none).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn line_color<P: Probe>(
@@ -541,19 +543,19 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             minor =
                 (minor + ((drift * distance) >> COORD_FRAC_BITS)).clamp(0, walk.plane.minor_max);
         }
-        let (l, shift) = (usize::from(level), u32::from(level));
-        let index = index + (minor >> (COORD_FRAC_BITS + shift)) as isize * walk.across[l];
-        let weight =
-            (minor >> (COORD_FRAC_BITS - WEIGHT_BITS + shift)) as u32 & ((1 << WEIGHT_BITS) - 1);
-        probe.color(level, index as usize);
-        match self.grids[l].color_pair(index, walk.across[l]) {
-            Some((c0, c1)) => lerp(c0, c1, weight),
-            None => self.sky.color,
-        }
+        let (l, across) = (usize::from(level), walk.across[usize::from(level)]);
+        // Minor coordinates stay inside the map (`Plane::minor_max`), far
+        // below 2^31 in Q16.
+        let minor = minor as i32;
+        let color = line_color(&self.grids[l], index, across, minor, level);
+        let cell = index + (minor >> (COORD_FRAC_BITS + u32::from(level))) as isize * across;
+        probe.color(level, cell as usize);
+        color.unwrap_or(self.sky.color)
     }
 
     /// The color at the crossing `crossing`/256 samples along the line,
-    /// `distance` (Q16) from the eye, from levels `level − 1` and `level`
+    /// `distance` (Q16) from the eye, looked up `drift` aside (as
+    /// `Ray::color_point` places it), from levels `level − 1` and `level`
     /// blended by `t`/256; `None` where neither has a color.
     #[allow(clippy::too_many_arguments)]
     fn footprint<P: Probe>(
@@ -579,17 +581,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         } else {
             [minor, major]
         };
-        let finer = (t < 1 << WEIGHT_BITS)
-            .then(|| bilinear(self.surface, level - 1, point, probe))
-            .flatten();
-        let coarser = (t > 0)
-            .then(|| bilinear(self.surface, level, point, probe))
-            .flatten();
-        match (finer, coarser) {
-            (Some(finer), Some(coarser)) => Some(lerp(finer, coarser, t)),
-            (Some(color), None) | (None, Some(color)) => Some(color),
-            (None, None) => None,
-        }
+        levels_color(self.surface, level, t, point, probe)
     }
 }
 

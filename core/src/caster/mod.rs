@@ -30,7 +30,7 @@ mod per_line;
 pub(crate) mod walk;
 
 pub use budget::{FrameCost, Governor};
-pub use per_line::{render_level0_lines, render_level_columns, ColumnsError};
+pub use per_line::{render_level_columns, ColumnsError};
 
 use crate::probe::Probe;
 use crate::roughness::terrain_fit;

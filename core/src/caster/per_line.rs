@@ -1,10 +1,8 @@
-//! The per-line design at its smallest: level 0 only, subvoxel shading.
-//! [`render_level_columns`] takes level views (pitch 0), whose image lines
-//! are the columns; [`render_level0_lines`] any pitch, along the kernel's
-//! image lines through the vertical's vanishing point. They are the speed
-//! bound the kernel's line caster (`line_caster.rs`, the same design on
-//! the pyramid) is measured against (`cargo bench -p terracast-sim --bench
-//! kernel`, group `per-line bound`):
+//! The per-line design at its smallest: level 0 only, subvoxel shading,
+//! level views only (pitch 0), whose image lines are the columns. It is
+//! the speed bound the kernel's line caster (`line_caster.rs`, the same
+//! design on the pyramid at any pitch) is measured against (`cargo bench
+//! -p terracast-sim --bench kernel`, group `per-line bound`):
 //!
 //! - **Once a column**: its vertical plane ([`Plane`]: major axis,
 //!   direction, minor slope, the samples inside the map), its bottom ray's
@@ -20,11 +18,11 @@
 //!   and both grid lines' colors blended there by the subvoxel weights.
 //! - **Sky** above a column's last hit is one span, written without rays.
 //!
-//! Their images differ from the kernel's single-resolution ones only by
-//! rounding (the column caster steps the slope instead of dividing it, and
-//! leaves out the color drift of rays beside their pixel's center, which
-//! at pitch 0 are none), so a pixel costs what the algorithm costs. Under
-//! pitch a ray's slope is a ratio, one division a ray.
+//! Its images differ from the kernel's single-resolution ones only by
+//! rounding (it steps the slope instead of dividing it; at pitch 0 no ray
+//! is beside its pixel's center, so there is no color drift), so a pixel
+//! costs what the algorithm costs. Under pitch a ray's slope is a ratio,
+//! one division a ray: the line caster's.
 
 use super::walk::lerp;
 use super::{crossing_fraction, sky, RenderOptions};
@@ -72,22 +70,7 @@ pub fn render_level_columns<S: Sink>(
     Ok(())
 }
 
-/// Renders `view` of `terrain` (any pitch; level 0, subvoxel shading, the
-/// sky of `options`) line by line along its image lines through the
-/// vertical's vanishing point into `sink`.
-pub fn render_level0_lines<S: Sink>(
-    terrain: &Terrain<'_>,
-    view: &View,
-    options: &RenderOptions,
-    sink: &mut S,
-) {
-    let frame = FrameCaster::new(terrain, view, options);
-    for line in 0..view.lines() {
-        frame.line(line, sink);
-    }
-}
-
-/// What every line of a frame shares: the terrain, the view and the sky.
+/// What every column of a frame shares: the terrain, the view and the sky.
 struct FrameCaster<'t, 'v> {
     heights: &'t [u16],
     colors: &'t [Rgb],
@@ -206,47 +189,7 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
                 (row..height_px).for_each(|row| put(sink, row, self.sky));
                 return;
             };
-            put(sink, row, self.hit(&at, z, dz, &walk, &plane, 0));
-        }
-    }
-
-    /// One image line: a ray a pixel, by rising elevation, each resuming
-    /// where the one before it hit.
-    fn line<S: Sink>(&self, index: u32, sink: &mut S) {
-        let view = self.view;
-        let Some(line) = view.line(index) else {
-            return;
-        };
-        let plane =
-            Plane::new(view, &self.extent, &line.reference).with_across(&view.across(&line));
-        let walk = Walk::new(&plane, self.width);
-        let mut at: Option<At> = None;
-        // The slope of the ray before, and of the lowest that left the
-        // terrain: rays no lower than that one see sky without a walk.
-        let (mut previous_dz, mut sky_from_dz) = (i64::MIN, i64::MAX);
-        for pixel in line.pixels(view.height()) {
-            let d = pixel.direction;
-            let (dz, _) = View::slope(&d, &plane);
-            if walk.first > walk.last || dz >= sky_from_dz {
-                sink.put(pixel.x, pixel.y, self.sky);
-                continue;
-            }
-            // A ray lower than the one before (by rounding, near the
-            // vanishing point) cannot resume where it hit.
-            if dz < previous_dz {
-                at = None;
-            }
-            previous_dz = dz;
-            let at = at.get_or_insert_with(|| self.start(&plane, &walk));
-            let z0 = view.eye[2].to_bits() + ((plane.delta0 * dz) >> COORD_FRAC_BITS);
-            let sample = match self.climb(at, z0 + at.k * dz, dz, &walk, &plane) {
-                Some(z) => self.hit(at, z, dz, &walk, &plane, plane.drift(&d, pixel.offset)),
-                None => {
-                    sky_from_dz = dz;
-                    self.sky
-                }
-            };
-            sink.put(pixel.x, pixel.y, sample);
+            put(sink, row, self.hit(&at, z, dz, &walk, &plane));
         }
     }
 
@@ -287,35 +230,13 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         Some(z)
     }
 
-    /// The color at minor coordinate `minor` of the grid line at `index`,
-    /// `distance` (Q16) from the eye, moved aside by `drift` (Q16 a major
-    /// step; see `Plane::drift`) over that distance.
-    #[inline(always)]
-    fn color_aside(
-        &self,
-        index: isize,
-        across: isize,
-        minor: i64,
-        distance: i64,
-        drift: i64,
-        plane: &Plane,
-    ) -> Rgb {
-        let minor = if drift == 0 {
-            minor
-        } else {
-            (minor + ((drift * distance) >> COORD_FRAC_BITS)).clamp(0, plane.minor_max)
-        };
-        self.color(index, across, minor)
-    }
-
     /// The sample of a ray at height `z` (Q16) at `at`, below the surface
-    /// there and above it at the sample before (when there is one); its
-    /// colors looked up `drift` aside.
+    /// there and above it at the sample before (when there is one).
     #[inline(always)]
-    fn hit(&self, at: &At, z: i64, dz: i64, walk: &Walk, plane: &Plane, drift: i64) -> Sample {
+    fn hit(&self, at: &At, z: i64, dz: i64, walk: &Walk, plane: &Plane) -> Sample {
         let (across, step) = (walk.across, walk.step);
         let distance = plane.delta0 + (at.k << COORD_FRAC_BITS);
-        let on_hit_line = self.color_aside(at.index, across, at.minor, distance, drift, plane);
+        let on_hit_line = self.color(at.index, across, at.minor);
         if at.before == i64::MAX {
             return Sample {
                 color: on_hit_line,
@@ -326,14 +247,7 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         let above = (z - dz - at.before) as i32;
         let below = (z - at.height) as i32;
         let t = crossing_fraction(above, below);
-        let before = self.color_aside(
-            at.index - step,
-            across,
-            at.minor - plane.dminor,
-            distance - (1 << COORD_FRAC_BITS),
-            drift,
-            plane,
-        );
+        let before = self.color(at.index - step, across, at.minor - plane.dminor);
         let back = i64::from(256 - t);
         Sample {
             color: lerp(before, on_hit_line, t),

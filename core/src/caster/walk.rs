@@ -216,9 +216,11 @@ impl Recent {
     }
 }
 
-/// Two colors across a grid line blended by the subvoxel weight.
+/// Two colors across a grid line blended by the subvoxel weight: at minor
+/// coordinate `minor` (Q16, world voxels) of level `level`'s grid line
+/// starting at `base`, the neighbour `minor_stride` away.
 #[inline]
-fn line_color<G: Grid>(
+pub(crate) fn line_color<G: Grid>(
     grid: &G,
     base: isize,
     minor_stride: isize,
