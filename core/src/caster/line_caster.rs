@@ -84,34 +84,38 @@ pub(crate) struct LineCaster<'s, 'v, T: Surface + ?Sized + 's> {
 /// One line's walk through the grids.
 struct LineWalk {
     plane: Plane,
-    /// The line's samples inside the map: `first..=last`.
-    first: i64,
-    last: i64,
-    /// `begins[l]`: the first sample of level `l`; `i64::MAX` past the
+    /// The line's samples inside the map: `first..=last` (a map side is
+    /// below 2^15 samples: the walk's positions are 32-bit, the word of
+    /// the cores it runs on).
+    first: i32,
+    last: i32,
+    /// `begins[l]`: the first sample of level `l`; `i32::MAX` past the
     /// line's last level.
-    begins: [i64; LEVELS + 1],
+    begins: [i32; LEVELS + 1],
     /// Index change per major grid line and across a minor grid line, on
     /// each level.
     major_stride: [isize; LEVELS],
     across: [isize; LEVELS],
     /// Index change of one step on each level (a major grid line of the
-    /// level, forward or back).
+    /// level, forward or back), and the minor coordinate's (Q16).
     step: [isize; LEVELS],
+    minor_step: [i32; LEVELS],
 }
 
 /// Where a line's walk is: a sample, its level and its blended height, and
 /// the sample visited before it and its height (on its own level).
 #[derive(Clone, Copy)]
 struct At {
-    k: i64,
+    k: i32,
     level: u8,
     /// The index of the sample's major grid line on its level, and its
-    /// minor coordinate (Q16, world voxels).
+    /// minor coordinate (Q16, world voxels, inside the map: below 2^31).
     index: isize,
-    minor: i64,
-    height: i64,
-    before_k: i64,
-    before: Option<i64>,
+    minor: i32,
+    /// Q16; heights are U12.4, so below 2^28.
+    height: i32,
+    before_k: i32,
+    before: Option<i32>,
 }
 
 impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
@@ -140,14 +144,17 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     fn line_walk(&self, line: &Line) -> LineWalk {
         let view = self.view;
         let plane = Plane::new(view, &self.extent, &line.reference).with_across(&view.across(line));
-        let (first, last) = (plane.first.max(0), plane.last);
-        let mut begins = [i64::MAX; LEVELS + 1];
+        // `Plane` keeps its samples inside the map, whose side is below 2^15.
+        let (first, last) = (plane.first.max(0) as i32, plane.last as i32);
+        let mut begins = [i32::MAX; LEVELS + 1];
         begins[0] = first;
         let x_major = plane.key.x_major;
         let major_stride = core::array::from_fn(|l| if x_major { 1 } else { self.strides[l] });
         let across = core::array::from_fn(|l| if x_major { self.strides[l] } else { 1 });
         let sign = if plane.key.forward { 1 } else { -1 };
         let step = major_stride.map(|stride| sign * stride);
+        // |dminor| <= 2^16 and levels go to 14: within 2^30.
+        let minor_step = core::array::from_fn(|l| (plane.dminor << l) as i32);
         LineWalk {
             plane,
             first,
@@ -156,6 +163,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             major_stride,
             across,
             step,
+            minor_step,
         }
     }
 
@@ -169,13 +177,18 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         let top = usize::from(self.plan.top);
         let reach = self.plan.height_reach(run);
         for level in 1..=LEVELS {
-            walk.begins[level] = i64::MAX;
+            walk.begins[level] = i32::MAX;
             if level > top || walk.begins[level - 1] > walk.last {
                 continue;
             }
             let threshold = ((reach << (level - 1)) - plane.delta0 + ONE - 1) >> COORD_FRAC_BITS;
-            let k = align_up(plane, walk.begins[level - 1].max(threshold), level as u32);
-            walk.begins[level] = if k > walk.last { i64::MAX } else { k };
+            let from = threshold.max(i64::from(walk.begins[level - 1]));
+            let k = align_up(plane, from, level as u32);
+            walk.begins[level] = if k > i64::from(walk.last) {
+                i32::MAX
+            } else {
+                k as i32
+            };
         }
     }
 
@@ -203,16 +216,18 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             .end_directions()
             .map(|d| View::slope(&d, &walk.plane).1);
         let mut at: Option<At> = None;
-        // The least major-axis component of the stretch's rays, which its
-        // levels are scheduled by: they hold up to a third more.
-        let mut stretch_run = 0;
+        // The major-axis components the stretch's levels hold: from its
+        // least, which they are scheduled by, to a third more.
+        let (mut stretch_run, mut stretch_most) = (0, -1);
         let mut pixels = line.pixels(view.height());
         let mut previous_dz = i64::MIN;
+        // The direction's components a ray's set-up needs.
+        let axes = [if walk.plane.key.x_major { 0 } else { 1 }, 2];
         if walk.first <= walk.last {
             for pixel in pixels.by_ref() {
                 probe.ray();
-                let d = pixel.direction;
-                let (dz, run) = View::slope(&d, &walk.plane);
+                let [d_major, d_up] = line.direction_component(pixel.along, axes);
+                let (dz, run) = View::slope_of(d_major, d_up, &walk.plane);
                 // A ray lower than the one before (directions are linear
                 // along the line, so only next to the vanishing point,
                 // where a ray's horizontal part rounds to nothing) cannot
@@ -225,7 +240,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 let mut resume_from = None;
                 if dz < previous_dz {
                     at = None;
-                } else if levels && !(stretch_run..=stretch_run + stretch_run / 3).contains(&run) {
+                } else if levels && !(stretch_run <= run && run <= stretch_most) {
                     resume_from = at.map(|at| at.before_k);
                     at = None;
                 }
@@ -242,15 +257,16 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                         } else {
                             last_run.max(run - run / 4).min(run)
                         };
+                        stretch_most = stretch_run + stretch_run / 3;
                         self.schedule(&mut walk, stretch_run);
                     }
                     at = resume_from
-                        .or_else(|| self.clear_until(&walk, &d, probe))
+                        .or_else(|| self.clear_until(&walk, &line.direction(pixel.along), probe))
                         .and_then(|from| self.start(&walk, from, z0, dz, probe));
                 }
                 let hit = at.as_mut().and_then(|at| {
                     let z = self.climb(&walk, at, z0, dz, probe)?;
-                    let drift = walk.plane.drift(&d, pixel.offset);
+                    let drift = walk.plane.drift_of(d_major, pixel.offset);
                     Some(self.hit(&walk, at, z, dz, run, drift, probe))
                 });
                 match hit {
@@ -278,28 +294,29 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     fn start<P: Probe>(
         &self,
         walk: &LineWalk,
-        from: i64,
+        from: i32,
         z0: i64,
         dz: i64,
         probe: &mut P,
     ) -> Option<At> {
         let mut k = from.max(walk.first);
-        if z0 + k * dz > self.highest {
+        if z0 + i64::from(k) * dz > self.highest {
             if dz >= 0 {
                 return None;
             }
             // The first sample at or below the top, less one.
-            let below_top = div_ceil(z0 - self.highest, -dz);
-            k = k.max(below_top - 1);
-            if k > walk.last {
+            let below_top = div_ceil(z0 - self.highest, -dz) - 1;
+            if below_top > i64::from(walk.last) {
                 return None;
             }
+            k = k.max(below_top as i32);
         }
         let mut level = 0;
         while walk.begins[level + 1] <= k {
             level += 1;
         }
-        let (k, level) = (align_down(&walk.plane, k, level as u32), level as u8);
+        let k = align_down(&walk.plane, i64::from(k), level as u32) as i32;
+        let level = level as u8;
         let (index, minor) = self.position(walk, k, level);
         Some(At {
             k,
@@ -317,7 +334,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// height bounds (the line's first sample without them); `None` when
     /// it cannot hit at all. Its bounds cover every level, so the skip
     /// holds whatever levels the walk steps on.
-    fn clear_until<P: Probe>(&self, walk: &LineWalk, d: &[i64; 3], probe: &mut P) -> Option<i64> {
+    fn clear_until<P: Probe>(&self, walk: &LineWalk, d: &[i64; 3], probe: &mut P) -> Option<i32> {
         if !self.first_hit {
             return Some(walk.first);
         }
@@ -329,21 +346,23 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         let mut ray = view.ray_with(&self.extent, &self.plan, plane, &clip);
         ray.schedule();
         let k = first_hit(self.surface, &ray, ray.start, ray.end, u32::MAX, probe)?;
-        Some(i64::from(k) - 1)
+        Some(k - 1)
     }
 
     /// Where sample `k` of `walk` is on `level`: the index of its major
     /// grid line there, and its minor coordinate (Q16, world voxels).
     #[inline(always)]
-    fn position(&self, walk: &LineWalk, k: i64, level: u8) -> (isize, i64) {
+    fn position(&self, walk: &LineWalk, k: i32, level: u8) -> (isize, i32) {
         let plane = &walk.plane;
+        let k = i64::from(k);
         let major = if plane.key.forward {
             plane.major0 + k
         } else {
             plane.major0 - k
         };
         let index = (major >> level) as isize * walk.major_stride[usize::from(level)];
-        (index, plane.minor0 + k * plane.dminor)
+        // Inside the map, below 2^31 (`Plane::minor_max`).
+        (index, (plane.minor0 + k * plane.dminor) as i32)
     }
 
     /// The blended height (Q16) at the point of `level`'s major grid line
@@ -355,20 +374,18 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         &self,
         walk: &LineWalk,
         index: isize,
-        minor: i64,
+        minor: i32,
         level: u8,
         probe: &mut P,
-    ) -> Option<i64> {
+    ) -> Option<i32> {
         let (l, shift) = (usize::from(level), u32::from(level));
         let across = walk.across[l];
         let index = index + (minor >> (COORD_FRAC_BITS + shift)) as isize * across;
         let (h0, h1) = self.grids[l].height_pair(index, across)?;
         probe.visit(level, index as usize);
         let weight_shift = COORD_FRAC_BITS - HEIGHT_WEIGHT_BITS + shift;
-        let weight = ((minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1)) as i32;
-        Some(i64::from(
-            (i32::from(h0) << HEIGHT_TO_Q16) + (i32::from(h1) - i32::from(h0)) * weight,
-        ))
+        let weight = (minor >> weight_shift) & ((1 << HEIGHT_WEIGHT_BITS) - 1);
+        Some((i32::from(h0) << HEIGHT_TO_Q16) + (i32::from(h1) - i32::from(h0)) * weight)
     }
 
     /// Climbs to a ray whose height at sample 0 is `z0` (Q16), `dz` a
@@ -385,51 +402,63 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         dz: i64,
         probe: &mut P,
     ) -> Option<i64> {
-        let mut z = z0 + at.k * dz;
-        while z > at.height {
-            if at.k >= walk.last || (dz >= 0 && z > self.highest) {
+        let mut z = z0 + i64::from(at.k) * dz;
+        if z <= i64::from(at.height) {
+            return Some(z);
+        }
+        // The walk in locals, written back once.
+        let mut here = *at;
+        let mut z_step = dz << here.level;
+        loop {
+            if here.k >= walk.last || (dz >= 0 && z > self.highest) {
                 return None;
             }
-            let level = at.level;
-            let next = at.k + (1 << level);
-            let (next, level, index, minor) =
-                if next < walk.begins[usize::from(level) + 1] && next <= walk.last {
-                    // On along this level: its index and minor step.
-                    let step = walk.step[usize::from(level)];
-                    (
-                        next,
-                        level,
-                        at.index + step,
-                        at.minor + (walk.plane.dminor << level),
-                    )
-                } else {
-                    let (next, level) = if next > walk.last {
-                        // The map ends between this level's grid lines: its
-                        // last sample is tested, on level 0 where the map's
-                        // edge is the terrain's (the edge keeps its
-                        // silhouette), else against this level's grid line
-                        // at or before it (a window of a larger world holds
-                        // level 0 no farther than its schedule needs).
-                        (walk.last, if self.extent.real_edges { 0 } else { level })
+            let l = usize::from(here.level);
+            let next = here.k + (1 << here.level);
+            let (index, minor);
+            if next < walk.begins[l + 1] && next <= walk.last {
+                // On along this level: its index and minor step.
+                index = here.index + walk.step[l];
+                minor = here.minor + walk.minor_step[l];
+                z += z_step;
+            } else {
+                let level = if next > walk.last {
+                    // The map ends between this level's grid lines: its
+                    // last sample is tested, on level 0 where the map's
+                    // edge is the terrain's (the edge keeps its
+                    // silhouette), else against this level's grid line
+                    // at or before it (a window of a larger world holds
+                    // level 0 no farther than its schedule needs).
+                    if self.extent.real_edges {
+                        0
                     } else {
-                        (next, level + 1)
-                    };
-                    let (index, minor) = self.position(walk, next, level);
-                    (next, level, index, minor)
+                        here.level
+                    }
+                } else {
+                    here.level + 1
                 };
-            let height = self.height(walk, index, minor, level, probe)?;
-            *at = At {
+                let next = next.min(walk.last);
+                (index, minor) = self.position(walk, next, level);
+                here.level = level;
+                z = z0 + i64::from(next) * dz;
+                z_step = dz << level;
+            }
+            let next = next.min(walk.last);
+            let height = self.height(walk, index, minor, here.level, probe)?;
+            here = At {
                 k: next,
-                level,
+                level: here.level,
                 index,
                 minor,
                 height,
-                before_k: at.k,
-                before: Some(at.height),
+                before_k: here.k,
+                before: Some(here.height),
             };
-            z = z0 + next * dz;
+            if z <= i64::from(height) {
+                *at = here;
+                return Some(z);
+            }
         }
-        Some(z)
     }
 
     /// The sample of a ray at height `z` (Q16) at `at`, below the surface
@@ -453,25 +482,27 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         let span = at.k - at.before_k;
         // The crossing, `t`/256 of the way from the sample before to the
         // hit, and the clearances either side.
-        let below = (z - at.height) as i32;
+        let below = (z - i64::from(at.height)) as i32;
         let (t, above) = match at.before {
             Some(before) if span > 0 => {
-                let above = (z - dz * span - before) as i32;
+                let above = (z - dz * i64::from(span) - i64::from(before)) as i32;
                 (crossing_fraction(above, below), Some(above))
             }
             _ => (256, None),
         };
-        let back = i64::from(256 - t) * span;
-        let distance = plane.delta0 + (at.k << COORD_FRAC_BITS) - (back << 8);
+        // How far back from the hit the crossing is, in 1/256 of a sample.
+        let back = (256 - t) as i32 * span;
+        let hit_distance = plane.delta0 + (i64::from(at.k) << COORD_FRAC_BITS);
+        let distance = hit_distance - (i64::from(back) << 8);
         let sample = |color| Sample {
             color,
             distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
-            elevation: (z - ((back * dz) >> 8)) as i32,
+            elevation: (z - ((i64::from(back) * dz) >> 8)) as i32,
         };
         let color_reach = self.plan.color_reach(run);
         if distance >= color_reach || at.level > 0 {
-            let above = above.map(|above| (at.before_k as i32, above));
-            let width = narrower_side(distance, span as i32, above, below);
+            let above = above.map(|above| (at.before_k, above));
+            let width = narrower_side(distance, span, above, below);
             let levels = match color_level(width, color_reach, self.plan.top) {
                 Some((level, t)) if level >= at.level => Some((level, t)),
                 _ if at.level > 0 => Some((at.level, 0)),
@@ -479,7 +510,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             };
             if let Some((level, t)) = levels {
                 // The crossing, in 1/256 of a sample.
-                let crossing = (at.k << 8) - back;
+                let crossing = (i64::from(at.k) << 8) - i64::from(back);
                 if let Some(color) =
                     self.footprint(walk, crossing, distance, drift, level, t, probe)
                 {
@@ -488,17 +519,10 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             }
         }
         // Level 0's grid lines at the hit and the sample before, blended
-        // at the crossing.
-        let hit_distance = plane.delta0 + (at.k << COORD_FRAC_BITS);
-        let on_hit = self.line_color(
-            walk,
-            at.level,
-            at.index,
-            at.minor,
-            hit_distance,
-            drift,
-            probe,
-        );
+        // at the crossing, looked up `drift` aside: the drift times the
+        // distance, which is one sample less at the sample before.
+        let aside = ((drift * hit_distance) >> COORD_FRAC_BITS) as i32;
+        let on_hit = self.line_color(walk, at.level, at.index, at.minor, aside, probe);
         if at.level > 0 {
             // A coarse hit whose footprint found no color (at the map's
             // edge): its own level's grid line.
@@ -510,9 +534,8 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                     walk,
                     0,
                     at.index - walk.step[0],
-                    at.minor - plane.dminor,
-                    hit_distance - ONE,
-                    drift,
+                    at.minor - walk.minor_step[0],
+                    aside - drift as i32,
                     probe,
                 );
                 lerp(before, on_hit, t)
@@ -524,29 +547,25 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
 
     /// The color of `level` where the sample on its major grid line
     /// `index` at minor coordinate `minor` crosses its minor grid line,
-    /// `distance` (Q16) from the eye, looked up `drift` aside: the two
-    /// voxels across the line blended by the subvoxel weight (the sky's
-    /// color where the map has none).
-    #[allow(clippy::too_many_arguments)]
+    /// looked up `aside` (Q16) across the line: the two voxels across the
+    /// line blended by the subvoxel weight (the sky's color where the map
+    /// has none).
     #[inline(always)]
     fn line_color<P: Probe>(
         &self,
         walk: &LineWalk,
         level: u8,
         index: isize,
-        mut minor: i64,
-        distance: i64,
-        drift: i64,
+        mut minor: i32,
+        aside: i32,
         probe: &mut P,
     ) -> Rgb {
-        if drift != 0 {
-            minor =
-                (minor + ((drift * distance) >> COORD_FRAC_BITS)).clamp(0, walk.plane.minor_max);
+        if aside != 0 {
+            // Minor coordinates stay inside the map (`Plane::minor_max`),
+            // below 2^31 in Q16; the sum may not.
+            minor = (i64::from(minor) + i64::from(aside)).clamp(0, walk.plane.minor_max) as i32;
         }
         let (l, across) = (usize::from(level), walk.across[usize::from(level)]);
-        // Minor coordinates stay inside the map (`Plane::minor_max`), far
-        // below 2^31 in Q16.
-        let minor = minor as i32;
         let color = line_color(&self.grids[l], index, across, minor, level);
         let cell = index + (minor >> (COORD_FRAC_BITS + u32::from(level))) as isize * across;
         probe.color(level, cell as usize);
@@ -585,8 +604,6 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     }
 }
 
-/// The last sample at or before `k` on a grid line of `level` (major
-/// coordinate a multiple of `2^level`).
 fn align_down(plane: &Plane, k: i64, level: u32) -> i64 {
     let mask = (1i64 << level) - 1;
     if plane.key.forward {

@@ -564,7 +564,7 @@ fn line_rays<T: Surface + ?Sized, S: Sink, P: Probe, A: Allowances, R: RaysPerPi
             }
             probe.ray();
             let d = if offset == 0 {
-                pixel.direction
+                line.direction(pixel.along)
             } else {
                 View::direction_beside(&line, &pixel, offset)
             };

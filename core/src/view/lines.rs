@@ -266,11 +266,13 @@ pub(crate) struct Owned {
     pub y: u32,
     /// Axis coordinate of the pixel.
     pub s: i32,
+    /// Axis coordinate of the pixel less the far edge's (`s − s_ref`): the
+    /// ray's direction is the line's reference plus this many axis steps
+    /// ([`Line::direction`]).
+    pub along: i32,
     /// The pixel's center less its line's point there, along the cross
     /// coordinate, Q16 pixels (within ±1/2).
     pub offset: i64,
-    /// The direction through the line's point there (I32F32 bits).
-    pub direction: [i64; 3],
 }
 
 impl View {
@@ -334,7 +336,8 @@ impl View {
     /// `pixel`'s (a sub-ray's; I32F32 bits).
     #[inline]
     pub(crate) fn direction_beside(line: &Line, pixel: &Owned, offset16: i64) -> [i64; 3] {
-        core::array::from_fn(|i| pixel.direction[i] + ((line.per_axis[i] * offset16) >> 4))
+        let direction = line.direction(pixel.along);
+        core::array::from_fn(|i| direction[i] + ((line.per_axis[i] * offset16) >> 4))
     }
 }
 
@@ -353,6 +356,23 @@ impl View {
 }
 
 impl Line {
+    /// The direction through the line's point `along` axis steps past the
+    /// far edge (I32F32 bits): every component is linear along the line.
+    #[inline]
+    pub(crate) fn direction(&self, along: i32) -> [i64; 3] {
+        self.direction_component(along, [0, 1, 2])
+    }
+
+    /// Components `which` of [`Line::direction`], and only those.
+    #[inline(always)]
+    pub(crate) fn direction_component<const N: usize>(
+        &self,
+        along: i32,
+        which: [usize; N],
+    ) -> [i64; N] {
+        which.map(|i| self.reference[i] + self.per_axis[i] * i64::from(along))
+    }
+
     /// How far apart (in pixels, Q16) the centers of two of the line's
     /// pixels on neighbouring rows are: `√(1 + slope²)`, from 1 for a line
     /// along the axis to √2 on the diagonals.
@@ -452,10 +472,7 @@ impl Line {
         if first == end {
             return [self.reference; 2];
         }
-        [first, end - self.sector.step].map(|s| {
-            let along = i64::from(s - self.sector.s_ref);
-            core::array::from_fn(|i| self.reference[i] + self.per_axis[i] * along)
-        })
+        [first, end - self.sector.step].map(|s| self.direction(s - self.sector.s_ref))
     }
 
     /// The pixels this line owns, in the order their rays are cast.
@@ -479,20 +496,38 @@ impl Line {
 /// The direction and the offset are worked out for the pixels owned only.
 #[derive(Debug, Clone)]
 pub(crate) struct OwnedPixels {
-    line: Line,
+    along_rows: bool,
+    /// The row next looked at, the row past the last, and the step.
     s: i32,
     end: i32,
+    step: i32,
+    /// The far edge's row (`along` counts from it) and the image's top row
+    /// (`y` counts from it), along the axis; pixels across.
+    s_ref: i32,
     top_row: i32,
-    /// The window on row `s`: its start `(K − ½ − t_V)·a` and width `a`
-    /// (Q16, `a` times one pixel), and their change a row.
-    from: i64,
+    cross_len: i32,
+    /// The window on row `s` starts at `(K − ½ − t_V)·a` and is `a` wide
+    /// (Q16, `a` times one pixel): its start's change a row, its width
+    /// and the width's change a row.
     from_step: i64,
     width: i64,
     width_step: i64,
-    /// The candidate pixel, `(t − t_V)·b` (Q16), and its change a pixel.
+    /// The window's start moves toward larger `t` from row to row (or
+    /// stays), so the candidate only ever rises; else it only falls.
+    rising: bool,
+    /// The candidate pixel `t`, how far `(t − t_V)·b` is past the window's
+    /// start on row `s` (Q16), and its change a pixel, `b`.
     t: i32,
-    t_b: i64,
+    gap: i64,
     b_step: i64,
+    /// `t_V` (Q8) where a pixel may lie outside the sector's cone (only
+    /// the lines at its edges); `None` where none can.
+    cone: Option<i64>,
+    /// The line's point on row `s` less `t_V`, Q40 (the Q32 slope times the
+    /// row's Q8 distance from `V`), its change a row, and `t_V` in Q16.
+    point: i64,
+    point_step: i64,
+    t_v: i64,
 }
 
 impl OwnedPixels {
@@ -510,83 +545,92 @@ impl OwnedPixels {
             }
             None => (0, i64::from(line.k) << IMG_FRAC, 1, 1, 0, -IMG_ONE / 2),
         };
+        // An owned pixel is within (|K − t_V| + ½)·a/b of t_V: inside the
+        // cone `|t − t_V| < a` whenever |K − t_V| + ½ < b.
+        let k_t = nearest_from + IMG_ONE / 2;
+        let cone = (sector.vanishing.is_some() && k_t.abs() + IMG_ONE / 2 >= b).then_some(t_v);
         // The candidate starts at the line's point on the first row.
-        let point = (t_v << 32) + line.slope * ((first << IMG_FRAC) - s_v);
-        let t = (point >> 40).clamp(-(1 << 24), 1 << 24) as i32;
-        Self {
-            line: *line,
+        let point = line.slope * ((first << IMG_FRAC) - s_v);
+        let t = (((t_v << 32) + point) >> 40).clamp(-(1 << 24), 1 << 24) as i32;
+        let from_step = nearest_from * a_step;
+        let mut pixels = Self {
+            along_rows: sector.along_rows,
             s: first as i32,
             end,
+            step: sector.step,
+            s_ref: sector.s_ref,
             top_row: height as i32 - 1,
-            from: nearest_from * a,
-            from_step: nearest_from * a_step,
+            cross_len: sector.cross_len,
+            from_step,
             width: IMG_ONE * a,
             width_step: IMG_ONE * a_step,
+            rising: from_step >= 0,
             t,
-            t_b: ((i64::from(t) << IMG_FRAC) - t_v) * b,
+            gap: ((i64::from(t) << IMG_FRAC) - t_v) * b - nearest_from * a,
             b_step: IMG_ONE * b,
+            cone,
+            point,
+            point_step: line.slope * (i64::from(sector.step) << IMG_FRAC),
+            t_v: t_v << (COORD_FRAC_BITS - IMG_FRAC),
+        };
+        // The smallest t at or past the first row's window start; from
+        // there on the candidate moves one way only.
+        while pixels.gap < 0 {
+            pixels.t += 1;
+            pixels.gap += pixels.b_step;
         }
+        while pixels.gap >= pixels.b_step {
+            pixels.t -= 1;
+            pixels.gap -= pixels.b_step;
+        }
+        pixels
     }
 
-    /// The pixel the line owns at cross coordinate `t` on row `s`.
+    /// The next pixel's cross and axis coordinates, and the line's point
+    /// on its row (see `point`).
     #[inline(always)]
-    fn owned(&self, t: i32, s: i32) -> Owned {
-        let line = &self.line;
-        let sector = &line.sector;
-        let (x, row) = if sector.along_rows { (t, s) } else { (s, t) };
-        let (s_v, t_v) = sector
-            .vanishing
-            .unwrap_or((0, i64::from(line.k) << IMG_FRAC));
-        // The line's point, Q16: Q32 slope times Q8 distance.
-        let point = (t_v << (COORD_FRAC_BITS - IMG_FRAC))
-            + ((line.slope * ((i64::from(s) << IMG_FRAC) - s_v))
-                >> (32 + IMG_FRAC - COORD_FRAC_BITS));
-        let along = i64::from(s - sector.s_ref);
-        Owned {
-            x: x as u32,
-            y: (self.top_row - row) as u32,
-            s,
-            offset: (i64::from(t) << COORD_FRAC_BITS) - point,
-            direction: core::array::from_fn(|i| line.reference[i] + line.per_axis[i] * along),
-        }
-    }
-}
-
-impl OwnedPixels {
-    /// The next pixel's cross and axis coordinates.
-    #[inline(always)]
-    fn advance(&mut self) -> Option<(i32, i32)> {
-        let step = self.line.sector.step;
-        let cross_len = self.line.sector.cross_len;
+    fn advance(&mut self) -> Option<(i32, i32, i64)> {
         while self.s != self.end {
-            let (s, from, width) = (self.s, self.from, self.width);
-            self.s += step;
-            self.from += self.from_step;
+            let (s, width, point) = (self.s, self.width, self.point);
+            self.s += self.step;
             self.width += self.width_step;
+            self.point += self.point_step;
             // The smallest t at or past the window's start.
-            while self.t_b < from {
-                self.t += 1;
-                self.t_b += self.b_step;
+            if self.rising {
+                while self.gap < 0 {
+                    self.t += 1;
+                    self.gap += self.b_step;
+                }
+            } else {
+                while self.gap >= self.b_step {
+                    self.t -= 1;
+                    self.gap -= self.b_step;
+                }
             }
-            while self.t_b - self.b_step >= from {
-                self.t -= 1;
-                self.t_b -= self.b_step;
-            }
-            let t = self.t;
-            if self.t_b - from >= width || !(0..cross_len).contains(&t) {
+            let (t, gap) = (self.t, self.gap);
+            self.gap -= self.from_step;
+            if gap >= width || t as u32 >= self.cross_len as u32 {
                 continue;
             }
             // Inside the sector: |t − t_V| <= a (< a for the sectors left
-            // and right of V), Q8; parallel lines have no sector bound.
-            if let Some((_, t_v)) = self.line.sector.vanishing {
+            // and right of V), Q8.
+            if let Some(t_v) = self.cone {
                 let (dt, a) = (((i64::from(t) << IMG_FRAC) - t_v).abs(), width >> IMG_FRAC);
-                if dt > a || (dt == a && !self.line.sector.along_rows) {
+                if dt > a || (dt == a && !self.along_rows) {
                     continue;
                 }
             }
-            return Some((t, s));
+            return Some((t, s, point));
         }
         None
+    }
+
+    /// The image position (x, y from the top) of the pixel at cross
+    /// coordinate `t`, axis coordinate `s`.
+    #[inline(always)]
+    fn image_position(&self, t: i32, s: i32) -> (u32, u32) {
+        let (x, row) = if self.along_rows { (t, s) } else { (s, t) };
+        (x as u32, (self.top_row - row) as u32)
     }
 
     /// Calls `put` with the image position (x, y from the top) of each
@@ -594,13 +638,9 @@ impl OwnedPixels {
     /// rays (the sky above a line's last hit).
     #[inline]
     pub fn for_each_position(mut self, mut put: impl FnMut(u32, u32)) {
-        while let Some((t, s)) = self.advance() {
-            let (x, row) = if self.line.sector.along_rows {
-                (t, s)
-            } else {
-                (s, t)
-            };
-            put(x as u32, (self.top_row - row) as u32);
+        while let Some((t, s, _)) = self.advance() {
+            let (x, y) = self.image_position(t, s);
+            put(x, y);
         }
     }
 }
@@ -608,10 +648,19 @@ impl OwnedPixels {
 impl Iterator for OwnedPixels {
     type Item = Owned;
 
-    #[inline]
+    #[inline(always)]
     fn next(&mut self) -> Option<Owned> {
-        let (t, s) = self.advance()?;
-        Some(self.owned(t, s))
+        let (t, s, point) = self.advance()?;
+        let (x, y) = self.image_position(t, s);
+        Some(Owned {
+            x,
+            y,
+            s,
+            along: s - self.s_ref,
+            // The line's point, Q16: Q40 to Q16.
+            offset: (i64::from(t) << COORD_FRAC_BITS)
+                - (self.t_v + (point >> (32 + IMG_FRAC - COORD_FRAC_BITS))),
+        })
     }
 }
 
@@ -814,11 +863,11 @@ mod tests {
                     } else {
                         (f64::from(p.s), point)
                     };
-                    for i in 0..3 {
+                    for (i, component) in line.direction(p.along).into_iter().enumerate() {
                         let exact = q32(view.base[i].to_bits())
                             + q32(view.per_column[i].to_bits()) * u
                             + q32(view.per_row[i].to_bits()) * v;
-                        worst = worst.max((q32(p.direction[i]) - exact).abs());
+                        worst = worst.max((q32(component) - exact).abs());
                     }
                     if pitch == 0.0 {
                         assert_eq!(p.offset, 0);

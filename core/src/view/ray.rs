@@ -289,16 +289,26 @@ impl Plane {
     /// lookup makes up for.
     #[inline]
     pub fn drift(&self, d: &[i64; 3], offset: i64) -> i64 {
-        let major = if self.key.x_major { d[0] } else { d[1] };
+        self.drift_of(if self.key.x_major { d[0] } else { d[1] }, offset)
+    }
+
+    /// [`Plane::drift`] from the direction's major-axis component alone.
+    #[inline]
+    pub fn drift_of(&self, major: i64, offset: i64) -> i64 {
         let run = if self.key.forward { major } else { -major };
         if run <= 0 || offset == 0 || self.across == 0 {
             return 0;
         }
         // A color lookup needs no more than 24 bits of this: drop the low
-        // bits of both until they fit the core's 32-bit divide.
+        // bits of both until they fit the core's 32-bit divide (and the
+        // product its 32 × 32-bit multiply: |offset| <= 2^15).
         let shift = (64 - run.leading_zeros()).saturating_sub(24);
-        let per_pixel = div_trunc(bound(self.across >> shift, 1 << 30), (run >> shift).max(1));
-        bound((per_pixel * offset) >> COORD_FRAC_BITS, 1 << 14)
+        let across = bound(self.across >> shift, 1 << 30) as i32;
+        let per_pixel = across / ((run >> shift) as i32).max(1);
+        bound(
+            (i64::from(per_pixel) * i64::from(offset as i32)) >> COORD_FRAC_BITS,
+            1 << 14,
+        )
     }
 }
 
@@ -307,20 +317,26 @@ impl View {
     /// `plane`, and the run: `d`'s major component (I32F32 bits).
     #[inline]
     pub(crate) fn slope(d: &[i64; 3], plane: &Plane) -> (i64, i64) {
-        let RayKey { x_major, forward } = plane.key;
-        let d_major = if x_major { d[0] } else { d[1] };
+        Self::slope_of(if plane.key.x_major { d[0] } else { d[1] }, d[2], plane)
+    }
+
+    /// [`View::slope`] from the direction's major-axis and vertical
+    /// components alone.
+    #[inline]
+    pub(crate) fn slope_of(d_major: i64, d_up: i64, plane: &Plane) -> (i64, i64) {
+        let forward = plane.key.forward;
         // Within rounding of the vanishing point the sign may disagree: that
         // ray is vertical.
         let run = if forward { d_major } else { -d_major }.max(0);
         let max_slope = i64::from(MAX_RAY_SLOPE) << COORD_FRAC_BITS;
         let dz = if run == 0 {
-            if d[2] < 0 {
+            if d_up < 0 {
                 -max_slope
             } else {
                 max_slope
             }
         } else {
-            bound(div_trunc(d[2] << COORD_FRAC_BITS, run), max_slope)
+            bound(div_trunc(d_up << COORD_FRAC_BITS, run), max_slope)
         };
         (dz, run)
     }

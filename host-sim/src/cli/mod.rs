@@ -85,6 +85,9 @@ struct BoardSceneArgs {
     /// Image size of the board's frames.
     #[arg(long, default_value = "320x240", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
+    /// Only the board's view N (0 to 3), to profile one view alone.
+    #[arg(long, value_name = "N", value_parser = number(0usize, 3), allow_hyphen_values = true)]
+    view: Option<usize>,
     /// Output scene file.
     #[arg(long, value_name = "SCENE.tcb")]
     out: PathBuf,
@@ -401,7 +404,10 @@ fn board_scene_command(args: BoardSceneArgs) -> Result<()> {
     let mut outputs = Outputs::new();
     let out = outputs.output("--out", &args.out)?;
     let scene = procedural(args.procedural_size, args.seed);
-    let views = board_views(args.procedural_size, scene.max_height());
+    let mut views = board_views(args.procedural_size, scene.max_height());
+    if let Some(view) = args.view {
+        views = vec![views[view]];
+    }
     write_scene(outputs.temporary(out), &scene, args.size, &views)?;
     outputs.commit()?;
     println!(
