@@ -8,7 +8,7 @@
 //! | 0 | 8 | [`MAGIC`] |
 //! | 8 | 4 × u32 | map width, map depth, image width, image height |
 //! | 24 | u32 | number of views, at most [`MAX_VIEWS`] |
-//! | 28 | 24 a view | eye x, y, z, yaw, pitch, horizontal fov: f32 each (roll 0) |
+//! | 28 | 28 a view | eye x, y, z, yaw, pitch, horizontal fov, roll: f32 each |
 //! | [`HEADER_BYTES`] | 2 a voxel | heights, U12.4, row-major |
 //! | after them | 3 a voxel | colors, RGB |
 //!
@@ -19,13 +19,14 @@ use core::fmt;
 use terracast::{Camera, Rgb, Terrain, TerrainError};
 
 /// First bytes of a board scene file.
-pub const MAGIC: [u8; 8] = *b"TCBOARD1";
+pub const MAGIC: [u8; 8] = *b"TCBOARD2";
 /// Header size; the heights start here.
 pub const HEADER_BYTES: usize = 256;
 /// Most views a scene carries.
 pub const MAX_VIEWS: usize = 8;
 const VIEWS_AT: usize = 28;
-const VIEW_BYTES: usize = 24;
+const VIEW_BYTES: usize = 28;
+const _: () = assert!(VIEWS_AT + MAX_VIEWS * VIEW_BYTES <= HEADER_BYTES);
 
 /// Sizes and views: everything but the terrain's voxels.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -100,6 +101,7 @@ impl Header {
                 view.yaw_deg,
                 view.pitch_deg,
                 view.hfov_deg,
+                view.roll_deg,
             ];
             for (s, n) in slot.chunks_exact_mut(4).zip(numbers) {
                 s.copy_from_slice(&n.to_le_bytes());
@@ -132,7 +134,7 @@ impl Header {
                 eye: [float(0), float(1), float(2)],
                 yaw_deg: float(3),
                 pitch_deg: float(4),
-                roll_deg: 0.0,
+                roll_deg: float(6),
                 hfov_deg: float(5),
             };
         }

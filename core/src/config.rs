@@ -60,6 +60,9 @@ pub const MAX_VERTICAL_TANGENT: f32 = 64.0;
 /// Pitch range in degrees: −89 (looking up) to +90 (straight down).
 pub const PITCH_RANGE_DEG: (f32, f32) = (-89.0, 90.0);
 
+/// Roll range in degrees (−180 and 180 are the same bank, upside down).
+pub const ROLL_RANGE_DEG: (f32, f32) = (-180.0, 180.0);
+
 /// Default sky color of the view contract.
 pub const DEFAULT_SKY: crate::color::Rgb = [135, 185, 235];
 

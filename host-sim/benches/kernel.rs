@@ -16,7 +16,9 @@
 //!   their PSNR against the exact reference; and `per-line bound by
 //!   pitch`, the default against `Exact` at pitch 2° to 90°;
 //! * `sky against terrain`: the default kernel from above the map's top,
-//!   45° up (all sky) against 45° down (all terrain), and their ratio.
+//!   45° up (all sky) against 45° down (all terrain), and their ratio;
+//! * `roll`: the default kernel at pitch 10° from the same eye, rolled 0°
+//!   to 90°, each frame's time against the level one's.
 //!
 //!     cargo bench -p terracast-sim --bench kernel
 //!
@@ -37,6 +39,7 @@ use terracast_sim::scene::{load_pair, procedural, Scene};
 
 const SIZE: (u32, u32) = (640, 480);
 const PITCHES: [f32; 6] = [2.0, 5.0, 15.0, 30.0, 60.0, 90.0];
+const ROLLS: [f32; 5] = [0.0, 15.0, 30.0, 45.0, 90.0];
 
 fn scene() -> (Scene, &'static str) {
     let dir = std::env::var_os("TERRACAST_DATA")
@@ -249,6 +252,25 @@ fn main() {
         }
         group.finish();
     }
+    let rolled = |roll: f32| Camera {
+        roll_deg: roll,
+        ..camera(10.0)
+    };
+    {
+        let mut group = criterion.benchmark_group("roll");
+        group.throughput(Throughput::Elements(pixels));
+        group.sample_size(10);
+        let default = RenderOptions::default();
+        let levels = levels_for(&default);
+        let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+        for roll in ROLLS {
+            let view = View::new(&rolled(roll), SIZE.0, SIZE.1).expect("view");
+            group.bench_function(BenchmarkId::from_parameter(roll), |b| {
+                b.iter(|| render(&levels, &view, &default, &mut buffer, &mut NoProbe))
+            });
+        }
+        group.finish();
+    }
     criterion.final_summary();
 
     let mean_ns =
@@ -353,6 +375,27 @@ fn main() {
             "an all-sky frame renders {:.2}x as fast as an all-terrain one",
             terrain / sky
         );
+    }
+
+    println!("\n| roll (pitch 10) | steps/pixel | ns/pixel | time against roll 0 |");
+    println!("|---|---|---|---|");
+    let level = mean_ns("roll", "0");
+    for roll in ROLLS {
+        let case = Case {
+            group: "roll",
+            label: roll.to_string(),
+            camera: rolled(roll),
+            options: RenderOptions::default(),
+        };
+        let spp = steps_per_pixel(&case);
+        match (mean_ns("roll", &case.label), level) {
+            (Some(ns), Some(level)) => println!(
+                "| {roll} | {spp:.2} | {:.1} | {:.2}x |",
+                ns / pixels as f64,
+                ns / level
+            ),
+            _ => println!("| {roll} | {spp:.2} | (not measured in this run) | |"),
+        }
     }
 }
 

@@ -21,15 +21,22 @@ pub const MAX_IMAGE_HEIGHT: usize = 1024;
 
 /// The views the board renders, over a `side` map whose highest point is
 /// `top`: the `render` command's default view, a grazing view across the
-/// map, a steep one and one straight down.
+/// map, a steep one, one straight down, and a view at 20° pitch level and
+/// rolled 30° (the cost of roll, against its level twin).
 pub fn board_views(side: u32, top: f32) -> Vec<Camera> {
     let s = side as f32;
     let camera = terracast::Camera::looking;
+    let banking = camera([s * 0.5, s * 0.1, top + 0.05 * s], 90.0, 20.0);
     vec![
         camera(crate::scene::south_edge_eye(side, side, top), 90.0, 12.0),
         camera([s * 0.08, s * 0.1, top + 0.01 * s], 40.0, 2.0),
         camera([s * 0.3, s * 0.3, top + 0.15 * s], 60.0, 45.0),
         camera([s * 0.5, s * 0.5, top + 0.25 * s], 0.0, 90.0),
+        banking,
+        Camera {
+            roll_deg: 30.0,
+            ..banking
+        },
     ]
 }
 

@@ -42,10 +42,12 @@ pub struct Key {
     pub time: f64,
     /// Eye, voxels.
     pub eye: [f32; 3],
-    /// Heading and pitch, degrees.
+    /// Heading, pitch and bank, degrees.
     pub yaw: f32,
     /// See `yaw`.
     pub pitch: f32,
+    /// See `yaw`.
+    pub roll: f32,
 }
 
 impl Path {
@@ -61,8 +63,9 @@ impl Path {
         Ok(Self { keys })
     }
 
-    /// Reads a path file: one keyframe a line, `t x y z yaw pitch`
-    /// (seconds, voxels, degrees), `#` starts a comment.
+    /// Reads a path file: one keyframe a line, `t x y z yaw pitch [roll]`
+    /// (seconds, voxels, degrees; roll 0 when left out), `#` starts a
+    /// comment.
     pub fn parse(text: &str) -> Result<Self> {
         let mut keys = Vec::new();
         for (number, line) in text.lines().enumerate() {
@@ -75,10 +78,12 @@ impl Path {
                 .map(str::parse::<f64>)
                 .collect::<std::result::Result<_, _>>()
                 .ok()
-                .filter(|v: &Vec<f64>| v.len() == 6 && v.iter().all(|x| x.is_finite()))
+                .filter(|v: &Vec<f64>| {
+                    (6..=7).contains(&v.len()) && v.iter().all(|x| x.is_finite())
+                })
                 .ok_or_else(|| {
                     Error::new(format!(
-                        "path line {}: expected 't x y z yaw pitch', got '{line}'",
+                        "path line {}: expected 't x y z yaw pitch [roll]', got '{line}'",
                         number + 1
                     ))
                 })?;
@@ -87,6 +92,7 @@ impl Path {
                 eye: [values[1] as f32, values[2] as f32, values[3] as f32],
                 yaw: values[4] as f32,
                 pitch: values[5] as f32,
+                roll: values.get(6).copied().unwrap_or(0.0) as f32,
             });
         }
         Self::new(keys)
@@ -95,33 +101,44 @@ impl Path {
     /// The built-in scenic path over `scene`: in from its south edge over
     /// the middle, a long turn east and back west, dipping toward the
     /// ground and looking down on the way, about 100 voxels a second at a
-    /// 1024-voxel scale. It looks across the map all the way: terrain
-    /// fills the view out to 0.3 of the map's side.
+    /// 1024-voxel scale, banking into its turns (the right wing down while
+    /// the heading falls, the left while it rises). It looks across the
+    /// map all the way: terrain fills the view out to 0.3 of the map's
+    /// side.
     pub fn scenic(scene: &Scene) -> Self {
         let (w, d) = (scene.width as f32, scene.depth as f32);
         let s = w.min(d) / 1024.0;
         let top = scene.max_height();
         let at = |x: f32, y: f32| [w * x, d * y];
         let keys = [
-            (0.0, at(0.50, 0.06), top + 40.0 * s, 90.0, 10.0),
-            (2.0, at(0.52, 0.25), top + 10.0 * s, 80.0, 14.0),
-            (4.0, at(0.60, 0.42), top - 20.0 * s, 55.0, 22.0),
-            (6.0, at(0.70, 0.50), top + 5.0 * s, 40.0, 35.0),
-            (8.0, at(0.74, 0.64), top + 60.0 * s, 100.0, 55.0),
-            (10.0, at(0.66, 0.72), top + 30.0 * s, 160.0, 18.0),
-            (12.0, at(0.52, 0.68), top + 15.0 * s, 210.0, 8.0),
+            (0.0, at(0.50, 0.06), top + 40.0 * s, 90.0, 10.0, 0.0),
+            (2.0, at(0.52, 0.25), top + 10.0 * s, 80.0, 14.0, 5.0),
+            (4.0, at(0.60, 0.42), top - 20.0 * s, 55.0, 22.0, 12.0),
+            (6.0, at(0.70, 0.50), top + 5.0 * s, 40.0, 35.0, -10.0),
+            (8.0, at(0.74, 0.64), top + 60.0 * s, 100.0, 55.0, -25.0),
+            (10.0, at(0.66, 0.72), top + 30.0 * s, 160.0, 18.0, -20.0),
+            (12.0, at(0.52, 0.68), top + 15.0 * s, 210.0, 8.0, 0.0),
         ];
         Self {
             keys: keys
                 .into_iter()
-                .map(|(time, [x, y], z, yaw, pitch)| Key {
+                .map(|(time, [x, y], z, yaw, pitch, roll)| Key {
                     time,
                     eye: [x, y, z],
                     yaw,
                     pitch,
+                    roll,
                 })
                 .collect(),
         }
+    }
+
+    /// The same path with every keyframe's roll 0.
+    pub fn level(mut self) -> Self {
+        for key in &mut self.keys {
+            key.roll = 0.0;
+        }
+        self
     }
 
     /// Seconds from the first keyframe to the last.
@@ -145,13 +162,15 @@ impl Path {
             0.0
         };
         let lerp = |x: f32, y: f32| x + (y - x) * f;
-        // Turn the short way round.
-        let turn = ((b.yaw - a.yaw + 540.0) % 360.0) - 180.0;
+        // Turn and bank the short way round.
+        let short = |from: f32, to: f32| ((to - from + 540.0) % 360.0) - 180.0;
+        let roll = a.roll + short(a.roll, b.roll) * f;
         Camera {
             eye: core::array::from_fn(|i| lerp(a.eye[i], b.eye[i])),
-            yaw_deg: (a.yaw + turn * f).rem_euclid(360.0),
+            yaw_deg: (a.yaw + short(a.yaw, b.yaw) * f).rem_euclid(360.0),
             pitch_deg: lerp(a.pitch, b.pitch),
-            roll_deg: 0.0,
+            // Within −180° to 180°, as the kernel takes it.
+            roll_deg: roll - 360.0 * ((roll + 180.0) / 360.0).floor(),
             hfov_deg: hfov,
         }
     }
@@ -512,7 +531,16 @@ mod tests {
         assert_eq!(path.camera(-1.0, 60.0).eye, [0.0, 0.0, 100.0]);
         assert_eq!(path.camera(5.0, 60.0).eye, [20.0, 0.0, 100.0]);
         assert!((path.duration() - 2.0).abs() < 1e-12);
-        for bad in ["", "0 1 2 3 4", "0 1 2 3 4 x", "1 0 0 0 0 0\n0 0 0 0 0 0"] {
+        assert_eq!(mid.roll_deg, 0.0);
+        // A seventh column banks, also the short way round.
+        let banked = Path::parse("0 0 0 100 0 0 170\n2 0 0 100 0 0 -150").unwrap();
+        assert_eq!(banked.camera(0.0, 60.0).roll_deg, 170.0);
+        assert!((banked.camera(1.0, 60.0).roll_deg - (-170.0)).abs() < 1e-3);
+        let bad_lines = ["0 1 2 3 4 5 6 7", "0 1 2 3 4 5 inf"];
+        for bad in ["", "0 1 2 3 4", "0 1 2 3 4 x", "1 0 0 0 0 0\n0 0 0 0 0 0"]
+            .into_iter()
+            .chain(bad_lines)
+        {
             assert!(Path::parse(bad).is_err(), "{bad:?}");
         }
     }

@@ -138,7 +138,11 @@ fn bad_input_gives_one_line_and_a_nonzero_exit() {
             "--voxelspace-growth",
         ),
         (base(&["--pitch", "120"]), "pitch"),
-        (base(&["--roll", "10"]), "roll"),
+        (base(&["--roll", "190"]), "--roll"),
+        (
+            base(&["--method", "voxelspace", "--roll", "10"]),
+            "cannot roll",
+        ),
         (base(&["--hfov", "0"]), "--hfov"),
         (base(&["--height-scale", "-1"]), "height-scale"),
         (base(&["--height-scale", "1000"]), "kernel's range"),

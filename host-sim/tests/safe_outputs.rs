@@ -290,7 +290,7 @@ fn every_numeric_flag_refuses_bad_values_naming_the_flag() {
         (&render, "--yaw", REAL, &["361", "-361"]),
         (&render, "--pitch", REAL, &["-90", "91"]),
         (&render, "--hfov", REAL, &["0", "-1", "161"]),
-        (&render, "--roll", REAL, &["361"]),
+        (&render, "--roll", REAL, &["181", "-181"]),
         (&render, "--pixel-to-voxel", REAL, &["0", "-1", "256"]),
         (&render, "--voxelspace-growth", REAL, &["-1", "11"]),
         (&render, "--march-step", REAL, &["0", "-1", "65"]),

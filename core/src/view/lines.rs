@@ -63,8 +63,11 @@ pub(crate) struct Sector {
     /// the row from the bottom).
     pub along_rows: bool,
     /// `V`'s axis and cross coordinates, Q8; `None` when `V` is at infinity
-    /// and the lines are parallel (the columns).
+    /// and the lines are parallel (the columns, or slanted under roll).
     vanishing: Option<(i64, i64)>,
+    /// Parallel lines' cross coordinate change a unit of axis, Q32 (within
+    /// ±1; 0 for the columns and for lines through `V`).
+    lean: i64,
     /// Axis coordinate of the far edge, where line `K` crosses at `t = K`.
     s_ref: i32,
     /// The sector's axis positions, in the order rays are cast: `first`
@@ -87,39 +90,55 @@ pub(crate) struct Lines {
 
 impl Lines {
     /// The sectors of a `width × height` image whose camera looks `pitch`
-    /// radians down, with `tangent = tan(hfov / 2)`. Float set-up, once a
-    /// frame; everything per pixel is integer.
-    pub fn new(width: u32, height: u32, pitch: f64, tangent: f64) -> Self {
+    /// radians down, with `tangent = tan(hfov / 2)`, and rolls by `roll`
+    /// radians; `pixels` are the frame's pixel directions. Float set-up,
+    /// once a frame; everything per pixel is integer.
+    pub fn new(
+        width: u32,
+        height: u32,
+        pitch: f64,
+        tangent: f64,
+        roll: f64,
+        pixels: &PixelDirections,
+    ) -> Self {
         let (w, h) = (f64::from(width), f64::from(height));
-        // Pixel (c, j), j rows from the bottom, looks along
-        // f + r·tan·((2c+1)/w − 1) + u·tan·((2j+1−h)/w); its horizontal part
-        // vanishes at c = (w−1)/2 and cos p + sin p·tan·(2j+1−h)/w = 0.
-        let u_v = i64::from(width - 1) << (IMG_FRAC - 1);
-        let cot = libm::cos(pitch) / libm::sin(pitch);
-        let j_v = (h - 1.0 - cot * w / tangent) * 0.5;
-        let parallel = Sector {
-            along_rows: true,
-            vanishing: None,
-            s_ref: height as i32 - 1,
-            first: 0,
-            last: height as i32 - 1,
-            step: 1,
-            k_first: 0,
-            lines: width,
-            cross_len: width as i32,
+        let vanishing = if roll == 0.0 {
+            // Pixel (c, j), j rows from the bottom, looks along
+            // f + r·tan·((2c+1)/w − 1) + u·tan·((2j+1−h)/w); its horizontal
+            // part vanishes at c = (w−1)/2 and cos p + sin p·tan·(2j+1−h)/w = 0.
+            let cot = libm::cos(pitch) / libm::sin(pitch);
+            ((w - 1.0) * 0.5, (h - 1.0 - cot * w / tangent) * 0.5)
+        } else {
+            pixels.vertical()
         };
-        if !j_v.is_finite() || j_v.abs() > FAR_VANISHING_POINT {
+        let (c_v, j_v) = vanishing;
+        let far = (c_v - (w - 1.0) * 0.5)
+            .abs()
+            .max((j_v - (h - 1.0) * 0.5).abs());
+        if !c_v.is_finite() || !j_v.is_finite() || far > FAR_VANISHING_POINT {
+            let parallel = if roll == 0.0 {
+                // The columns, bottom to top.
+                Sector {
+                    along_rows: true,
+                    vanishing: None,
+                    lean: 0,
+                    s_ref: height as i32 - 1,
+                    first: 0,
+                    last: height as i32 - 1,
+                    step: 1,
+                    k_first: 0,
+                    lines: width,
+                    cross_len: width as i32,
+                }
+            } else {
+                parallel_sector(width as i32, height as i32, pixels)
+            };
             return Self {
                 sectors: [Some(parallel), None, None, None],
             };
         }
-        let mut v_v = (j_v * IMG_ONE as f64) as i64;
-        // Keep V off every pixel center, half pixel and diagonal through a
-        // pixel center: with `u_v` a multiple of one half, that makes every
-        // pixel strictly inside one sector.
-        if v_v.rem_euclid(IMG_ONE / 2) == 0 {
-            v_v += 1;
-        }
+        let (u_v, v_v) =
+            off_pixel_centers((c_v * IMG_ONE as f64) as i64, (j_v * IMG_ONE as f64) as i64);
         let nadir = pitch > 0.0;
         let (wi, hi) = (width as i32, height as i32);
         // (along rows, s_V, t_V, s_ref, the sector's axis range, away from V)
@@ -147,6 +166,7 @@ impl Lines {
             *slot = Some(Sector {
                 along_rows,
                 vanishing: Some((s_v, t_v)),
+                lean: 0,
                 s_ref,
                 first,
                 last,
@@ -174,6 +194,109 @@ impl Lines {
         }
         None
     }
+}
+
+/// A frame's pixel directions: pixel (0, 0)'s (the bottom-left one) and
+/// their change a column and a row (world axes, any common scale).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PixelDirections {
+    pub corner: [f64; 3],
+    pub per_column: [f64; 3],
+    pub per_row: [f64; 3],
+}
+
+impl PixelDirections {
+    /// The image position (column, row from the bottom) whose direction is
+    /// vertical: where both horizontal components vanish. Not finite when
+    /// the image of the vertical is at infinity.
+    fn vertical(&self) -> (f64, f64) {
+        let (b, c, r) = (self.corner, self.per_column, self.per_row);
+        let det = c[0] * r[1] - c[1] * r[0];
+        (
+            (b[1] * r[0] - b[0] * r[1]) / det,
+            (b[0] * c[1] - b[1] * c[0]) / det,
+        )
+    }
+}
+
+/// The image of vertical planes when `V` is at infinity (the camera level,
+/// rolled): parallel lines along the image direction in which a pixel's
+/// horizontal direction does not change, stepping along rows where they
+/// are steeper than 45° and along columns otherwise (Qu et al. §5, there
+/// by Bresenham; here by the same stepped ownership test as lines through
+/// `V`). Rays go by rising elevation.
+fn parallel_sector(width: i32, height: i32, pixels: &PixelDirections) -> Sector {
+    let (c, r) = (pixels.per_column, pixels.per_row);
+    // (dc, dj) with c_h·dc + r_h·dj = 0 on the better-conditioned
+    // horizontal axis (the other agrees: the determinant is about 0).
+    let i = if c[0].abs() + r[0].abs() >= c[1].abs() + r[1].abs() {
+        0
+    } else {
+        1
+    };
+    let (mut dc, mut dj) = (r[i], -c[i]);
+    if c[2] * dc + r[2] * dj < 0.0 {
+        (dc, dj) = (-dc, -dj);
+    }
+    let along_rows = dj.abs() >= dc.abs();
+    let (axis, cross, axis_len, cross_len) = if along_rows {
+        (dj, dc, height, width)
+    } else {
+        (dc, dj, width, height)
+    };
+    let lean = (cross / axis).clamp(-1.0, 1.0);
+    let step = if axis > 0.0 { 1 } else { -1 };
+    let s_ref = axis_len - 1;
+    // Line K crosses row s at K + lean·(s − s_ref): the lines that reach
+    // the image are those between its corners' K, with one to spare.
+    let spread = lean.abs() * f64::from(axis_len - 1);
+    let k_first = -(libm::ceil(spread) as i32) - 1;
+    let k_last = cross_len + libm::ceil(spread) as i32;
+    let (first, last) = if step > 0 {
+        (0, axis_len - 1)
+    } else {
+        (axis_len - 1, 0)
+    };
+    Sector {
+        along_rows,
+        vanishing: None,
+        lean: (lean * (1u64 << 32) as f64) as i64,
+        s_ref,
+        first,
+        last,
+        step,
+        k_first,
+        lines: (k_last - k_first + 1) as u32,
+        cross_len,
+    }
+}
+
+/// `V` (Q8 column and row from the bottom) moved by a few 1/256 of a pixel
+/// where needed, so that every pixel lies strictly inside one sector: off
+/// every pixel's row and column, and off every diagonal through a pixel
+/// center. Unrolled, `V` is on the image's middle column or half a pixel
+/// beside it (a multiple of one half): then it only has to leave the half
+/// rows, as it always has.
+fn off_pixel_centers(mut u_v: i64, mut v_v: i64) -> (i64, i64) {
+    if u_v.rem_euclid(IMG_ONE / 2) == 0 {
+        if v_v.rem_euclid(IMG_ONE / 2) == 0 {
+            v_v += 1;
+        }
+        return (u_v, v_v);
+    }
+    for _ in 0..8 {
+        let on_a_line = u_v.rem_euclid(IMG_ONE) == 0 || v_v.rem_euclid(IMG_ONE) == 0;
+        let on_a_diagonal =
+            (u_v - v_v).rem_euclid(IMG_ONE) == 0 || (u_v + v_v).rem_euclid(IMG_ONE) == 0;
+        if !on_a_line && !on_a_diagonal {
+            break;
+        }
+        if u_v.rem_euclid(IMG_ONE) == 0 {
+            u_v += 1;
+        }
+        v_v += 1;
+    }
+    (u_v, v_v)
 }
 
 fn floor_q8(v: i64) -> i32 {
@@ -292,7 +415,7 @@ impl View {
                 + self.per_row[i].to_bits() * v
         });
         let slope = match sector.vanishing {
-            None => 0,
+            None => sector.lean,
             Some((s_v, t_v)) => {
                 // |K − t_V| stays below 2^17 pixels and |s_ref − s_V| above
                 // 2^−8: no overflow, and the quotient is at most 1 in size
@@ -386,15 +509,11 @@ impl Line {
     /// the point [`OwnedPixels`] steps along, bit for bit.
     #[cfg(test)]
     fn cross_at(&self, s_q16: i64) -> i64 {
-        match self.sector.vanishing {
-            None => i64::from(self.k) << COORD_FRAC_BITS,
-            Some((s_v, t_v)) => {
-                // Q32 slope times Q8 distance, to Q16.
-                let ds = (s_q16 >> (COORD_FRAC_BITS - IMG_FRAC)) - s_v;
-                (t_v << (COORD_FRAC_BITS - IMG_FRAC))
-                    + ((self.slope * ds) >> (32 + IMG_FRAC - COORD_FRAC_BITS))
-            }
-        }
+        let (s_v, t_v) = self.anchor();
+        // Q32 slope times Q8 distance, to Q16.
+        let ds = (s_q16 >> (COORD_FRAC_BITS - IMG_FRAC)) - s_v;
+        (t_v << (COORD_FRAC_BITS - IMG_FRAC))
+            + ((self.slope * ds) >> (32 + IMG_FRAC - COORD_FRAC_BITS))
     }
 
     /// Whether the pixel at cross coordinate `t`, axis coordinate `s`, is
@@ -408,7 +527,10 @@ impl Line {
             return false;
         }
         let Some((s_v, t_v)) = self.sector.vanishing else {
-            return t == self.k;
+            // Parallel lines: t within half a pixel of K + lean·(s − s_ref),
+            // the lower end in (all Q32).
+            let gap = (i64::from(t - self.k) << 32) - self.slope * i64::from(s - self.sector.s_ref);
+            return (-(1 << 31)..1 << 31).contains(&gap);
         };
         let a = ((i64::from(s) << IMG_FRAC) - s_v).abs();
         let b = self.far;
@@ -425,6 +547,16 @@ impl Line {
         inside && self.nearest_from * a <= dt * b && dt * b < nearest_to * a
     }
 
+    /// A point the line goes through (axis and cross coordinates, Q8): `V`,
+    /// or for parallel lines the far edge's point, `(s_ref, K)`.
+    fn anchor(&self) -> (i64, i64) {
+        let sector = &self.sector;
+        sector.vanishing.unwrap_or((
+            i64::from(sector.s_ref) << IMG_FRAC,
+            i64::from(self.k) << IMG_FRAC,
+        ))
+    }
+
     /// The rows (axis coordinates) where the line's point is within half
     /// a pixel of the image, with a row to spare at each end, in the
     /// order rays are cast: `first` up to `end` (exclusive; `first == end`
@@ -433,9 +565,7 @@ impl Line {
     fn rows_in_image(&self) -> (i32, i32) {
         let sector = &self.sector;
         let (first, last, step) = (sector.first, sector.last, sector.step);
-        let Some((s_v, t_v)) = sector.vanishing else {
-            return (first, last + step);
-        };
+        let (s_v, t_v) = self.anchor();
         let (low, high) = (
             -IMG_ONE / 2,
             (i64::from(sector.cross_len) << IMG_FRAC) - IMG_ONE / 2,
@@ -448,6 +578,7 @@ impl Line {
             };
         }
         // Where the point crosses the two edges: s = s_V + (t − t_V)/slope
+        // (`V` standing for the anchor)
         // (Q8; the Q32 slope is at least 2^−32, the quotient clamps).
         let s_at = |t: i64| s_v + div_trunc((t - t_v) << 32, self.slope);
         let (a, b) = (s_at(low), s_at(high));
@@ -535,24 +666,39 @@ impl OwnedPixels {
         let sector = line.sector;
         let (first, end) = line.rows_in_image();
         let first = i64::from(first);
-        // Parallel lines (pitch 0) own every pixel of their column: a
-        // window from K − ½ to K + ½, `a = b = 1`, none outside the sector.
-        let (s_v, t_v, b, a, a_step, nearest_from) = match sector.vanishing {
-            Some((s_v, t_v)) => {
-                let ds = (first << IMG_FRAC) - s_v;
-                let a_step = ds.signum() * i64::from(sector.step) * IMG_ONE;
-                (s_v, t_v, line.far, ds.abs(), a_step, line.nearest_from)
-            }
-            None => (0, i64::from(line.k) << IMG_FRAC, 1, 1, 0, -IMG_ONE / 2),
-        };
-        // An owned pixel is within (|K − t_V| + ½)·a/b of t_V: inside the
-        // cone `|t − t_V| < a` whenever |K − t_V| + ½ < b.
-        let k_t = nearest_from + IMG_ONE / 2;
-        let cone = (sector.vanishing.is_some() && k_t.abs() + IMG_ONE / 2 >= b).then_some(t_v);
+        let (s_v, t_v) = line.anchor();
         // The candidate starts at the line's point on the first row.
         let point = line.slope * ((first << IMG_FRAC) - s_v);
         let t = (((t_v << 32) + point) >> 40).clamp(-(1 << 24), 1 << 24) as i32;
-        let from_step = nearest_from * a_step;
+        let (gap, from_step, width, width_step, b_step, cone) = match sector.vanishing {
+            Some(_) => {
+                let ds = (first << IMG_FRAC) - s_v;
+                let (a, a_step) = (ds.abs(), ds.signum() * i64::from(sector.step) * IMG_ONE);
+                let (b, nearest_from) = (line.far, line.nearest_from);
+                // An owned pixel is within (|K − t_V| + ½)·a/b of t_V: inside
+                // the cone `|t − t_V| < a` whenever |K − t_V| + ½ < b.
+                let k_t = nearest_from + IMG_ONE / 2;
+                let cone = (k_t.abs() + IMG_ONE / 2 >= b).then_some(t_v);
+                (
+                    ((i64::from(t) << IMG_FRAC) - t_v) * b - nearest_from * a,
+                    nearest_from * a_step,
+                    IMG_ONE * a,
+                    IMG_ONE * a_step,
+                    IMG_ONE * b,
+                    cone,
+                )
+            }
+            None => {
+                // Parallel lines own a pixel a row: line K's window on row s
+                // starts at K − ½ + lean·(s − s_ref) and is a pixel wide
+                // (Q32), so the lines share every row out exactly.
+                let from = (i64::from(line.k) << 32) - (1 << 31)
+                    + line.slope * (first - i64::from(sector.s_ref));
+                let one = 1 << 32;
+                let lean_step = line.slope * i64::from(sector.step);
+                ((i64::from(t) << 32) - from, lean_step, one, 0, one, None)
+            }
+        };
         let mut pixels = Self {
             along_rows: sector.along_rows,
             s: first as i32,
@@ -562,12 +708,12 @@ impl OwnedPixels {
             top_row: height as i32 - 1,
             cross_len: sector.cross_len,
             from_step,
-            width: IMG_ONE * a,
-            width_step: IMG_ONE * a_step,
+            width,
+            width_step,
             rising: from_step >= 0,
             t,
-            gap: ((i64::from(t) << IMG_FRAC) - t_v) * b - nearest_from * a,
-            b_step: IMG_ONE * b,
+            gap,
+            b_step,
             cone,
             point,
             point_step: line.slope * (i64::from(sector.step) << IMG_FRAC),
@@ -671,14 +817,24 @@ mod tests {
     use std::vec;
 
     fn view(pitch: f32, yaw: f32, size: (u32, u32), hfov: f32) -> View {
+        rolled(pitch, 0.0, yaw, size, hfov)
+    }
+
+    fn rolled(pitch: f32, roll: f32, yaw: f32, size: (u32, u32), hfov: f32) -> View {
         let camera = Camera {
             eye: [10.0, 20.0, 30.0],
             yaw_deg: yaw,
             pitch_deg: pitch,
+            roll_deg: roll,
             hfov_deg: hfov,
-            ..Camera::default()
         };
         View::new(&camera, size.0, size.1).unwrap()
+    }
+
+    /// Every roll the ownership test is held to: every 7.5° both ways,
+    /// with ±90° and 180°.
+    fn rolls() -> impl Iterator<Item = f32> {
+        (-24..=24).map(|i| i as f32 * 7.5)
     }
 
     /// How many times each pixel is owned, over every line of the view.
@@ -719,18 +875,85 @@ mod tests {
     }
 
     #[test]
+    fn every_pixel_belongs_to_exactly_one_line_at_every_roll() {
+        for roll in rolls() {
+            for pitch in [-89.0, -45.0, 0.0, 2.0, 30.0, 60.0, 90.0] {
+                for size in [(32, 21), (40, 30)] {
+                    for hfov in [30.0, 70.0, 120.0] {
+                        let view = rolled(pitch, roll, 25.0, size, hfov);
+                        let owned = ownership(&view);
+                        let wrong = owned.iter().filter(|&&n| n != 1).count();
+                        assert_eq!(
+                            wrong, 0,
+                            "roll {roll} pitch {pitch} size {size:?} hfov {hfov}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_rolled_lines_rays_share_one_vertical_plane_and_rise_along_it() {
+        for roll in rolls() {
+            for pitch in [-45.0, 0.0, 2.0, 30.0, 90.0] {
+                let view = rolled(pitch, roll, 25.0, (48, 36), 70.0);
+                for index in 0..view.lines() {
+                    let line = view.line(index).unwrap();
+                    let rays: vec::Vec<[f64; 3]> = line
+                        .pixels(36)
+                        .map(|p| line.direction(p.along).map(|v| v as f64 / 4294967296.0))
+                        .collect();
+                    let (Some(first), Some(last)) = (rays.first(), rays.last()) else {
+                        continue;
+                    };
+                    // The last ray leaves the first one's vertical plane by
+                    // far less than a pixel: its sideways part against its
+                    // length, in pixels (a pixel is |per_column| radians).
+                    let length = |d: &[f64; 3]| (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    let across = (first[0] * last[1] - first[1] * last[0]).abs()
+                        / first[0].hypot(first[1]).max(1e-12);
+                    let pixel = length(&view.per_column.map(|v| v.to_num::<f64>()));
+                    let off = across / length(last) / pixel;
+                    // (0.076 at most, straight down, rolled or not: `V` is
+                    // placed to 1/256 of a pixel.)
+                    assert!(
+                        off < 0.1,
+                        "roll {roll} pitch {pitch} line {index}: {off} pixel"
+                    );
+                    // Elevation rises (or holds) ray by ray.
+                    let elevation = |d: &[f64; 3]| d[2].atan2(d[0].hypot(d[1]));
+                    for pair in rays.windows(2) {
+                        assert!(
+                            elevation(&pair[1]) >= elevation(&pair[0]) - 1e-9,
+                            "roll {roll} pitch {pitch} line {index}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn the_stepped_pixels_are_the_exact_tests_pixels() {
         // Every row of every line: the pixel the iterator gives (if any)
         // is the one pixel of the row `Line::owns` accepts.
-        for (pitch, size) in [
-            (0.0, (16, 8)),
-            (30.0, (64, 48)),
-            (60.0, (63, 47)),
-            (89.9, (64, 48)),
-            (90.0, (160, 120)),
-            (-45.0, (40, 90)),
+        for (pitch, roll, size) in [
+            (0.0, 0.0, (16, 8)),
+            (30.0, 0.0, (64, 48)),
+            (60.0, 0.0, (63, 47)),
+            (89.9, 0.0, (64, 48)),
+            (90.0, 0.0, (160, 120)),
+            (-45.0, 0.0, (40, 90)),
+            (0.0, 30.0, (40, 30)),
+            (0.0, 60.0, (41, 31)),
+            (0.0, -135.0, (40, 30)),
+            (20.0, 30.0, (64, 48)),
+            (45.0, -100.0, (63, 47)),
+            (90.0, 45.0, (80, 60)),
+            (-30.0, 170.0, (40, 90)),
         ] {
-            let view = view(pitch, 25.0, size, 60.0);
+            let view = rolled(pitch, roll, 25.0, size, 60.0);
             for index in 0..view.lines() {
                 let line = view.line(index).unwrap();
                 let sector = line.sector;
@@ -740,7 +963,10 @@ mod tests {
                     let owned: vec::Vec<i32> = (-2..sector.cross_len + 2)
                         .filter(|&t| line.owns(t, s))
                         .collect();
-                    assert!(owned.len() <= 1, "pitch {pitch} line {index} row {s}");
+                    assert!(
+                        owned.len() <= 1,
+                        "pitch {pitch} roll {roll} line {index} row {s}"
+                    );
                     exact.extend(owned.into_iter().map(|t| (t, s)));
                     s += sector.step;
                 }
@@ -752,7 +978,7 @@ mod tests {
                         (t, p.s)
                     })
                     .collect();
-                assert_eq!(stepped, exact, "pitch {pitch} line {index}");
+                assert_eq!(stepped, exact, "pitch {pitch} roll {roll} line {index}");
             }
         }
     }

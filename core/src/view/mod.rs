@@ -10,7 +10,7 @@ pub(crate) mod ray;
 
 use crate::config::{
     HFOV_RANGE_DEG, MAX_EYE_COORD, MAX_EYE_HEIGHT, MAX_IMAGE_SIDE, MAX_VERTICAL_TANGENT,
-    PITCH_RANGE_DEG,
+    PITCH_RANGE_DEG, ROLL_RANGE_DEG,
 };
 use core::fmt;
 use fixed::types::{I32F32, I48F16};
@@ -25,7 +25,7 @@ pub struct Camera {
     pub yaw_deg: f32,
     /// Angle below the horizon (positive looks down), −89° to +90°.
     pub pitch_deg: f32,
-    /// Bank, positive = right wing down. Only 0 is supported so far.
+    /// Bank, positive = right wing down, −180° to +180°.
     pub roll_deg: f32,
     /// Full horizontal field of view.
     pub hfov_deg: f32,
@@ -43,7 +43,14 @@ impl Camera {
         let (sp, cp) = (libm::sin(pitch), libm::cos(pitch));
         let forward = DVec3::new(cp * cy, cp * sy, -sp);
         let right = DVec3::new(-sy, cy, 0.0);
-        [forward, right, forward.cross(right)]
+        let up = forward.cross(right);
+        if self.roll_deg == 0.0 {
+            return [forward, right, up];
+        }
+        // The view contract's bank: r = r₀ cos ρ − u₀ sin ρ, u = u₀ cos ρ + r₀ sin ρ.
+        let roll = f64::from(self.roll_deg).to_radians();
+        let (sr, cr) = (libm::sin(roll), libm::cos(roll));
+        [forward, right * cr - up * sr, up * cr + right * sr]
     }
 
     /// A camera at `eye` heading `yaw_deg` and looking `pitch_deg` below
@@ -81,8 +88,8 @@ pub enum ViewError {
     EyeOutOfRange,
     /// Pitch outside −89° to +90°.
     PitchOutOfRange,
-    /// Roll is not zero; the caster does not bank yet.
-    RollUnsupported,
+    /// Roll outside −180° to +180°.
+    RollOutOfRange,
     /// Field of view outside 1° to 160°.
     FovOutOfRange,
     /// Image width or height is zero or above the largest side.
@@ -98,7 +105,7 @@ impl fmt::Display for ViewError {
             Self::NotFinite => "camera value is NaN or infinite",
             Self::EyeOutOfRange => "eye is outside |x|,|y| <= 32000, |z| <= 16000 voxels",
             Self::PitchOutOfRange => "pitch must be between -89 and 90 degrees",
-            Self::RollUnsupported => "roll is not supported by the kernel yet (use roll 0)",
+            Self::RollOutOfRange => "roll must be between -180 and 180 degrees",
             Self::FovOutOfRange => "horizontal field of view must be between 1 and 160 degrees",
             Self::ImageSize => "image width and height must be between 1 and 8192",
             Self::AspectOutOfRange => "image is too tall for its width at this field of view",
@@ -152,8 +159,8 @@ impl View {
         if !(PITCH_RANGE_DEG.0..=PITCH_RANGE_DEG.1).contains(&camera.pitch_deg) {
             return Err(ViewError::PitchOutOfRange);
         }
-        if camera.roll_deg != 0.0 {
-            return Err(ViewError::RollUnsupported);
+        if !(ROLL_RANGE_DEG.0..=ROLL_RANGE_DEG.1).contains(&camera.roll_deg) {
+            return Err(ViewError::RollOutOfRange);
         }
         if !(HFOV_RANGE_DEG.0..=HFOV_RANGE_DEG.1).contains(&camera.hfov_deg) {
             return Err(ViewError::FovOutOfRange);
@@ -168,20 +175,28 @@ impl View {
         }
 
         let [forward, right, up] = camera.axes();
-        let pitch = f64::from(camera.pitch_deg).to_radians();
+        let (pitch, roll) = (
+            f64::from(camera.pitch_deg).to_radians(),
+            f64::from(camera.roll_deg).to_radians(),
+        );
 
         // Pixel (c, row j from the bottom) has a = (2c+1)/W − 1 and
         // b = (2j+1)/H − 1, so both advance by 2/W · t per pixel.
         let step = 2.0 * tangent / w;
         let base =
             forward + right * (tangent * (1.0 / w - 1.0)) + up * (tangent * (1.0 / w - h / w));
+        let pixels = lines::PixelDirections {
+            corner: base.to_array(),
+            per_column: (right * step).to_array(),
+            per_row: (up * step).to_array(),
+        };
         Ok(Self {
             eye: camera.eye.map(|v| I48F16::from_num(v)),
             base: to_fixed(base),
             per_column: to_fixed(right * step),
             per_row: to_fixed(up * step),
             focal: (w / (2.0 * tangent) * 65536.0) as i64,
-            lines: lines::Lines::new(width, height, pitch, tangent),
+            lines: lines::Lines::new(width, height, pitch, tangent, roll, &pixels),
             width,
             height,
         })
@@ -254,10 +269,10 @@ mod tests {
             ),
             (
                 Camera {
-                    roll_deg: 5.0,
+                    roll_deg: 180.5,
                     ..ok
                 },
-                ViewError::RollUnsupported,
+                ViewError::RollOutOfRange,
             ),
             (
                 Camera {

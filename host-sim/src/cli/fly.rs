@@ -15,10 +15,14 @@ use std::path::PathBuf;
 pub(super) struct FlyArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Camera path: one keyframe a line, `t x y z yaw pitch` (seconds,
-    /// voxels, degrees) [default: a built-in scenic path over the scene].
+    /// Camera path: one keyframe a line, `t x y z yaw pitch [roll]`
+    /// (seconds, voxels, degrees; roll 0 when left out) [default: a
+    /// built-in scenic path over the scene, banking into its turns].
     #[arg(long, value_name = "PATH.txt")]
     path: Option<PathBuf>,
+    /// Fly the path level: every keyframe's roll taken as 0.
+    #[arg(long)]
+    level: bool,
     /// Display frames [default: the path's length at the display rate].
     #[arg(long, value_name = "N", value_parser = number(1u32, 100_000), allow_hyphen_values = true)]
     frames: Option<u32>,
@@ -105,6 +109,7 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
         Some(file) => super::load_path(file)?,
         None => Path::scenic(&scene),
     };
+    let path = if args.level { path.level() } else { path };
     let frames = match args.frames {
         Some(n) => n,
         None => ((path.duration() * args.display_hz).floor() as u32 + 1).min(100_000),

@@ -22,7 +22,7 @@ use terracast::{
     Camera, Coherence, HeightFilter, RenderOptions, Resolution, Rgb, Shading, VerticalSamples,
     View, ViewError, U8F8,
 };
-use values::{angle, hfov, number, pitch, positive, seed, size, triple};
+use values::{angle, hfov, number, pitch, positive, roll, seed, size, triple};
 
 /// Real-time terrain flythrough: the terracast kernel on the host.
 #[derive(Debug, Parser)]
@@ -85,8 +85,8 @@ struct BoardSceneArgs {
     /// Image size of the board's frames.
     #[arg(long, default_value = "320x240", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
-    /// Only the board's view N (0 to 3), to profile one view alone.
-    #[arg(long, value_name = "N", value_parser = number(0usize, 3), allow_hyphen_values = true)]
+    /// Only the board's view N (0 to 5), to profile one view alone.
+    #[arg(long, value_name = "N", value_parser = number(0usize, 5), allow_hyphen_values = true)]
     view: Option<usize>,
     /// Output scene file.
     #[arg(long, value_name = "SCENE.tcb")]
@@ -257,6 +257,9 @@ struct CameraArgs {
     /// `sim --table`: 30].
     #[arg(long, value_parser = hfov, allow_hyphen_values = true, value_name = "DEG")]
     hfov: Option<f32>,
+    /// Bank in degrees, positive = right wing down, -180 to 180 [default: 0].
+    #[arg(long, value_parser = roll, allow_hyphen_values = true, value_name = "DEG")]
+    roll: Option<f32>,
 }
 
 impl CameraArgs {
@@ -266,13 +269,14 @@ impl CameraArgs {
     }
 
     /// The camera these flags describe: `eye` where none is given, and the
-    /// command's defaults (heading, pitch, field of view) for the rest.
-    fn camera(&self, eye: [f32; 3], [yaw, pitch, hfov]: [f32; 3], roll_deg: f32) -> Camera {
+    /// command's defaults (heading, pitch, field of view; level) for the
+    /// rest.
+    fn camera(&self, eye: [f32; 3], [yaw, pitch, hfov]: [f32; 3]) -> Camera {
         Camera {
             eye: self.eye.unwrap_or(eye),
             yaw_deg: self.yaw.unwrap_or(yaw),
             pitch_deg: self.pitch.unwrap_or(pitch),
-            roll_deg,
+            roll_deg: self.roll.unwrap_or(0.0),
             hfov_deg: self.hfov_or(hfov),
         }
     }
@@ -281,8 +285,8 @@ impl CameraArgs {
 /// The heading and pitch a camera takes by default (`render`, `sim`).
 const DEFAULT_YAW_PITCH: [f32; 2] = [90.0, 12.0];
 
-/// `--path PATH.txt`: one keyframe a line, `t x y z yaw pitch` (seconds,
-/// voxels, degrees); `fly`, `sim` and `page` fly it.
+/// `--path PATH.txt`: one keyframe a line, `t x y z yaw pitch [roll]`
+/// (seconds, voxels, degrees); `fly`, `sim` and `page` fly it.
 fn load_path(file: &Path) -> Result<crate::fly::Path> {
     let text = std::fs::read_to_string(file)
         .map_err(|e| Error::new(format!("cannot read --path {}: {e}", file.display())))?;
@@ -349,9 +353,6 @@ struct RenderArgs {
     terrain: Option<String>,
     #[command(flatten)]
     camera: CameraArgs,
-    /// Bank in degrees, positive = right wing down.
-    #[arg(long, default_value_t = 0.0, value_parser = angle, allow_hyphen_values = true, value_name = "DEG")]
-    roll: f32,
     /// Image size.
     #[arg(long, default_value = "640x360", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
@@ -467,25 +468,19 @@ fn render_command(args: RenderArgs) -> Result<()> {
     }
     let scene = load_scene(&args.scene)?;
     let [yaw, pitch] = DEFAULT_YAW_PITCH;
-    let camera = args.camera.camera(
-        scene.default_eye(),
-        [yaw, pitch, DEFAULT_HFOV_DEG],
-        args.roll,
-    );
+    let camera = args
+        .camera
+        .camera(scene.default_eye(), [yaw, pitch, DEFAULT_HFOV_DEG]);
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
-    // The reference can roll; every other method shares the kernel's
-    // camera limits.
-    let checked = Camera {
-        roll_deg: if args.method == Method::Reference {
-            0.0
-        } else {
-            camera.roll_deg
-        },
-        ..camera
-    };
-    let check_view = || View::new(&checked, width, height).map_err(view_error);
+    // Every method shares the kernel's camera limits.
+    let check_view = || View::new(&camera, width, height).map_err(view_error);
     if args.method != Method::Kernel {
         check_view()?;
+    }
+    if args.method == Method::Voxelspace && camera.roll_deg != 0.0 {
+        return Err(Error::new(
+            "--method voxelspace cannot roll (its columns stay vertical): use --roll 0".to_string(),
+        ));
     }
     let (frame, stats) = match args.method {
         Method::Kernel => {
@@ -673,7 +668,7 @@ fn view_error(e: ViewError) -> Error {
         ViewError::NotFinite => "--eye, --yaw, --pitch, --hfov",
         ViewError::EyeOutOfRange => "--eye",
         ViewError::PitchOutOfRange => "--pitch",
-        ViewError::RollUnsupported => "--roll",
+        ViewError::RollOutOfRange => "--roll",
         ViewError::FovOutOfRange => "--hfov",
         ViewError::ImageSize | ViewError::AspectOutOfRange => "--size",
     };

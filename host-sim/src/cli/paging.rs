@@ -99,7 +99,6 @@ pub(super) fn render_tiled_command(
     let camera = args.camera.camera(
         default_eye(&world),
         [yaw, pitch, terracast::config::DEFAULT_HFOV_DEG],
-        args.roll,
     );
     let (width, height) = args.size;
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
@@ -219,7 +218,6 @@ pub(super) fn page_command(args: PageArgs) -> Result<()> {
     let start = args.camera.camera(
         default_eye(&world),
         [0.0, 20.0, terracast::config::DEFAULT_HFOV_DEG],
-        0.0,
     );
     let path = args.path.as_deref().map(super::load_path).transpose()?;
     View::new(

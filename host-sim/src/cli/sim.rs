@@ -125,9 +125,7 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
     let scene = load_scene_or(&args.scene, side)?;
     let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
     let [yaw, pitch] = super::DEFAULT_YAW_PITCH;
-    let start = args
-        .camera
-        .camera(scene.default_eye(), [yaw, pitch, hfov], 0.0);
+    let start = args.camera.camera(scene.default_eye(), [yaw, pitch, hfov]);
     let options = args.kernel.fixed_rays_options()?;
     let cameras = match &args.path {
         Some(file) => {

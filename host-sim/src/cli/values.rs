@@ -9,7 +9,7 @@
 
 use std::fmt::Display;
 use std::str::FromStr;
-use terracast::config::{HFOV_RANGE_DEG, MAX_IMAGE_SIDE, PITCH_RANGE_DEG};
+use terracast::config::{HFOV_RANGE_DEG, MAX_IMAGE_SIDE, PITCH_RANGE_DEG, ROLL_RANGE_DEG};
 use terracast::Rgb;
 
 /// A parser for a number from `low` to `high` inclusive: NaN, infinities,
@@ -67,9 +67,14 @@ pub(crate) fn pitch(text: &str) -> Result<f32, String> {
     number(PITCH_RANGE_DEG.0, PITCH_RANGE_DEG.1)(text)
 }
 
-/// `--yaw` and `--roll`: an angle in degrees, one turn either way.
+/// `--yaw`: an angle in degrees, one turn either way.
 pub(crate) fn angle(text: &str) -> Result<f32, String> {
     number(-360.0, 360.0)(text)
+}
+
+/// `--roll`: a bank in degrees, half a turn either way.
+pub(crate) fn roll(text: &str) -> Result<f32, String> {
+    number(ROLL_RANGE_DEG.0, ROLL_RANGE_DEG.1)(text)
 }
 
 /// `--seed`: any 64-bit value.
