@@ -33,11 +33,11 @@ fn scene_and_board_output(name: &str) -> (PathBuf, PathBuf) {
         s(&scene),
     ]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("96x96 map, 4 views at 40x30"), "{out}");
+    assert!(out.contains("96x96 map, 6 views at 40x30"), "{out}");
     let board = dir.join("board");
     std::fs::create_dir_all(&board).unwrap();
     let frames = SceneFile::read(&scene).unwrap().render().unwrap();
-    assert_eq!(frames.len(), 4);
+    assert_eq!(frames.len(), 6);
     let mut results = String::from("calibration instructions 4000 ticks 100\npyramid_ticks 7\n");
     for (k, frame) in frames.iter().enumerate() {
         std::fs::write(board.join(format!("frame-{k}.rgb")), &frame.rgb).unwrap();

@@ -48,7 +48,7 @@ use crate::divide::div_ceil;
 use crate::probe::Probe;
 use crate::surface::{Extent, Grid, Surface};
 use crate::view::lines::Line;
-use crate::view::ray::{LodPlan, Plane};
+use crate::view::ray::{saturate, LodPlan, Plane};
 use crate::{Sample, Sink, View};
 
 /// Heights are U12.4; the walk compares them in Q16.
@@ -482,10 +482,13 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         let span = at.k - at.before_k;
         // The crossing, `t`/256 of the way from the sample before to the
         // hit, and the clearances either side.
-        let below = (z - i64::from(at.height)) as i32;
+        // Clearances and the elevation saturate: a ray that reaches the
+        // map far below the terrain (an eye far off the map) hits at its
+        // first sample thousands of voxels down.
+        let below = saturate(z - i64::from(at.height));
         let (t, above) = match at.before {
             Some(before) if span > 0 => {
-                let above = (z - dz * i64::from(span) - i64::from(before)) as i32;
+                let above = saturate(z - dz * i64::from(span) - i64::from(before));
                 (crossing_fraction(above, below), Some(above))
             }
             _ => (256, None),
@@ -497,7 +500,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         let sample = |color| Sample {
             color,
             distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
-            elevation: (z - ((i64::from(back) * dz) >> 8)) as i32,
+            elevation: saturate(z - ((i64::from(back) * dz) >> 8)),
         };
         let color_reach = self.plan.color_reach(run);
         if distance >= color_reach || at.level > 0 {
