@@ -408,6 +408,41 @@ mod tests {
     }
 
     #[test]
+    fn a_rolled_camera_is_a_rotation_the_margins_cover() {
+        // Five degrees of bank between two frames (a bank rate of 150° a
+        // second at 30 Hz, far past any flight's): every display pixel
+        // finds its source inside the rendered frame with 1.2× margins,
+        // and the ground points map back to where they were rendered.
+        let rendered_cam = Camera {
+            roll_deg: 10.0,
+            ..Camera::looking([0.0, 0.0, 60.0], 0.0, 30.0)
+        };
+        let (rendered, size) = with_margin(&rendered_cam, (200, 150), 1.2);
+        let display = Camera {
+            roll_deg: 15.0,
+            ..rendered_cam
+        };
+        let points = ground_points(&rendered, size);
+        let warp = Warp::fit(&rendered, size, &display, (200, 150), &points).unwrap();
+        let target = Basis::new(&display, (200, 150));
+        for p in points {
+            let world = DVec3::from(p.point.unwrap());
+            let (x, y) = target.project(world - target.eye).unwrap();
+            let (sx, sy) = warp.source_of(x, y);
+            assert!(
+                (sx - p.at[0]).abs() < 0.5 && (sy - p.at[1]).abs() < 0.5,
+                "{p:?}: {sx} {sy}"
+            );
+        }
+        for (x, y) in [(0.0, 0.0), (199.0, 0.0), (0.0, 149.0), (199.0, 149.0)] {
+            let (sx, sy) = warp.source_of(x, y);
+            let inside = (0.0..=f64::from(size.0 - 1)).contains(&sx)
+                && (0.0..=f64::from(size.1 - 1)).contains(&sy);
+            assert!(inside, "corner ({x}, {y}) samples ({sx}, {sy}) of {size:?}");
+        }
+    }
+
+    #[test]
     fn apply_samples_bilinearly_and_clamps_to_the_edge() {
         // A horizontal ramp 0, 10, 20, ... in red.
         let rendered: std::vec::Vec<Rgb> = (0..8 * 4).map(|i| [(i % 8 * 10) as u8, 0, 0]).collect();
