@@ -1,7 +1,9 @@
 //! Out-of-core terrain: packed files render as their PNGs do, bit for bit;
 //! a flight over 64 GiB of procedural terrain pages through a 28 MiB cache
 //! with no frame drawn short of a tile after the first; damaged files,
-//! failing and slow sources never stop a frame.
+//! failing and slow sources never stop a frame, and over a thousand frames
+//! from a source that fails, stalls and hands back damaged tiles at random
+//! no damaged tile is ever drawn.
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -341,4 +343,119 @@ fn failing_and_slow_sources_never_stop_a_frame_and_change_nothing_but_time() {
     assert!(flaky_images
         .iter()
         .all(|i| i.iter().any(|c| *c != terracast::config::DEFAULT_SKY)));
+}
+
+/// A source that misbehaves at random (seeded): fails to read, hands back
+/// a damaged record (filled with a poison color and refused, as a file's
+/// checksum refuses it), or stalls.
+struct Chaotic {
+    inner: ProceduralSource,
+    state: u64,
+    stalls: u32,
+}
+
+/// A color the procedural terrain never has: a damaged tile's.
+const POISON: terracast::Rgb = [255, 0, 255];
+
+impl Chaotic {
+    fn roll(&mut self) -> u64 {
+        // xorshift64*: deterministic, no dependency.
+        self.state ^= self.state >> 12;
+        self.state ^= self.state << 25;
+        self.state ^= self.state >> 27;
+        self.state.wrapping_mul(0x2545_F491_4F6C_DD1D) % 100
+    }
+}
+
+impl TileSource<TILE> for Chaotic {
+    fn world(&self) -> World {
+        self.inner.world()
+    }
+    fn load(&mut self, key: TileKey, tile: &mut Tile<TILE>) -> Result<usize, TileError> {
+        match self.roll() {
+            0..=7 => Err(TileError::Io),
+            8..=15 => {
+                self.inner.load(key, tile)?;
+                tile.colors = [[POISON; TILE]; TILE];
+                Err(TileError::Checksum)
+            }
+            16..=20 => {
+                self.stalls += 1;
+                std::thread::sleep(Duration::from_micros(200));
+                self.inner.load(key, tile)
+            }
+            _ => self.inner.load(key, tile),
+        }
+    }
+}
+
+#[test]
+fn a_thousand_frames_from_a_misbehaving_source_are_all_drawn_none_with_a_bad_tile() {
+    let options = PageOptions {
+        size: (96, 72),
+        ..flight(1000, true)
+    };
+    let run = |chaotic: bool| {
+        let mut source = Chaotic {
+            inner: ProceduralSource::new(131_072, 1).unwrap(),
+            state: 0x9E37_79B9_7F4A_7C15,
+            stalls: 0,
+        };
+        let mut drawn = 0u32;
+        let mut poisoned = 0usize;
+        let report = if chaotic {
+            page_flight(&mut source, &options, &mut |image, _| {
+                drawn += 1;
+                poisoned += image.colors.iter().filter(|c| **c == POISON).count();
+                Ok(())
+            })
+        } else {
+            page_flight(&mut source.inner, &options, &mut |image, _| {
+                drawn += 1;
+                poisoned += image.colors.iter().filter(|c| **c == POISON).count();
+                Ok(())
+            })
+        }
+        .unwrap();
+        (report, drawn, poisoned, source.stalls)
+    };
+    let (clean, clean_drawn, clean_poison, _) = run(false);
+    let (chaos, drawn, poisoned, stalls) = run(true);
+    let failed: u64 = chaos.rejected;
+    let missing: usize = chaos.frames.iter().map(|f| f.missing_tiles).sum();
+    let steady = |r: &terracast_sim::tiles::PageReport| {
+        r.frames[900..]
+            .iter()
+            .map(|f| f.resident_bytes)
+            .max()
+            .unwrap_or(0)
+    };
+    println!(
+        "1000 frames: {drawn} drawn; {failed} tiles refused as damaged, {stalls} stalls, {missing} tile-draws from coarser levels; resident at the end {} KiB (clean flight {} KiB, cache {} KiB)",
+        steady(&chaos) >> 10,
+        steady(&clean) >> 10,
+        chaos.cache_bytes >> 10
+    );
+    assert_eq!((clean_drawn, drawn), (1000, 1000));
+    // The poison color is the damaged tiles' alone, and none is shown.
+    assert_eq!(clean_poison, 0);
+    assert_eq!(poisoned, 0, "a damaged tile was drawn");
+    assert!(failed > 0 && stalls > 0 && missing > 0);
+    // The loader's budget holds every frame after the first (which loads
+    // its footprint before it is drawn), and the cache neither grows past
+    // its slots nor loses them: over the last hundred frames the resident
+    // bytes stay within 5 % of the clean flight's (the tiles refused and
+    // retried make the two caches hold slightly different tiles).
+    assert!(chaos.frames[1..]
+        .iter()
+        .all(|f| f.loads <= u64::from(options.load_budget)));
+    assert!(chaos
+        .frames
+        .iter()
+        .all(|f| f.resident_bytes <= chaos.cache_bytes));
+    let (ended, clean_ended) = (steady(&chaos) as f64, steady(&clean) as f64);
+    assert!(
+        (ended - clean_ended).abs() <= 0.05 * clean_ended,
+        "resident {ended} against {clean_ended}"
+    );
 }
