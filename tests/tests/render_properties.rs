@@ -3,8 +3,9 @@
 //! random cameras over the whole range `View::new` takes (eye anywhere
 //! within the config's limits, below the surface and far outside the map;
 //! every yaw; pitch −89° to 90°; roll −180° to 180°; fields of view 1° to
-//! 160°; images 1 × 1 up to 64 × 64), every kernel setting, and the
-//! governor with budgets down to 0.
+//! 160°; images 1 × 1 up to 64 × 64, one in a hundred up to 512 × 512),
+//! terrains 2 to 96 a side (one in forty up to 1024), every kernel setting,
+//! and the governor with budgets down to 0.
 //!
 //! Held on every render: no panic; every pixel written exactly once; a
 //! sky sample has the sky's color, and a hit lies no higher than the
@@ -171,9 +172,11 @@ fn shape() -> impl Strategy<Value = Shape> {
     ]
 }
 
-/// A terrain: its shape, size (2 to 96 a side) and a seed.
+/// A terrain: its shape, size (2 to 96 a side, and one in forty up to
+/// 1024) and a seed.
 fn terrain() -> impl Strategy<Value = (Shape, u32, u32, u64)> {
-    (shape(), 2u32..=96, 2u32..=96, any::<u64>())
+    let side = || prop_oneof![39 => 2u32..=96, 1 => 97u32..=1024];
+    (shape(), side(), side(), any::<u64>())
 }
 
 /// A camera anywhere `View::new` takes one, and an image size; a few
@@ -205,7 +208,9 @@ fn camera(rng: &mut TestRng, side: f32) -> (Camera, u32, u32) {
         },
         hfov_deg: between(HFOV_RANGE_DEG.0, HFOV_RANGE_DEG.1),
     };
-    let size = |rng: &mut TestRng| 1 + rng.next_u32() % 64;
+    // Mostly small images; one camera in a hundred up to 512 a side.
+    let most = if rng.next_u32() % 100 == 0 { 512 } else { 64 };
+    let size = |rng: &mut TestRng| 1 + rng.next_u32() % most;
     let (width, height) = (size(rng), size(rng));
     (camera, width, height)
 }

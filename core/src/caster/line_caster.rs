@@ -496,11 +496,13 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // How far back from the hit the crossing is, in 1/256 of a sample.
         let back = (256 - t) as i32 * span;
         let hit_distance = plane.delta0 + (i64::from(at.k) << COORD_FRAC_BITS);
-        let distance = hit_distance - (i64::from(back) << 8);
+        // A crossing behind the eye (a ray that starts inside the terrain)
+        // is the eye itself: distance 0, and the ray's height there.
+        let distance = (hit_distance - (i64::from(back) << 8)).max(0);
         let sample = |color| Sample {
             color,
-            distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
-            elevation: saturate(z - ((i64::from(back) * dz) >> 8)),
+            distance: distance.min(i64::from(Sample::SKY - 1)) as u32,
+            elevation: saturate(z - (((hit_distance - distance) * dz) >> COORD_FRAC_BITS)),
         };
         let color_reach = self.plan.color_reach(run);
         if distance >= color_reach || at.level > 0 {

@@ -881,8 +881,13 @@ fn crossing(
         }
         None => (0, 1, None),
     };
-    let distance = ray.distance(hit.k) - ((back * step) << 8);
-    let elevation = i64::from(hit.z) - ((back * step * i64::from(ray.dz.to_bits())) >> 8);
+    let hit_distance = ray.distance(hit.k);
+    // A crossing behind the eye (a ray that starts inside the terrain,
+    // retraced past where it began) is the eye itself: distance 0, and the
+    // ray's height there.
+    let distance = (hit_distance - ((back * step) << 8)).max(0);
+    let elevation =
+        i64::from(hit.z) - (((hit_distance - distance) * i64::from(ray.dz.to_bits())) >> 16);
     (
         Sample {
             color: [0; 3],
