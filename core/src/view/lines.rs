@@ -49,9 +49,12 @@ const FAR_VANISHING_POINT: f64 = (1u64 << 20) as f64;
 
 /// The most lines any view of a `width × height` image has: the size a
 /// [`LinePool`](crate::LinePool) needs a frame. A frame has about `width`
-/// lines at shallow pitch and up to about twice its perimeter straight down.
+/// lines at shallow pitch, up to about twice its perimeter straight down,
+/// and rolled with the vanishing point just off a corner, where the lines
+/// fan out across two sectors, up to about four times `width + height`
+/// (tested over every pitch, roll and field of view).
 pub const fn max_lines(width: u32, height: u32) -> u32 {
-    3 * width + 2 * height + 32
+    6 * (width + height) + 64
 }
 
 /// One sector of the image and its family of lines.
@@ -1023,11 +1026,15 @@ mod tests {
         let mut most = 0.0f64;
         for size in [(64, 48), (48, 64), (1, 9), (9, 1), (200, 20), (20, 200)] {
             for hfov in [1.0, 30.0, 60.0, 120.0, 160.0] {
-                for tenth in -890..=900 {
+                for (tenth, roll) in (-890..=900)
+                    .map(|t| (t, 0.0))
+                    .chain((-89..=90).flat_map(|p| rolls().map(move |r| (p * 10, r))))
+                {
                     let pitch = tenth as f32 / 10.0;
                     let Ok(view) = View::new(
                         &Camera {
                             pitch_deg: pitch,
+                            roll_deg: roll,
                             hfov_deg: hfov,
                             ..Camera::default()
                         },
@@ -1039,7 +1046,7 @@ mod tests {
                     let bound = max_lines(size.0, size.1);
                     assert!(
                         view.lines() <= bound,
-                        "{size:?} hfov {hfov} pitch {pitch}: {}",
+                        "{size:?} hfov {hfov} pitch {pitch} roll {roll}: {}",
                         view.lines()
                     );
                     most = most.max(f64::from(view.lines()) / f64::from(bound));
