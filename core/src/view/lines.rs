@@ -115,9 +115,14 @@ impl Lines {
             pixels.vertical()
         };
         let (c_v, j_v) = vanishing;
-        let far = (c_v - (w - 1.0) * 0.5)
-            .abs()
-            .max((j_v - (h - 1.0) * 0.5).abs());
+        // How far off the image `V` is (unrolled, as it always was measured).
+        let far = if roll == 0.0 {
+            j_v.abs()
+        } else {
+            (c_v - (w - 1.0) * 0.5)
+                .abs()
+                .max((j_v - (h - 1.0) * 0.5).abs())
+        };
         if !c_v.is_finite() || !j_v.is_finite() || far > FAR_VANISHING_POINT {
             let parallel = if roll == 0.0 {
                 // The columns, bottom to top.
