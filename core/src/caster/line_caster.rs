@@ -414,7 +414,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 return None;
             }
             let l = usize::from(here.level);
-            let next = here.k + (1 << here.level);
+            let mut next = here.k + (1 << here.level);
             let (index, minor);
             if next < walk.begins[l + 1] && next <= walk.last {
                 // On along this level: its index and minor step.
@@ -437,13 +437,12 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 } else {
                     here.level + 1
                 };
-                let next = next.min(walk.last);
+                next = next.min(walk.last);
                 (index, minor) = self.position(walk, next, level);
                 here.level = level;
                 z = z0 + i64::from(next) * dz;
                 z_step = dz << level;
             }
-            let next = next.min(walk.last);
             let height = self.height(walk, index, minor, here.level, probe)?;
             here = At {
                 k: next,

@@ -666,7 +666,7 @@ pub(crate) struct OwnedPixels {
     /// row's Q8 distance from `V`), its change a row, and `t_V` in Q16.
     point: i64,
     point_step: i64,
-    t_v: i64,
+    t_v_q16: i64,
 }
 
 impl OwnedPixels {
@@ -725,7 +725,7 @@ impl OwnedPixels {
             cone,
             point,
             point_step: line.slope * (i64::from(sector.step) << IMG_FRAC),
-            t_v: t_v << (COORD_FRAC_BITS - IMG_FRAC),
+            t_v_q16: t_v << (COORD_FRAC_BITS - IMG_FRAC),
         };
         // The smallest t at or past the first row's window start; from
         // there on the candidate moves one way only.
@@ -813,7 +813,7 @@ impl Iterator for OwnedPixels {
             along: s - self.s_ref,
             // The line's point, Q16: Q40 to Q16.
             offset: (i64::from(t) << COORD_FRAC_BITS)
-                - (self.t_v + (point >> (32 + IMG_FRAC - COORD_FRAC_BITS))),
+                - (self.t_v_q16 + (point >> (32 + IMG_FRAC - COORD_FRAC_BITS))),
         })
     }
 }
