@@ -23,5 +23,6 @@ pub mod scene;
 pub mod sim;
 pub mod stability;
 pub mod tiles;
+pub mod viewer;
 
 pub use error::{Error, Result};

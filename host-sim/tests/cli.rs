@@ -342,3 +342,39 @@ fn every_rendering_command_takes_the_kernel_settings_and_a_keyframed_path() {
     assert!(err.contains("is the input --path"), "{err}");
     assert!(std::fs::read_to_string(&path).unwrap().starts_with("0 500"));
 }
+
+#[test]
+fn the_window_without_a_display_or_with_bad_input_says_so_in_one_line() {
+    let run = |args: &[&str], display: Option<&str>| {
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_terracast-sim"));
+        command.arg("view").args(args).env_remove("WAYLAND_DISPLAY");
+        match display {
+            Some(d) => command.env("DISPLAY", d),
+            None => command.env_remove("DISPLAY"),
+        };
+        let out = command.output().unwrap();
+        (
+            out.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let missing = temp("no-such-map.png");
+    let not_a_display = Some(":7951");
+    let cases: [(&[&str], Option<&str>, &str); 5] = [
+        (&["--procedural-size", "64"], None, "DISPLAY is not set"),
+        (
+            &["--procedural-size", "64"],
+            not_a_display,
+            "cannot connect to the display",
+        ),
+        (&["--height", s(&missing)], None, "no-such-map.png"),
+        (&["--threads", "0"], None, "--threads"),
+        (&["--pitch", "95"], None, "--pitch"),
+    ];
+    for (args, display, says) in cases {
+        let (code, err) = run(args, display);
+        assert_ne!(code, 0, "{args:?}");
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    }
+}

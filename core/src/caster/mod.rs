@@ -327,6 +327,31 @@ pub fn render_by_footprint<T: Surface + ?Sized, S: Sink, P: Probe>(
     }
 }
 
+/// Renders image line `line` as [`render_by_footprint`] renders it: a pool
+/// of workers that hands out lines ([`render_line`]) gets the same image
+/// from this as the whole frame gives.
+pub fn render_line_by_footprint<T: Surface + ?Sized, S: Sink, P: Probe>(
+    surface: &T,
+    view: &View,
+    options: &RenderOptions,
+    line: u32,
+    sink: &mut S,
+    probe: &mut P,
+) {
+    let frame = Frame::new(surface, view, options);
+    line_rays(
+        surface,
+        view,
+        options,
+        &frame,
+        line,
+        sink,
+        probe,
+        &mut Unlimited,
+        RaysByFootprint::new(view, options),
+    );
+}
+
 /// How many steps each ray of a line may take, asked before each ray:
 /// `u32::MAX` for no limit, `n` for at most `4n + 2` steps (the ray is cut
 /// short past that), 0 for none at all (the pixel repeats the line's

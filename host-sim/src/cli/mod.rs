@@ -6,6 +6,7 @@ mod fly;
 mod paging;
 mod sim;
 mod values;
+mod view;
 
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
 use crate::board::{board_views, verify, write_scene};
@@ -59,6 +60,9 @@ enum Command {
     /// a fixed tile cache, paging tiles as Cohen-Or's master did; reports
     /// each frame's missing tiles, loads and resident bytes.
     Page(paging::PageArgs),
+    /// Fly over a terrain yourself, in a window: keys and mouse, the line
+    /// pool on the host's cores, the governor holding the frame time.
+    View(view::ViewArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -398,6 +402,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bench(args) => bench::bench_command(args),
         Command::Pack(args) => paging::pack_command(args),
         Command::Page(args) => paging::page_command(args),
+        Command::View(args) => view::view_command(args),
     }
 }
 

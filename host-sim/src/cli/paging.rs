@@ -71,7 +71,7 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
 
 /// A view over the middle of a world: the south edge, as `render` places
 /// it on a map, when the world fits one window; its center otherwise.
-fn default_eye(world: &World) -> [f32; 3] {
+pub(super) fn default_eye(world: &World) -> [f32; 3] {
     let top = f32::from(world.max_height) / 16.0;
     if world.width <= WINDOW_SIDE && world.depth <= WINDOW_SIDE {
         crate::scene::south_edge_eye(world.width, world.depth, top)

@@ -12,7 +12,9 @@ mod procedural;
 
 pub use file::{TilesFile, FORMAT_VERSION};
 pub use pack::{pack, PackInput, PackSummary};
-pub use paging::{page_flight, render_tiled, PageOptions, PageReport, PagedFrame, TiledRender};
+pub use paging::{
+    page_flight, render_tiled, PageOptions, PageReport, PagedFrame, TiledRender, TiledViewer,
+};
 pub use procedural::ProceduralSource;
 
 use crate::error::{Error, Result};

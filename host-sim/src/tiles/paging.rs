@@ -157,6 +157,67 @@ pub fn render_tiled<S: TileSource<TILE>>(
     Ok((frame, stats, tiled))
 }
 
+/// A tiled terrain drawn frame after frame through one cache that stays
+/// resident between frames (the interactive viewer's): each frame loads
+/// what its footprint lacks, then renders from the window around the eye.
+pub struct TiledViewer<'s, S: TileSource<TILE>> {
+    source: S,
+    cache: TileCache<'s, TILE, SLOTS>,
+    needed: Box<Keys>,
+}
+
+impl<'s, S: TileSource<TILE>> TiledViewer<'s, S> {
+    /// A viewer of `source` whose cache lives in `slots`.
+    pub fn new(source: S, slots: &'s mut [Tile<TILE>; SLOTS]) -> Self {
+        let cache = TileCache::new(source.world(), slots);
+        Self {
+            source,
+            cache,
+            needed: Box::new(Keys::new()),
+        }
+    }
+
+    /// The terrain's extent.
+    pub fn world(&self) -> terracast::tiles::World {
+        self.source.world()
+    }
+
+    /// The ground under `eye` (world coordinates), from the tiles
+    /// resident now ([`crate::viewer::ground_under`]).
+    pub fn ground_under(&self, eye: [f32; 3]) -> Option<f32> {
+        let surface = TiledSurface::around(&self.cache, eye);
+        let local = surface.local(&Camera::looking(eye, 0.0, 0.0)).eye;
+        crate::viewer::ground_under(&surface, local[0], local[1])
+    }
+
+    /// Loads `camera`'s footprint (world coordinates) at `size` with
+    /// `options`, then calls `draw` with the window around the eye and the
+    /// camera in its coordinates. Returns what `draw` returns and the
+    /// footprint tiles that could not be loaded.
+    pub fn frame<R>(
+        &mut self,
+        camera: &Camera,
+        size: (u32, u32),
+        options: &RenderOptions,
+        draw: impl FnOnce(&TiledSurface<'_, 's, TILE, SLOTS>, &Camera) -> R,
+    ) -> Result<(R, usize)> {
+        self.cache.begin_frame();
+        self.needed.clear();
+        let bias = options.level_bias(self.source.world().roughness);
+        let misses = load_view(
+            &mut self.cache,
+            &mut self.source,
+            camera,
+            size,
+            bias,
+            &mut self.needed,
+        )?;
+        let surface = TiledSurface::around(&self.cache, camera.eye);
+        let local = local_camera(&surface, camera)?;
+        Ok((draw(&surface, &local), misses))
+    }
+}
+
 /// How to fly through a tiled terrain.
 #[derive(Debug, Clone)]
 pub struct PageOptions {

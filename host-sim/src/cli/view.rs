@@ -1,0 +1,803 @@
+//! `terracast-sim view`: fly over a terrain yourself, in a window, with
+//! the line pool on the host's cores and the governor holding the frame
+//! time (see `docs/viewer.md`).
+
+use super::values::{number, positive, size};
+use super::{load_scene, view_error, CameraArgs, KernelArgs, SceneArgs, DEFAULT_YAW_PITCH};
+use crate::error::{Error, Result};
+use crate::kernel::PixelRays;
+use crate::outputs::Outputs;
+use crate::tiles::{new_slots, Terrain, TiledViewer};
+use crate::viewer::{
+    describe_camera, draw_line_of_text, fly_step, ground_under, keep_above, render_arguments,
+    render_pool, shell_word, threads_or_cores, turn_by, FrameFigures, Motion, Pixels, Recorder,
+    ScaleGovernor, Settings, DRAG_DEG_PER_PIXEL,
+};
+use clap::ValueEnum;
+use std::collections::HashSet;
+use std::num::NonZeroU32;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::time::Instant;
+use terracast::config::DEFAULT_HFOV_DEG;
+use terracast::{Camera, Pyramid, RenderOptions, Resolution, Rgb, View};
+use winit::application::ApplicationHandler;
+use winit::dpi::{PhysicalPosition, PhysicalSize};
+use winit::event::{ElementState, MouseButton, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+#[derive(Debug, clap::Args)]
+pub(super) struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// A tiled terrain instead: a file from `pack`, or `procedural:SIZE`.
+    #[arg(long, value_name = "T.tiles|procedural:SIZE", conflicts_with_all = ["height", "color"])]
+    terrain: Option<String>,
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// Window size at the start (the window is resizable).
+    #[arg(long, default_value = "960x540", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
+    size: (u32, u32),
+    /// Rendering threads [default: the host's cores].
+    #[arg(long, value_name = "N", value_parser = number(1usize, 1024), allow_hyphen_values = true)]
+    threads: Option<usize>,
+    /// Frame rate the governor holds [default: the display's refresh rate,
+    /// or 60 where it does not say].
+    #[arg(long, value_name = "HZ", value_parser = positive(0.0f32, 1000.0), allow_hyphen_values = true)]
+    fps: Option<f32>,
+    /// The governor: render smaller (enlarged to the window) when a frame
+    /// would be late, grow back to the window's size when there is time.
+    /// Off: every frame at the window's size.
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    governor: Switch,
+    /// Ground speed at the start, voxels a second [default: a tenth of
+    /// the map's side, at most 100].
+    #[arg(long, value_name = "V", value_parser = positive(0.0f32, 1e6), allow_hyphen_values = true)]
+    speed: Option<f32>,
+    /// Sky color.
+    #[arg(long, value_parser = super::values::rgb, allow_hyphen_values = true, value_name = "R,G,B")]
+    sky: Option<Rgb>,
+    /// Views saved with P go to PREFIX-N.png (the first N not taken).
+    #[arg(long, default_value = "terracast-view", value_name = "PREFIX")]
+    save_prefix: String,
+    /// Write the flown path to this file, in `fly`'s path format, when the
+    /// window closes.
+    #[arg(long, value_name = "PATH.txt")]
+    record: Option<PathBuf>,
+    /// Measure instead of waiting for keys: fly `fly`'s built-in scenic
+    /// path (over a tiled terrain: straight ahead) in real time for
+    /// SECONDS, rendering frame after frame, then print the frame rate and
+    /// close.
+    #[arg(long, value_name = "SECONDS", value_parser = positive(0.0f32, 3600.0), allow_hyphen_values = true)]
+    measure: Option<f32>,
+    #[command(flatten)]
+    kernel: KernelArgs,
+}
+
+/// A setting that is on or off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(super) enum Switch {
+    /// On.
+    On,
+    /// Off.
+    Off,
+}
+
+/// How long the view stays still before a frame the governor shrank is
+/// drawn again at the window's size.
+const STILL_AFTER: std::time::Duration = std::time::Duration::from_millis(300);
+
+/// The keys, as printed at the start and in `docs/viewer.md`.
+const KEYS_HELP: &str =
+    "keys: W/S forward/back, A/D sideways, R/F up/down, arrows turn and pitch, Q/E bank, \
+drag with the left button to look, +/- speed; 1 shading, 2 resolution, 3 rays by footprint, \
+4 coherence, G governor, H on-screen line; P save the view; Esc quit";
+
+pub(super) fn view_command(args: ViewArgs) -> Result<()> {
+    let threads = threads_or_cores(args.threads)?;
+    let mut outputs = Outputs::new();
+    args.scene.name_inputs(&mut outputs);
+    if let Some(spec) = &args.terrain {
+        outputs.input("--terrain", Path::new(spec));
+    }
+    let record = args
+        .record
+        .as_deref()
+        .map(|path| outputs.output("--record", path))
+        .transpose()?;
+    let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
+    let options = args.kernel.options(sky);
+    let settings = Settings {
+        options,
+        rays: args.kernel.vertical_samples.1,
+        governor: args.governor == Switch::On,
+    };
+    let mut slots;
+    let mut scene_storage = None;
+    let mut scenic = None;
+    let world = match &args.terrain {
+        Some(spec) => {
+            let terrain = Terrain::open(spec, args.scene.seed)?;
+            if let (Terrain::File(file), Some(wanted)) = (&terrain, args.kernel.height_filter) {
+                if file.filter() != terracast::HeightFilter::from(wanted) {
+                    return Err(Error::new(format!(
+                        "{} was packed with another --height-filter; leave --height-filter out",
+                        file.path().display()
+                    )));
+                }
+            }
+            slots = new_slots();
+            World::Tiled(Box::new(TiledViewer::new(terrain, &mut slots)))
+        }
+        None => {
+            let scene = load_scene(&args.scene)?;
+            let eye = scene.default_eye();
+            scenic = Some(crate::fly::Path::scenic(&scene));
+            let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
+            let scene = scene_storage.insert((kernel, eye));
+            let full = scene.0.pyramid()?;
+            World::Memory {
+                flat: Box::new(Pyramid::flat(*full.base())),
+                full: Box::new(full),
+                eye: scene.1,
+            }
+        }
+    };
+    let [yaw, pitch] = DEFAULT_YAW_PITCH;
+    let (side_x, side_y) = world.size();
+    let camera = args
+        .camera
+        .camera(world.default_eye(), [yaw, pitch, DEFAULT_HFOV_DEG]);
+    // A tiled terrain's eye is checked in the window it is drawn from,
+    // whose origin moves with it.
+    let local = match world {
+        World::Tiled(_) => Camera {
+            eye: [0.0, 0.0, camera.eye[2]],
+            ..camera
+        },
+        World::Memory { .. } => camera,
+    };
+    View::new(&local, args.size.0, args.size.1).map_err(view_error)?;
+    let speed = args
+        .speed
+        .unwrap_or((side_x.min(side_y) as f32 / 10.0).clamp(1.0, 100.0));
+    let display_named = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|name| std::env::var_os(name).is_some_and(|v| !v.is_empty()));
+    if !display_named {
+        return Err(Error::new(
+            "no display to open a window on (DISPLAY is not set): run it on a desktop, or under xvfb-run",
+        ));
+    }
+    let event_loop = EventLoop::new()
+        .map_err(|e| Error::new(format!("cannot connect to the display: {}", os_message(&e))))?;
+    println!(
+        "terracast view: {}x{} window, {threads} thread(s), governor {}; {KEYS_HELP}",
+        args.size.0,
+        args.size.1,
+        if settings.governor { "on" } else { "off" }
+    );
+    let mut app = App {
+        terrain_flags: terrain_flags(&args),
+        save_prefix: args.save_prefix.clone(),
+        world,
+        camera,
+        settings,
+        governor: ScaleGovernor::new(1.0 / 60.0),
+        fps: args.fps,
+        threads,
+        speed,
+        keys: HashSet::new(),
+        drag: None,
+        overlay: true,
+        window: None,
+        surface: None,
+        pixels: Pixels::new(1, 1),
+        shown: None,
+        started: Instant::now(),
+        last_tick: None,
+        recorder: args.record.as_ref().map(|_| Recorder::default()),
+        redraw: true,
+        initial_size: args.size,
+        window_size: (0, 0),
+        last_change: Instant::now(),
+        still_frame: false,
+        error: None,
+        measure: args.measure.map(|seconds| Measure {
+            seconds: f64::from(seconds),
+            ..Measure::default()
+        }),
+        scenic: scenic.filter(|_| args.measure.is_some()),
+    };
+    if app.measure.is_some() && app.scenic.is_none() {
+        app.keys.insert(KeyCode::KeyW);
+    }
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| Error::new(format!("window: {e}")))?;
+    if let Some(error) = app.error.take() {
+        return Err(error);
+    }
+    if let (Some(id), Some(recorder)) = (record, &app.recorder) {
+        std::fs::write(outputs.temporary(id), recorder.path_text())
+            .map_err(|e| Error::new(format!("cannot write --record: {e}")))?;
+        outputs.commit()?;
+        if let Some(path) = &args.record {
+            println!(
+                "recorded {} keyframes -> {}",
+                recorder.keys().len(),
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The flags that name the terrain, for the `render` command line.
+fn terrain_flags(args: &ViewArgs) -> Vec<String> {
+    let mut flags = Vec::new();
+    let mut flag = |name: &str, value: String| {
+        flags.push(format!("--{name}"));
+        flags.push(value);
+    };
+    if let Some(spec) = &args.terrain {
+        flag("terrain", spec.clone());
+    }
+    if let Some(path) = &args.scene.height {
+        flag("height", path.display().to_string());
+    }
+    if let Some(path) = &args.scene.color {
+        flag("color", path.display().to_string());
+    }
+    if let Some(scale) = args.scene.height_scale {
+        flag("height-scale", scale.to_string());
+    }
+    if let Some(side) = args.scene.procedural_size {
+        flag("procedural-size", side.to_string());
+    }
+    flag("seed", args.scene.seed.to_string());
+    if let Some(filter) = args.kernel.height_filter {
+        flag("height-filter", filter.name());
+    }
+    flags
+}
+
+/// The terrain the window flies over.
+enum World<'s> {
+    /// A map in memory: its pyramid, and level 0 alone for single
+    /// resolution (boxed, as the tiled terrain is: both are large).
+    Memory {
+        full: Box<Pyramid<'s>>,
+        flat: Box<Pyramid<'s>>,
+        eye: [f32; 3],
+    },
+    /// A tiled terrain through the tile cache.
+    Tiled(Box<TiledViewer<'s, Terrain>>),
+}
+
+impl World<'_> {
+    fn size(&self) -> (u32, u32) {
+        match self {
+            Self::Memory { full, .. } => (full.base().width(), full.base().depth()),
+            Self::Tiled(viewer) => {
+                let world = viewer.world();
+                (world.width, world.depth)
+            }
+        }
+    }
+
+    fn default_eye(&self) -> [f32; 3] {
+        match self {
+            Self::Memory { eye, .. } => *eye,
+            Self::Tiled(viewer) => super::paging::default_eye(&viewer.world()),
+        }
+    }
+
+    /// The ground under the eye, where it is known.
+    fn ground(&self, eye: [f32; 3]) -> Option<f32> {
+        match self {
+            Self::Memory { full, .. } => ground_under(&**full, eye[0], eye[1]),
+            Self::Tiled(viewer) => viewer.ground_under(eye),
+        }
+    }
+
+    /// Renders `camera` into `pixels`; returns the steps taken.
+    fn render(
+        &mut self,
+        camera: &Camera,
+        options: &RenderOptions,
+        rays: PixelRays,
+        threads: usize,
+        pixels: &Pixels,
+    ) -> Result<u64> {
+        let size = pixels.size();
+        match self {
+            Self::Memory { full, flat, .. } => {
+                let view = View::new(camera, size.0, size.1).map_err(view_error)?;
+                let surface: &Pyramid = if options.resolution == Resolution::Single
+                    && !options.hierarchical_first_hit
+                {
+                    flat
+                } else {
+                    full
+                };
+                Ok(render_pool(surface, &view, options, rays, threads, pixels))
+            }
+            Self::Tiled(viewer) => {
+                let (steps, _misses) = viewer.frame(camera, size, options, |surface, local| {
+                    let view = View::new(local, size.0, size.1).map_err(view_error)?;
+                    Ok::<_, Error>(render_pool(surface, &view, options, rays, threads, pixels))
+                })?;
+                steps
+            }
+        }
+    }
+}
+
+/// What the window shows: the camera and options it was rendered with.
+#[derive(Debug, Clone, Copy)]
+struct Shown {
+    camera: Camera,
+    options: RenderOptions,
+    rays: PixelRays,
+    size: (u32, u32),
+    figures: FrameFigures,
+}
+
+struct App<'s> {
+    terrain_flags: Vec<String>,
+    save_prefix: String,
+    world: World<'s>,
+    camera: Camera,
+    settings: Settings,
+    governor: ScaleGovernor,
+    fps: Option<f32>,
+    threads: usize,
+    speed: f32,
+    keys: HashSet<KeyCode>,
+    /// Where the cursor was while the left button is held.
+    drag: Option<Option<PhysicalPosition<f64>>>,
+    overlay: bool,
+    window: Option<Rc<Window>>,
+    surface: Option<softbuffer::Surface<Rc<Window>, Rc<Window>>>,
+    pixels: Pixels,
+    shown: Option<Shown>,
+    started: Instant,
+    last_tick: Option<Instant>,
+    recorder: Option<Recorder>,
+    /// Whether the next frame must be drawn: something changed.
+    redraw: bool,
+    initial_size: (u32, u32),
+    /// The window's size at the last frame.
+    window_size: (u32, u32),
+    /// When the governor last rendered a frame; the next frame is the still
+    /// frame at the window's size.
+    last_change: Instant,
+    still_frame: bool,
+    error: Option<Error>,
+    measure: Option<Measure>,
+    /// The path `--measure` flies.
+    scenic: Option<crate::fly::Path>,
+}
+
+/// `--measure`: frames rendered and shown in a set time.
+#[derive(Debug, Default)]
+struct Measure {
+    seconds: f64,
+    began: Option<Instant>,
+    frames: u64,
+    render_seconds: f64,
+    /// Renders longer than a display frame, and the longest.
+    late: u64,
+    slowest: f64,
+    pixels: u64,
+    /// The least and most the governor divided the window's sides by.
+    scale: Option<(f32, f32)>,
+}
+
+impl Measure {
+    fn note(&mut self, figures: &FrameFigures, scale: f32, period: f64) {
+        self.began.get_or_insert_with(Instant::now);
+        self.frames += 1;
+        self.render_seconds += figures.seconds;
+        self.late += u64::from(figures.seconds > period);
+        self.slowest = self.slowest.max(figures.seconds);
+        self.pixels += figures.pixels;
+        let (lo, hi) = self.scale.unwrap_or((scale, scale));
+        self.scale = Some((lo.min(scale), hi.max(scale)));
+    }
+
+    fn done(&self) -> bool {
+        self.began
+            .is_some_and(|t| t.elapsed().as_secs_f64() >= self.seconds)
+    }
+
+    fn report(&self, size: (u32, u32), threads: usize, governor: bool, period: f64) -> String {
+        let wall = self
+            .began
+            .map_or(0.0, |t| t.elapsed().as_secs_f64())
+            .max(1e-9);
+        let frames = self.frames.max(1) as f64;
+        let (lo, hi) = self.scale.unwrap_or((1.0, 1.0));
+        format!(
+            "measured: {} frames at {}x{} in {wall:.1} s: {:.1} frames a second ({:.1} ms a render, slowest {:.1} ms; {} of the renders longer than a {:.0} Hz frame; {:.1} Mpx/s rendering; {threads} thread(s), governor {}: sides divided by {lo:.2} to {hi:.2})",
+            self.frames,
+            size.0,
+            size.1,
+            self.frames as f64 / wall,
+            self.render_seconds / frames * 1e3,
+            self.slowest * 1e3,
+            self.late,
+            1.0 / period,
+            self.pixels as f64 / self.render_seconds.max(1e-9) / 1e6,
+            if governor { "on" } else { "off" },
+        )
+    }
+}
+
+impl App<'_> {
+    fn motion(&self) -> Motion {
+        let axis = |plus: KeyCode, minus: KeyCode| {
+            f32::from(u8::from(self.keys.contains(&plus)))
+                - f32::from(u8::from(self.keys.contains(&minus)))
+        };
+        Motion {
+            forward: axis(KeyCode::KeyW, KeyCode::KeyS),
+            right: axis(KeyCode::KeyD, KeyCode::KeyA),
+            up: axis(KeyCode::KeyR, KeyCode::KeyF),
+            turn: axis(KeyCode::ArrowRight, KeyCode::ArrowLeft),
+            pitch: axis(KeyCode::ArrowDown, KeyCode::ArrowUp),
+            bank: axis(KeyCode::KeyE, KeyCode::KeyQ),
+        }
+    }
+
+    /// Moves the camera by the keys held since the last frame, renders and
+    /// shows the frame.
+    fn frame(&mut self) -> Result<()> {
+        let Some(window) = self.window.clone() else {
+            return Ok(());
+        };
+        let now = Instant::now();
+        let seconds = self
+            .last_tick
+            .map_or(0.0, |t| now.duration_since(t).as_secs_f32().min(0.1));
+        self.last_tick = Some(now);
+        let motion = self.motion();
+        if let (Some(path), Some(measure)) = (&self.scenic, &self.measure) {
+            let t = measure
+                .began
+                .map_or(0.0, |t| now.duration_since(t).as_secs_f64());
+            self.camera = path.camera(t % path.duration().max(1e-3), self.camera.hfov_deg);
+        } else if !motion.is_still() {
+            fly_step(&mut self.camera, &motion, self.speed, seconds);
+        }
+        let (width, depth) = self.world.size();
+        let ground = self.world.ground(self.camera.eye);
+        keep_above(&mut self.camera, width, depth, ground);
+        if let Some(recorder) = &mut self.recorder {
+            recorder.note(now.duration_since(self.started).as_secs_f64(), &self.camera);
+        }
+        let PhysicalSize { width, height } = window.inner_size();
+        let window_size = (width.max(1), height.max(1));
+        if self.window_size != window_size {
+            self.window_size = window_size;
+            let (Some(w), Some(h), Some(surface)) = (
+                NonZeroU32::new(window_size.0),
+                NonZeroU32::new(window_size.1),
+                self.surface.as_mut(),
+            ) else {
+                return Ok(());
+            };
+            surface
+                .resize(w, h)
+                .map_err(|e| Error::new(format!("window: {e}")))?;
+        }
+        let still = std::mem::take(&mut self.still_frame);
+        let size = if self.settings.governor && !still {
+            self.governor.render_size(window_size)
+        } else {
+            window_size
+        };
+        if self.pixels.size() != size {
+            self.pixels = Pixels::new(size.0, size.1);
+        }
+        let options = self.settings.options;
+        let rays = self.settings.rays;
+        let began = Instant::now();
+        let steps = self
+            .world
+            .render(&self.camera, &options, rays, self.threads, &self.pixels)?;
+        let figures = FrameFigures {
+            seconds: began.elapsed().as_secs_f64(),
+            pixels: u64::from(size.0) * u64::from(size.1),
+            steps,
+        };
+        let scale_before = self.governor.scale();
+        if self.settings.governor && !still {
+            self.governor.adapt(figures.seconds);
+            self.last_change = now;
+        }
+        // Frames go on while the governor is still finding its size.
+        self.redraw = self.governor.scale() != scale_before;
+        let period = self.period();
+        if let Some(measure) = &mut self.measure {
+            let scale = window_size.0 as f32 / size.0 as f32;
+            measure.note(&figures, scale, period);
+        }
+        self.shown = Some(Shown {
+            camera: self.camera,
+            options,
+            rays,
+            size,
+            figures,
+        });
+        let Some(surface) = self.surface.as_mut() else {
+            return Ok(());
+        };
+        let mut buffer = surface
+            .buffer_mut()
+            .map_err(|e| Error::new(format!("window: {e}")))?;
+        self.pixels.enlarge_to(&mut buffer, window_size);
+        if self.overlay {
+            let text = format!(
+                "{}  {}x{}  {}  {}",
+                figures.describe(),
+                size.0,
+                size.1,
+                self.settings.describe(),
+                describe_camera(&self.camera)
+            );
+            draw_line_of_text(&mut buffer, window_size.0, &text);
+        }
+        buffer
+            .present()
+            .map_err(|e| Error::new(format!("window: {e}")))?;
+        Ok(())
+    }
+
+    /// Writes the view on screen to the first free PREFIX-N.png and prints
+    /// the `render` command line that draws it.
+    fn save(&self) -> Result<()> {
+        let Some(shown) = self.shown else {
+            return Ok(());
+        };
+        let path = (1..)
+            .map(|n| PathBuf::from(format!("{}-{n}.png", self.save_prefix)))
+            .find(|p| !p.exists())
+            .unwrap_or_default();
+        let mut outputs = Outputs::new();
+        let id = outputs.output("the saved view", &path)?;
+        let (w, h) = shown.size;
+        let image = image::RgbImage::from_raw(w, h, self.pixels.rgb())
+            .ok_or_else(|| Error::new("the frame does not match its size"))?;
+        image
+            .save_with_format(outputs.temporary(id), image::ImageFormat::Png)
+            .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))?;
+        outputs.commit()?;
+        let replay = format!("{}-{}.render.png", self.save_prefix, path_number(&path));
+        let args = render_arguments(
+            &self.terrain_flags,
+            &shown.camera,
+            shown.size,
+            &shown.options,
+            shown.rays,
+            &replay,
+        );
+        let line: Vec<String> = args.iter().map(|a| shell_word(a)).collect();
+        println!(
+            "saved {} ({}; {}; {}); the same view: terracast-sim render {}",
+            path.display(),
+            describe_camera(&shown.camera),
+            shown.figures.describe(),
+            if shown.size == self.window_size {
+                "at the window's size".to_string()
+            } else {
+                format!(
+                    "the governor rendered it at {}x{} for the window's {}x{}",
+                    shown.size.0, shown.size.1, self.window_size.0, self.window_size.1
+                )
+            },
+            line.join(" ")
+        );
+        Ok(())
+    }
+
+    fn key(&mut self, event_loop: &ActiveEventLoop, code: KeyCode, pressed: bool, repeat: bool) {
+        if !pressed {
+            self.keys.remove(&code);
+            return;
+        }
+        if repeat {
+            return;
+        }
+        // A changed setting redraws; saving and the speed do not.
+        self.redraw = true;
+        match code {
+            KeyCode::Escape => event_loop.exit(),
+            KeyCode::Digit1 => self.settings.toggle_shading(),
+            KeyCode::Digit2 => self.settings.toggle_resolution(),
+            KeyCode::Digit3 => self.settings.toggle_rays(),
+            KeyCode::Digit4 => self.settings.next_coherence(),
+            KeyCode::KeyG => self.settings.governor = !self.settings.governor,
+            KeyCode::KeyH => {
+                // The same view with or without the line: drawn at the
+                // window's size, as a still view is.
+                self.overlay = !self.overlay;
+                self.still_frame = true;
+            }
+            KeyCode::Equal | KeyCode::NumpadAdd => {
+                self.speed *= 1.5;
+                self.redraw = false;
+            }
+            KeyCode::Minus | KeyCode::NumpadSubtract => {
+                self.speed /= 1.5;
+                self.redraw = false;
+            }
+            KeyCode::KeyP => {
+                self.redraw = false;
+                if let Err(e) = self.save() {
+                    eprintln!("error: {e}");
+                }
+            }
+            _ => {
+                // A key that moves the camera redraws while it is held.
+                self.redraw = false;
+                self.keys.insert(code);
+            }
+        }
+    }
+
+    /// A display frame, seconds: the governor's budget.
+    fn period(&self) -> f64 {
+        self.governor.period()
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, error: Error) {
+        self.error = Some(error);
+        event_loop.exit();
+    }
+}
+
+/// A windowing error's message without the source location winit puts
+/// before it ("os error at …/mod.rs:788: Failed to open …").
+fn os_message(error: &dyn std::fmt::Display) -> String {
+    let text = error.to_string();
+    text.find(".rs:")
+        .and_then(|at| text[at..].find(": ").map(|colon| at + colon + 2))
+        .map_or(text.clone(), |start| text[start..].to_string())
+}
+
+/// The N of PREFIX-N.png.
+fn path_number(path: &Path) -> String {
+    path.file_stem()
+        .and_then(|s| s.to_str())
+        .and_then(|s| s.rsplit('-').next())
+        .unwrap_or("0")
+        .to_string()
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.window.is_some() {
+            return;
+        }
+        let (w, h) = self.initial_size;
+        let attributes = Window::default_attributes()
+            .with_title("terracast")
+            .with_inner_size(PhysicalSize::new(w, h));
+        let window = match event_loop.create_window(attributes) {
+            Ok(window) => Rc::new(window),
+            Err(e) => {
+                return self.fail(
+                    event_loop,
+                    Error::new(format!("cannot open a window: {}", os_message(&e))),
+                )
+            }
+        };
+        let surface = softbuffer::Context::new(window.clone())
+            .and_then(|context| softbuffer::Surface::new(&context, window.clone()));
+        match surface {
+            Ok(surface) => self.surface = Some(surface),
+            Err(e) => {
+                return self.fail(
+                    event_loop,
+                    Error::new(format!("cannot draw into the window: {e}")),
+                )
+            }
+        }
+        let hz = self.fps.unwrap_or_else(|| {
+            window
+                .current_monitor()
+                .and_then(|m| m.refresh_rate_millihertz())
+                .map_or(60.0, |mhz| mhz as f32 / 1000.0)
+        });
+        self.governor = ScaleGovernor::new(1.0 / f64::from(hz.max(1.0)));
+        window.request_redraw();
+        self.window = Some(window);
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(_) => self.redraw = true,
+            WindowEvent::KeyboardInput { event, .. } => {
+                if let PhysicalKey::Code(code) = event.physical_key {
+                    self.key(
+                        event_loop,
+                        code,
+                        event.state == ElementState::Pressed,
+                        event.repeat,
+                    );
+                }
+            }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => {
+                self.drag = (state == ElementState::Pressed).then_some(None);
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                if let Some(last) = &mut self.drag {
+                    if let Some(before) = last.replace(position) {
+                        let (dx, dy) = (position.x - before.x, position.y - before.y);
+                        turn_by(
+                            &mut self.camera,
+                            dx as f32 * DRAG_DEG_PER_PIXEL,
+                            dy as f32 * DRAG_DEG_PER_PIXEL,
+                            0.0,
+                        );
+                        self.redraw = true;
+                    }
+                }
+            }
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = self.frame() {
+                    self.fail(event_loop, e);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if let Some(measure) = &self.measure {
+            if measure.done() {
+                let size = self.window_size;
+                let report =
+                    measure.report(size, self.threads, self.settings.governor, self.period());
+                println!("{report}");
+                event_loop.exit();
+                return;
+            }
+        }
+        let moving = !self.motion().is_still() || self.measure.is_some();
+        let mut flow = ControlFlow::Wait;
+        if moving || self.redraw {
+            if let Some(window) = &self.window {
+                window.request_redraw();
+            }
+        } else {
+            // Nothing changes: the clock that moves the camera restarts
+            // with the next key, and a frame the governor shrank is drawn
+            // once more at the window's size when the view has been still
+            // for a moment.
+            self.last_tick = None;
+            let shrunk = self.shown.is_some_and(|s| s.size != self.window_size);
+            if shrunk {
+                let at = self.last_change + STILL_AFTER;
+                if Instant::now() >= at {
+                    self.still_frame = true;
+                    if let Some(window) = &self.window {
+                        window.request_redraw();
+                    }
+                } else {
+                    flow = ControlFlow::WaitUntil(at);
+                }
+            }
+        }
+        event_loop.set_control_flow(flow);
+    }
+}

@@ -1,0 +1,810 @@
+//! The interactive viewer's parts that need no window (`terracast-sim
+//! view` opens the window, see `cli/view.rs`): how held keys move the
+//! camera, the ground it stays above, frames rendered by the line pool on
+//! the host's cores straight into window pixels, the wall-clock governor's
+//! options, the on-screen line, the `render` command line that reproduces
+//! a view, and the flown path in `fly`'s path format.
+
+use crate::error::{Error, Result};
+use crate::fly::Key;
+use crate::kernel::PixelRays;
+use embedded_graphics::mono_font::{ascii::FONT_6X10, MonoTextStyle};
+use embedded_graphics::pixelcolor::Rgb888;
+use embedded_graphics::prelude::*;
+use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
+use embedded_graphics::text::{Baseline, Text};
+use std::sync::atomic::{AtomicU32, Ordering};
+use terracast::config::{MAX_EYE_HEIGHT, PITCH_RANGE_DEG};
+use terracast::{
+    render_line, render_line_by_footprint, Camera, Coherence, CountingProbe, Grid, LinePool, Probe,
+    RenderOptions, Resolution, Sample, Shading, Sink, Surface, View, Wait, U8F8,
+};
+
+/// How far above the ground the eye stays, voxels.
+pub const GROUND_CLEARANCE: f32 = 2.0;
+/// Degrees a second the arrow keys and Q/E turn, pitch and bank.
+pub const TURN_DEG_PER_S: f32 = 60.0;
+/// Degrees the view turns for a pixel of mouse drag.
+pub const DRAG_DEG_PER_PIXEL: f32 = 0.2;
+
+/// What the held keys ask for, each −1, 0 or 1: forward, right, up, and
+/// turning right, looking down, banking right.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Motion {
+    /// W (+1) and S (−1).
+    pub forward: f32,
+    /// D (+1) and A (−1).
+    pub right: f32,
+    /// R (+1) and F (−1).
+    pub up: f32,
+    /// → (+1) and ← (−1): heading.
+    pub turn: f32,
+    /// ↓ (+1, looks down) and ↑ (−1).
+    pub pitch: f32,
+    /// E (+1, right wing down) and Q (−1).
+    pub bank: f32,
+}
+
+impl Motion {
+    /// Whether any key moves the camera.
+    pub fn is_still(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
+/// Moves `camera` by `motion` for `seconds` at `speed` voxels a second:
+/// forward and sideways along the ground (the heading's horizontal
+/// directions, whatever the pitch), up and down along z; heading, pitch and
+/// bank at [`TURN_DEG_PER_S`]. Then [`keep_in_range`].
+pub fn fly_step(camera: &mut Camera, motion: &Motion, speed: f32, seconds: f32) {
+    let yaw = camera.yaw_deg.to_radians();
+    let (forward, right) = ([yaw.cos(), yaw.sin()], [-yaw.sin(), yaw.cos()]);
+    let distance = speed * seconds;
+    for axis in 0..2 {
+        camera.eye[axis] +=
+            distance * (motion.forward * forward[axis] + motion.right * right[axis]);
+    }
+    camera.eye[2] += distance * motion.up;
+    let turn = TURN_DEG_PER_S * seconds;
+    turn_by(
+        camera,
+        motion.turn * turn,
+        motion.pitch * turn,
+        motion.bank * turn,
+    );
+}
+
+/// Turns `camera` by the given degrees of heading, pitch and bank, within
+/// the kernel's ranges ([`keep_in_range`]).
+pub fn turn_by(camera: &mut Camera, yaw: f32, pitch: f32, roll: f32) {
+    camera.yaw_deg += yaw;
+    camera.pitch_deg += pitch;
+    camera.roll_deg += roll;
+    keep_in_range(camera);
+}
+
+/// Heading in [0°, 360°), bank in [−180°, 180°) and pitch within the
+/// kernel's range: the ranges `fly`'s paths come back in, so a recorded
+/// camera replays as it was.
+pub fn keep_in_range(camera: &mut Camera) {
+    camera.yaw_deg = camera.yaw_deg.rem_euclid(360.0);
+    camera.roll_deg = (camera.roll_deg + 180.0).rem_euclid(360.0) - 180.0;
+    camera.pitch_deg = camera.pitch_deg.clamp(PITCH_RANGE_DEG.0, PITCH_RANGE_DEG.1);
+}
+
+/// The highest of the four level-0 heights around `(x, y)` (voxels, the
+/// surface's own coordinates), or `None` off the surface.
+pub fn ground_under<T: Surface + ?Sized>(surface: &T, x: f32, y: f32) -> Option<f32> {
+    let extent = surface.extent();
+    if !(x >= 0.0 && y >= 0.0) {
+        return None;
+    }
+    let (x, y) = (x as u32, y as u32);
+    if x >= extent.width || y >= extent.depth {
+        return None;
+    }
+    let grid = surface.base();
+    let stride = grid.stride();
+    let corner = y as isize * stride + x as isize;
+    let (right, below) = (
+        isize::from(x + 1 < extent.width),
+        if y + 1 < extent.depth { stride } else { 0 },
+    );
+    [0, right, below, below + right]
+        .into_iter()
+        .filter_map(|offset| grid.height(corner + offset))
+        .max()
+        .map(|h| f32::from(h) / 16.0)
+}
+
+/// Keeps the eye inside the map (`width` × `depth` voxels) and between
+/// [`GROUND_CLEARANCE`] above `ground` and the kernel's highest eye.
+pub fn keep_above(camera: &mut Camera, width: u32, depth: u32, ground: Option<f32>) {
+    camera.eye[0] = camera.eye[0].clamp(0.0, width.saturating_sub(1) as f32);
+    camera.eye[1] = camera.eye[1].clamp(0.0, depth.saturating_sub(1) as f32);
+    let floor = ground.map_or(0.0, |g| g + GROUND_CLEARANCE);
+    camera.eye[2] = camera.eye[2].clamp(floor, MAX_EYE_HEIGHT.max(floor));
+}
+
+/// The kernel settings the viewer toggles (the ones the chart compares),
+/// and whether its governor is on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// The kernel's options; the governor replaces the pixel-to-voxel
+    /// ratio of a multi-resolution render with its level bias.
+    pub options: RenderOptions,
+    /// One ray a pixel, or as many as its footprint needs.
+    pub rays: PixelRays,
+    /// Whether the governor holds the frame time.
+    pub governor: bool,
+}
+
+impl Settings {
+    /// Subvoxel or nearest shading.
+    pub fn toggle_shading(&mut self) {
+        self.options.shading = match self.options.shading {
+            Shading::Subvoxel => Shading::Nearest,
+            Shading::Nearest => Shading::Subvoxel,
+        };
+    }
+
+    /// The pyramid's levels, or level 0 only.
+    pub fn toggle_resolution(&mut self) {
+        self.options.resolution = match self.options.resolution {
+            Resolution::Single => Resolution::Multi {
+                pixel_to_voxel: U8F8::ONE,
+            },
+            Resolution::Multi { .. } => Resolution::Single,
+        };
+    }
+
+    /// One ray a pixel, or rays by footprint.
+    pub fn toggle_rays(&mut self) {
+        self.rays = match self.rays {
+            PixelRays::Fixed => PixelRays::ByFootprint,
+            PixelRays::ByFootprint => PixelRays::Fixed,
+        };
+    }
+
+    /// Across levels, exact, off, and round again.
+    pub fn next_coherence(&mut self) {
+        self.options.coherence = match self.options.coherence {
+            Coherence::AcrossLevels => Coherence::Exact,
+            Coherence::Exact => Coherence::Off,
+            Coherence::Off => Coherence::AcrossLevels,
+        };
+    }
+
+    /// The settings in a few words, for the on-screen line.
+    pub fn describe(&self) -> String {
+        let options = &self.options;
+        let resolution = match options.resolution {
+            Resolution::Single => "single".to_string(),
+            Resolution::Multi { pixel_to_voxel } => format!("multi {pixel_to_voxel}"),
+        };
+        format!(
+            "{} | {resolution} | {} | {}",
+            match options.shading {
+                Shading::Subvoxel => "subvoxel",
+                Shading::Nearest => "nearest",
+            },
+            match self.rays {
+                PixelRays::Fixed => "1 ray",
+                PixelRays::ByFootprint => "rays by footprint",
+            },
+            coherence_name(options.coherence),
+        )
+    }
+}
+
+/// Holds a window's frame time by the size its frames are rendered at:
+/// when a render would be late the image is rendered smaller and enlarged
+/// to the window, and when there is time it grows back to the window's
+/// size. A render's time is nearly proportional to its pixels, so the
+/// scale of each side moves by the square root of the time's ratio to the
+/// target (three quarters of a display frame), by at most 2× a frame; a
+/// frame under half the display frame grows the image by an eighth of its
+/// pixels. Between the two the scale holds, so that it does not hunt.
+///
+/// (The pixel-to-voxel ratio is not the knob: a coarser ratio takes fewer
+/// steps but no less time on the host, because more hits take the dearer
+/// footprint colors; `docs/viewer.md` has the measurement.)
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScaleGovernor {
+    period: f64,
+    scale: f32,
+}
+
+impl ScaleGovernor {
+    /// The most a side is divided by.
+    pub const MAX_SCALE: f32 = 4.0;
+
+    /// A governor for display frames of `period` seconds, at full size.
+    pub fn new(period: f64) -> Self {
+        Self { period, scale: 1.0 }
+    }
+
+    /// A display frame, seconds.
+    pub fn period(&self) -> f64 {
+        self.period
+    }
+
+    /// What each side of the window is divided by: 1 to
+    /// [`ScaleGovernor::MAX_SCALE`].
+    pub fn scale(&self) -> f32 {
+        self.scale
+    }
+
+    /// The size to render a `window`-sized frame at.
+    pub fn render_size(&self, window: (u32, u32)) -> (u32, u32) {
+        let side = |n: u32| ((n as f32 / self.scale).round() as u32).clamp(1, n.max(1));
+        (side(window.0), side(window.1))
+    }
+
+    /// Chooses the next frame's scale from this one's render time.
+    pub fn adapt(&mut self, seconds: f64) {
+        let target = 0.75 * self.period;
+        if seconds > target {
+            self.scale *= (seconds / target).min(4.0).sqrt() as f32;
+        } else if seconds < 0.5 * self.period {
+            self.scale *= (7.0f32 / 8.0).sqrt();
+        }
+        self.scale = self.scale.clamp(1.0, Self::MAX_SCALE);
+    }
+}
+
+/// `--coherence`'s name for `coherence`.
+fn coherence_name(coherence: Coherence) -> &'static str {
+    match coherence {
+        Coherence::Off => "off",
+        Coherence::Exact => "exact",
+        Coherence::AcrossLevels => "across-levels",
+    }
+}
+
+/// A frame's pixels as the window takes them (`0x00RRGGBB`), written by
+/// any number of workers at once.
+#[derive(Debug)]
+pub struct Pixels {
+    width: u32,
+    height: u32,
+    words: Vec<AtomicU32>,
+}
+
+impl Pixels {
+    /// A black frame.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            words: (0..width as usize * height as usize)
+                .map(|_| AtomicU32::new(0))
+                .collect(),
+        }
+    }
+
+    /// Width and height.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Copies the frame into `out` (row-major, `0x00RRGGBB`, `size`),
+    /// enlarged to it by repeating pixels where it is larger.
+    pub fn enlarge_to(&self, out: &mut [u32], size: (u32, u32)) {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let (out_w, out_h) = (size.0 as usize, size.1 as usize);
+        for (y, row) in out.chunks_mut(out_w.max(1)).take(out_h).enumerate() {
+            let from = (y * h / out_h.max(1)).min(h.saturating_sub(1)) * w;
+            for (x, word) in row.iter_mut().enumerate() {
+                let at = from + (x * w / out_w.max(1)).min(w.saturating_sub(1));
+                *word = self.words.get(at).map_or(0, |p| p.load(Ordering::Relaxed));
+            }
+        }
+    }
+
+    /// Row-major RGB.
+    pub fn rgb(&self) -> Vec<u8> {
+        self.words
+            .iter()
+            .flat_map(|w| {
+                let w = w.load(Ordering::Relaxed);
+                [(w >> 16) as u8, (w >> 8) as u8, w as u8]
+            })
+            .collect()
+    }
+}
+
+/// A worker's sink into [`Pixels`].
+struct PixelSink<'a>(&'a Pixels);
+
+impl Sink for PixelSink<'_> {
+    #[inline]
+    fn put(&mut self, x: u32, y: u32, sample: Sample) {
+        let [r, g, b] = sample.color.map(u32::from);
+        if let Some(word) = self
+            .0
+            .words
+            .get(y as usize * self.0.width as usize + x as usize)
+        {
+            word.store(r << 16 | g << 8 | b, Ordering::Relaxed);
+        }
+    }
+}
+
+/// Renders `view` into `pixels` (its size) with `threads` workers taking
+/// lines from one [`LinePool`]; returns the frame's steps (walk steps and
+/// bound tests). The image is [`terracast::render`]'s (or
+/// [`terracast::render_by_footprint`]'s), bit for bit.
+pub fn render_pool<T: Surface + Sync + ?Sized>(
+    surface: &T,
+    view: &View,
+    options: &RenderOptions,
+    rays: PixelRays,
+    threads: usize,
+    pixels: &Pixels,
+) -> u64 {
+    let pool = LinePool::new(view.lines(), 1);
+    pool.publish(0);
+    let worker = || {
+        let mut probe = CountingProbe::default();
+        let mut sink = PixelSink(pixels);
+        loop {
+            match pool.take() {
+                Ok(task) => render_one(
+                    surface, view, options, rays, task.line, &mut sink, &mut probe,
+                ),
+                Err(Wait::NotPublished { .. }) => std::thread::yield_now(),
+                Err(Wait::Finished) => break,
+            }
+        }
+        probe.steps + probe.bound_tests
+    };
+    std::thread::scope(|scope| {
+        let others: Vec<_> = (1..threads.max(1)).map(|_| scope.spawn(worker)).collect();
+        let mine = worker();
+        mine + others
+            .into_iter()
+            .map(|w| w.join().unwrap_or(0))
+            .sum::<u64>()
+    })
+}
+
+fn render_one<T: Surface + ?Sized, S: Sink, P: Probe>(
+    surface: &T,
+    view: &View,
+    options: &RenderOptions,
+    rays: PixelRays,
+    line: u32,
+    sink: &mut S,
+    probe: &mut P,
+) {
+    match rays {
+        PixelRays::Fixed => render_line(surface, view, options, line, sink, probe),
+        PixelRays::ByFootprint => {
+            render_line_by_footprint(surface, view, options, line, sink, probe)
+        }
+    }
+}
+
+/// Draws `text` on a dark band across the top of `frame` (row-major
+/// `0x00RRGGBB`, `width` wide).
+pub fn draw_line_of_text(frame: &mut [u32], width: u32, text: &str) {
+    let height = (frame.len() / width.max(1) as usize) as u32;
+    let mut target = Framebuffer32 {
+        words: frame,
+        width,
+        height,
+    };
+    let band = Rectangle::new(Point::zero(), Size::new(width, OVERLAY_ROWS));
+    // Drawing into a framebuffer cannot fail (pixels outside are skipped).
+    let _ = band
+        .into_styled(PrimitiveStyle::with_fill(Rgb888::new(0, 0, 0)))
+        .draw(&mut target);
+    let style = MonoTextStyle::new(&FONT_6X10, Rgb888::new(255, 255, 160));
+    let _ = Text::with_baseline(text, Point::new(3, 1), style, Baseline::Top).draw(&mut target);
+}
+
+/// Rows the on-screen line covers.
+pub const OVERLAY_ROWS: u32 = 12;
+
+/// Window pixels as an embedded-graphics target.
+struct Framebuffer32<'a> {
+    words: &'a mut [u32],
+    width: u32,
+    height: u32,
+}
+
+impl OriginDimensions for Framebuffer32<'_> {
+    fn size(&self) -> Size {
+        Size::new(self.width, self.height)
+    }
+}
+
+impl DrawTarget for Framebuffer32<'_> {
+    type Color = Rgb888;
+    type Error = core::convert::Infallible;
+
+    fn draw_iter<I: IntoIterator<Item = Pixel<Rgb888>>>(
+        &mut self,
+        pixels: I,
+    ) -> core::result::Result<(), Self::Error> {
+        for Pixel(at, color) in pixels {
+            let (Ok(x), Ok(y)) = (u32::try_from(at.x), u32::try_from(at.y)) else {
+                continue;
+            };
+            if x < self.width && y < self.height {
+                self.words[(y * self.width + x) as usize] =
+                    u32::from(color.r()) << 16 | u32::from(color.g()) << 8 | u32::from(color.b());
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Quotes `word` for a POSIX shell when it needs it.
+pub fn shell_word(word: &str) -> String {
+    let plain = !word.is_empty()
+        && word
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_./:,=+@%".contains(c));
+    if plain {
+        word.to_string()
+    } else {
+        format!("'{}'", word.replace('\'', r"'\''"))
+    }
+}
+
+/// The `terracast-sim render` arguments (after `render`) that draw
+/// `camera` at `size` with `options` and `rays` on the terrain that
+/// `terrain` names (its flags, as the viewer was given them): the view the
+/// window showed, bit for bit.
+pub fn render_arguments(
+    terrain: &[String],
+    camera: &Camera,
+    size: (u32, u32),
+    options: &RenderOptions,
+    rays: PixelRays,
+    out: &str,
+) -> Vec<String> {
+    let mut args: Vec<String> = terrain.to_vec();
+    let [x, y, z] = camera.eye;
+    args.extend([
+        format!("--eye={x},{y},{z}"),
+        format!("--yaw={}", camera.yaw_deg),
+        format!("--pitch={}", camera.pitch_deg),
+        format!("--roll={}", camera.roll_deg),
+        format!("--hfov={}", camera.hfov_deg),
+        format!("--size={}x{}", size.0, size.1),
+    ]);
+    let [r, g, b] = options.sky;
+    args.push(format!("--sky={r},{g},{b}"));
+    args.push(format!("--coherence={}", coherence_name(options.coherence)));
+    match options.resolution {
+        Resolution::Single => args.push("--resolution=single".into()),
+        Resolution::Multi { pixel_to_voxel } => {
+            args.push("--resolution=multi".into());
+            // U8.8: its decimal expansion is exact within 8 digits.
+            args.push(format!(
+                "--pixel-to-voxel={}",
+                f64::from(pixel_to_voxel.to_bits()) / 256.0
+            ));
+        }
+    }
+    args.push(format!(
+        "--terrain-fit={}",
+        if options.terrain_fit { "on" } else { "off" }
+    ));
+    args.push(format!(
+        "--first-hit={}",
+        if options.hierarchical_first_hit {
+            "hierarchical"
+        } else {
+            "walk"
+        }
+    ));
+    args.push(format!(
+        "--vertical-samples={}",
+        match rays {
+            PixelRays::ByFootprint => "footprint".to_string(),
+            PixelRays::Fixed => options.vertical_samples.count().to_string(),
+        }
+    ));
+    args.push(format!(
+        "--shading={}",
+        match options.shading {
+            Shading::Subvoxel => "subvoxel",
+            Shading::Nearest => "nearest",
+        }
+    ));
+    args.push(format!("--out={out}"));
+    args
+}
+
+/// The flown path, as `fly` reads it: a keyframe whenever the camera
+/// changed (and the last camera before it moved again, so a pause stays a
+/// pause when replayed).
+#[derive(Debug, Default)]
+pub struct Recorder {
+    keys: Vec<Key>,
+    /// The camera last seen, and when, if it is not a keyframe yet.
+    held: Option<Key>,
+}
+
+impl Recorder {
+    /// Notes the camera at `seconds` from the start (increasing).
+    pub fn note(&mut self, seconds: f64, camera: &Camera) {
+        let key = Key {
+            time: seconds,
+            eye: camera.eye,
+            yaw: camera.yaw_deg,
+            pitch: camera.pitch_deg,
+            roll: camera.roll_deg,
+        };
+        if self.keys.last().is_some_and(|last| seconds <= last.time) {
+            return;
+        }
+        let same = |a: &Key, b: &Key| {
+            a.eye == b.eye && a.yaw == b.yaw && a.pitch == b.pitch && a.roll == b.roll
+        };
+        match self.keys.last() {
+            Some(last) if same(last, &key) => self.held = Some(key),
+            _ => {
+                if let Some(held) = self.held.take() {
+                    self.keys.push(held);
+                }
+                self.keys.push(key);
+            }
+        }
+    }
+
+    /// The keyframes so far, with the camera held last.
+    pub fn keys(&self) -> Vec<Key> {
+        self.keys.iter().chain(&self.held).copied().collect()
+    }
+
+    /// The path file's text: `t x y z yaw pitch roll` a line, each value
+    /// written so that it reads back to the same number.
+    pub fn path_text(&self) -> String {
+        let mut text = String::from("# t x y z yaw pitch roll, recorded by terracast-sim view\n");
+        for key in self.keys() {
+            let [x, y, z] = key.eye.map(f64::from);
+            text.push_str(&format!(
+                "{} {x} {y} {z} {} {} {}\n",
+                key.time,
+                f64::from(key.yaw),
+                f64::from(key.pitch),
+                f64::from(key.roll)
+            ));
+        }
+        text
+    }
+}
+
+/// A frame's figures for the on-screen line.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameFigures {
+    /// Seconds the render took.
+    pub seconds: f64,
+    /// Pixels rendered.
+    pub pixels: u64,
+    /// Steps taken.
+    pub steps: u64,
+}
+
+impl FrameFigures {
+    /// "12.3 ms  40.1 Mpx/s  2.31 steps/px".
+    pub fn describe(&self) -> String {
+        let pixels = self.pixels.max(1) as f64;
+        format!(
+            "{:.1} ms  {:.1} Mpx/s  {:.2} steps/px",
+            self.seconds * 1e3,
+            pixels / self.seconds.max(1e-9) / 1e6,
+            self.steps as f64 / pixels
+        )
+    }
+}
+
+/// The camera in a few words, for the on-screen line.
+pub fn describe_camera(camera: &Camera) -> String {
+    let [x, y, z] = camera.eye;
+    format!(
+        "eye {x:.0},{y:.0},{z:.0} yaw {:.0} pitch {:.0} roll {:.0}",
+        camera.yaw_deg, camera.pitch_deg, camera.roll_deg
+    )
+}
+
+/// `--threads`: 1 or more, or the host's cores when not given.
+pub fn threads_or_cores(threads: Option<usize>) -> Result<usize> {
+    match threads {
+        Some(0) => Err(Error::new("--threads must be at least 1")),
+        Some(n) => Ok(n),
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fly::Path;
+    use terracast::{render, render_by_footprint, Framebuffer, NoProbe};
+
+    #[test]
+    fn the_pool_renders_into_window_pixels_what_render_does() {
+        let scene = crate::scene::procedural(128, 3).to_kernel().unwrap();
+        let pyramid = scene.pyramid().unwrap();
+        let view = View::new(
+            &Camera {
+                roll_deg: 20.0,
+                ..Camera::looking([64.0, 5.0, 110.0], 90.0, 15.0)
+            },
+            80,
+            50,
+        )
+        .unwrap();
+        let options = RenderOptions::default();
+        for rays in [PixelRays::Fixed, PixelRays::ByFootprint] {
+            let mut colors = vec![[0u8; 3]; 80 * 50];
+            let mut frame = Framebuffer::new(&mut colors, 80, 50).unwrap();
+            match rays {
+                PixelRays::Fixed => render(&pyramid, &view, &options, &mut frame, &mut NoProbe),
+                PixelRays::ByFootprint => {
+                    render_by_footprint(&pyramid, &view, &options, &mut frame, &mut NoProbe)
+                }
+            }
+            for threads in [1, 3] {
+                let pixels = Pixels::new(80, 50);
+                let steps = render_pool(&pyramid, &view, &options, rays, threads, &pixels);
+                assert!(steps > 0);
+                assert_eq!(pixels.rgb(), colors.concat(), "{rays:?}, {threads} threads");
+            }
+        }
+    }
+
+    #[test]
+    fn keys_move_along_the_heading_and_turn_within_the_kernels_ranges() {
+        let mut camera = Camera::looking([100.0, 100.0, 50.0], 90.0, 10.0);
+        let forward = Motion {
+            forward: 1.0,
+            ..Motion::default()
+        };
+        fly_step(&mut camera, &forward, 10.0, 0.5);
+        assert!((camera.eye[0] - 100.0).abs() < 1e-4 && (camera.eye[1] - 105.0).abs() < 1e-4);
+        // Right of a heading of 90° (toward +y) is −x, as the view
+        // contract's right vector says.
+        let right = Motion {
+            right: 1.0,
+            ..Motion::default()
+        };
+        fly_step(&mut camera, &right, 10.0, 1.0);
+        assert!((camera.eye[0] - 90.0).abs() < 1e-4);
+        turn_by(&mut camera, 300.0, -200.0, 190.0);
+        assert_eq!(camera.yaw_deg, 30.0);
+        assert_eq!(camera.pitch_deg, PITCH_RANGE_DEG.0);
+        assert_eq!(camera.roll_deg, -170.0);
+        assert!(View::new(&camera, 64, 48).is_ok());
+    }
+
+    #[test]
+    fn the_eye_stays_above_the_ground_and_on_the_map() {
+        let scene = crate::scene::procedural(64, 2).to_kernel().unwrap();
+        let pyramid = scene.pyramid().unwrap();
+        let ground = ground_under(&pyramid, 10.5, 20.5).unwrap();
+        let highest = (10..=11)
+            .flat_map(|x| (20..=21).map(move |y| (x, y)))
+            .map(|(x, y)| f32::from(pyramid.base().height(y * 64 + x).unwrap()) / 16.0)
+            .fold(0.0, f32::max);
+        assert_eq!(ground, highest);
+        let mut camera = Camera::looking([10.5, 20.5, -30.0], 0.0, 0.0);
+        keep_above(&mut camera, 64, 64, Some(ground));
+        assert_eq!(camera.eye[2], ground + GROUND_CLEARANCE);
+        camera.eye = [-5.0, 99.0, 1e9];
+        keep_above(&mut camera, 64, 64, ground_under(&pyramid, -5.0, 99.0));
+        assert_eq!(camera.eye, [0.0, 63.0, MAX_EYE_HEIGHT]);
+        assert!(ground_under(&pyramid, 63.9, 63.9).is_some());
+        assert_eq!(ground_under(&pyramid, 64.0, 0.0), None);
+    }
+
+    #[test]
+    fn a_recorded_flight_replays_with_the_same_camera_at_every_keyframe() {
+        let mut recorder = Recorder::default();
+        let mut camera = Camera::looking([100.1, 200.2, 51.7], 359.9, -3.3);
+        let mut t = 0.0;
+        let mut expected = Vec::new();
+        for step in 0..40 {
+            t += 1.0 / 61.0;
+            let motion = Motion {
+                forward: if step < 20 { 1.0 } else { 0.0 },
+                turn: if step % 3 == 0 { -1.0 } else { 0.0 },
+                bank: if step < 30 { 1.0 } else { 0.0 },
+                ..Motion::default()
+            };
+            if step >= 35 {
+                // Still: the last camera is held, not repeated.
+            } else {
+                fly_step(&mut camera, &motion, 37.3, 1.0 / 61.0);
+            }
+            recorder.note(t, &camera);
+            expected.push((t, camera));
+        }
+        let path = Path::parse(&recorder.path_text()).unwrap();
+        let keys = recorder.keys();
+        assert!(keys.len() < expected.len());
+        for (t, camera) in expected {
+            assert_eq!(path.camera(t, camera.hfov_deg), camera, "at {t} s");
+        }
+    }
+
+    #[test]
+    fn the_governor_shrinks_late_frames_and_grows_them_back_when_there_is_time() {
+        let mut governor = ScaleGovernor::new(0.016);
+        assert_eq!(governor.render_size((960, 540)), (960, 540));
+        // Twice the target (three quarters of the frame): half the pixels.
+        governor.adapt(0.024);
+        assert!((governor.scale() - 2f32.sqrt()).abs() < 1e-6);
+        assert_eq!(governor.render_size((960, 540)), (679, 382));
+        // Far over: at most twice as small a side a frame, at most 4.
+        governor.adapt(1.0);
+        assert!((governor.scale() - 2.0 * 2f32.sqrt()).abs() < 1e-5);
+        governor.adapt(1.0);
+        assert_eq!(governor.scale(), ScaleGovernor::MAX_SCALE);
+        // Between half and three quarters: it holds.
+        governor.adapt(0.010);
+        assert_eq!(governor.scale(), ScaleGovernor::MAX_SCALE);
+        // Time to spare: an eighth more pixels a frame, up to the window.
+        governor.adapt(0.001);
+        assert!((governor.scale().powi(2) - 16.0 * 7.0 / 8.0).abs() < 1e-4);
+        for _ in 0..40 {
+            governor.adapt(0.001);
+        }
+        assert_eq!(governor.scale(), 1.0);
+        assert_eq!(governor.render_size((3, 1)), (3, 1));
+    }
+
+    #[test]
+    fn a_smaller_frame_is_enlarged_to_the_window_by_repeating_pixels() {
+        let pixels = Pixels::new(2, 2);
+        for (i, word) in pixels.words.iter().enumerate() {
+            word.store(i as u32 + 1, Ordering::Relaxed);
+        }
+        let mut out = vec![0; 5 * 3];
+        pixels.enlarge_to(&mut out, (5, 3));
+        assert_eq!(out, [1, 1, 1, 2, 2, 1, 1, 1, 2, 2, 3, 3, 3, 4, 4]);
+        let mut same = vec![0; 4];
+        pixels.enlarge_to(&mut same, (2, 2));
+        assert_eq!(same, [1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn the_render_command_names_every_setting_the_window_used() {
+        let mut settings = Settings {
+            options: RenderOptions::default(),
+            rays: PixelRays::ByFootprint,
+            governor: true,
+        };
+        settings.toggle_shading();
+        settings.options.resolution = Resolution::Multi {
+            pixel_to_voxel: U8F8::from_bits(300),
+        };
+        let options = settings.options;
+        let camera = Camera::looking([1.5, 2.25, 3.0], 10.0, 20.0);
+        let args = render_arguments(
+            &["--height".into(), "my map.png".into()],
+            &camera,
+            (960, 540),
+            &options,
+            settings.rays,
+            "view 1.png",
+        );
+        let line = args
+            .iter()
+            .map(|a| shell_word(a))
+            .collect::<Vec<_>>()
+            .join(" ");
+        assert!(line.starts_with("--height 'my map.png' --eye=1.5,2.25,3 --yaw=10 --pitch=20"));
+        assert!(line.contains("--pixel-to-voxel=1.171875"));
+        assert!(line.contains("--shading=nearest"));
+        assert!(line.contains("--vertical-samples=footprint"));
+        assert!(line.ends_with("'--out=view 1.png'"));
+        assert_eq!(shell_word("it's"), r"'it'\''s'");
+    }
+}
