@@ -156,16 +156,7 @@ fn check_saved(saved: &str) -> image::RgbImage {
         .unwrap();
     let saved_image = image::open(saved_png).unwrap().to_rgb8();
     let args = render_args(saved);
-    let out = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
-        .arg("render")
-        .args(&args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_ok("render", &args);
     let rendered_png = args.iter().find_map(|a| a.strip_prefix("--out=")).unwrap();
     let rendered = image::open(rendered_png).unwrap().to_rgb8();
     assert_eq!(rendered.dimensions(), saved_image.dimensions());
@@ -203,6 +194,65 @@ fn check_view(display: &str, window: &str, saved: &str) {
     }
 }
 
+/// The viewer running on `display`: the process, its stdout's lines and
+/// its window, focused for key presses.
+struct Viewer {
+    process: Killed,
+    lines: Receiver<String>,
+    window: String,
+}
+
+impl Viewer {
+    fn start(display: &str, args: &[String]) -> Self {
+        let child = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
+            .arg("view")
+            .args(args)
+            .env("DISPLAY", display)
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut process = Killed(child);
+        let (send, lines) = channel();
+        let stdout = process.0.stdout.take().unwrap();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                println!("viewer: {line}");
+                if send.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        let found = x_tool(
+            display,
+            "xdotool",
+            &["search", "--sync", "--name", "^terracast$"],
+        );
+        let window = String::from_utf8(found)
+            .unwrap()
+            .lines()
+            .next()
+            .unwrap()
+            .to_string();
+        x_tool(display, "xdotool", &["windowfocus", "--sync", &window]);
+        Self {
+            process,
+            lines,
+            window,
+        }
+    }
+}
+
+/// Runs `terracast-sim COMMAND ARGS`, which must succeed.
+fn run_ok(command: &str, args: &[String]) {
+    let out = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
+        .arg(command)
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{command}: {err}");
+}
+
 fn temp_dir() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("terracast-viewer-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -224,50 +274,14 @@ fn keys_fly_the_window_and_render_draws_what_it_shows() {
     let dir = temp_dir();
     let record = dir.join("flown.txt");
     let prefix = dir.join("view");
-    // A render at 2 Hz has time to spare: the governor refines the ratio
-    // to its finest and the window then stays as it is until a key.
-    let viewer = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
-        .args(["view", "--procedural-size", "256", "--size", "320x200"])
-        .args([
-            "--fps",
-            "2",
-            "--threads",
-            "2",
-            "--yaw",
-            "90",
-            "--pitch",
-            "15",
-        ])
-        .arg(format!("--record={}", record.display()))
-        .arg(format!("--save-prefix={}", prefix.display()))
-        .env("DISPLAY", &display)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .unwrap();
-    let mut viewer = Killed(viewer);
-    let (send, lines) = channel();
-    let stdout = viewer.0.stdout.take().unwrap();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            println!("viewer: {line}");
-            if send.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let found = x_tool(
-        &display,
-        "xdotool",
-        &["search", "--sync", "--name", "^terracast$"],
-    );
-    let window = String::from_utf8(found)
-        .unwrap()
-        .lines()
-        .next()
-        .unwrap()
-        .to_string();
-    x_tool(&display, "xdotool", &["windowfocus", "--sync", &window]);
+    // A render at 2 Hz has time to spare: the governor keeps the window's
+    // size, and the window then stays as it is until a key.
+    let args = "--procedural-size 256 --size 320x200 --fps 2 --threads 2 --yaw 90 --pitch 15";
+    let mut args: Vec<String> = args.split(' ').map(str::to_string).collect();
+    args.push(format!("--record={}", record.display()));
+    args.push(format!("--save-prefix={}", prefix.display()));
+    let mut viewer = Viewer::start(&display, &args);
+    let (lines, window) = (&viewer.lines, &viewer.window);
     let key = |args: &[&str]| {
         x_tool(&display, "xdotool", args);
     };
@@ -276,8 +290,8 @@ fn keys_fly_the_window_and_render_draws_what_it_shows() {
     key(&["key", "h"]);
     std::thread::sleep(Duration::from_millis(500));
     key(&["key", "p"]);
-    let first = next_saved(&lines);
-    check_view(&display, &window, &first);
+    let first = next_saved(lines);
+    check_view(&display, window, &first);
 
     // Forward (toward +y at a heading of 90°) for a moment, then bank
     // right a little: the camera moves as the keys say. Nearest shading
@@ -292,8 +306,8 @@ fn keys_fly_the_window_and_render_draws_what_it_shows() {
     key(&["keyup", "e"]);
     std::thread::sleep(Duration::from_secs(2));
     key(&["key", "p"]);
-    let second = next_saved(&lines);
-    check_view(&display, &window, &second);
+    let second = next_saved(lines);
+    check_view(&display, window, &second);
     let (before, after) = (eye_of(&render_args(&first)), eye_of(&render_args(&second)));
     assert_eq!(before[0], after[0], "no sideways motion");
     assert!(
@@ -315,7 +329,7 @@ fn keys_fly_the_window_and_render_draws_what_it_shows() {
     key(&["key", "Escape"]);
     let began = Instant::now();
     let status = loop {
-        if let Some(status) = viewer.0.try_wait().unwrap() {
+        if let Some(status) = viewer.process.0.try_wait().unwrap() {
             break status;
         }
         assert!(
@@ -330,24 +344,14 @@ fn keys_fly_the_window_and_render_draws_what_it_shows() {
     assert_eq!(end.eye, after);
     assert_eq!(end.roll_deg, roll);
     let replay = dir.join("replay.gif");
-    let out = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
-        .args([
-            "fly",
-            "--procedural-size",
-            "256",
-            "--frames",
-            "3",
-            "--size",
-            "64x48",
-        ])
-        .arg(format!("--path={}", record.display()))
-        .arg(format!("--out={}", replay.display()))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let fly = format!(
+        "--procedural-size 256 --frames 3 --size 64x48 --path={} --out={}",
+        record.display(),
+        replay.display()
+    );
+    run_ok(
+        "fly",
+        &fly.split(' ').map(str::to_string).collect::<Vec<_>>(),
     );
 }
 
@@ -364,49 +368,23 @@ fn a_late_frame_is_rendered_smaller_and_a_still_view_at_the_windows_size() {
     // is that fast, so while the view moves the governor shrinks the
     // frame as far as it goes (a quarter of each side); once it is still,
     // the view is drawn once more at the window's size.
-    let viewer = Command::new(env!("CARGO_BIN_EXE_terracast-sim"))
-        .args(["view", "--procedural-size", "256", "--size", "800x480"])
-        .args(["--fps", "1000", "--threads", "1"])
-        .arg(format!("--save-prefix={}", prefix.display()))
-        .env("DISPLAY", &display)
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut viewer = Killed(viewer);
-    let (send, lines) = channel();
-    let stdout = viewer.0.stdout.take().unwrap();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            println!("viewer: {line}");
-            if send.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let found = x_tool(
-        &display,
-        "xdotool",
-        &["search", "--sync", "--name", "^terracast$"],
-    );
-    let window = String::from_utf8(found)
-        .unwrap()
-        .lines()
-        .next()
-        .unwrap()
-        .to_string();
-    x_tool(&display, "xdotool", &["windowfocus", "--sync", &window]);
+    let args = "--procedural-size 256 --size 800x480 --fps 1000 --threads 1";
+    let mut args: Vec<String> = args.split(' ').map(str::to_string).collect();
+    args.push(format!("--save-prefix={}", prefix.display()));
+    let viewer = Viewer::start(&display, &args);
+    let (lines, window) = (&viewer.lines, &viewer.window);
     std::thread::sleep(Duration::from_secs(2));
     x_tool(&display, "xdotool", &["key", "h"]);
     std::thread::sleep(Duration::from_secs(1));
     x_tool(&display, "xdotool", &["key", "p"]);
-    let still = next_saved(&lines);
+    let still = next_saved(lines);
     assert!(still.contains("at the window's size"), "{still}");
-    check_view(&display, &window, &still);
+    check_view(&display, window, &still);
     // Climbing: every frame is late, so every frame is small.
     x_tool(&display, "xdotool", &["keydown", "r"]);
     std::thread::sleep(Duration::from_millis(500));
     x_tool(&display, "xdotool", &["key", "p"]);
-    let moving = next_saved(&lines);
+    let moving = next_saved(lines);
     x_tool(&display, "xdotool", &["keyup", "r"]);
     assert!(
         moving.contains("the governor rendered it at 200x120"),

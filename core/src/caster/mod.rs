@@ -313,17 +313,7 @@ pub fn render_by_footprint<T: Surface + ?Sized, S: Sink, P: Probe>(
 ) {
     let frame = Frame::new(surface, view, options);
     for line in 0..view.lines() {
-        line_rays(
-            surface,
-            view,
-            options,
-            &frame,
-            line,
-            sink,
-            probe,
-            &mut Unlimited,
-            RaysByFootprint::new(view, options),
-        );
+        footprint_line(surface, view, options, &frame, line, sink, probe);
     }
 }
 
@@ -339,16 +329,30 @@ pub fn render_line_by_footprint<T: Surface + ?Sized, S: Sink, P: Probe>(
     probe: &mut P,
 ) {
     let frame = Frame::new(surface, view, options);
+    footprint_line(surface, view, options, &frame, line, sink, probe);
+}
+
+/// One line with rays by footprint, unlimited.
+fn footprint_line<T: Surface + ?Sized, S: Sink, P: Probe>(
+    surface: &T,
+    view: &View,
+    options: &RenderOptions,
+    frame: &Frame,
+    line: u32,
+    sink: &mut S,
+    probe: &mut P,
+) {
+    let rays = RaysByFootprint::new(view, options);
     line_rays(
         surface,
         view,
         options,
-        &frame,
+        frame,
         line,
         sink,
         probe,
         &mut Unlimited,
-        RaysByFootprint::new(view, options),
+        rays,
     );
 }
 
