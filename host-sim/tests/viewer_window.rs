@@ -137,6 +137,12 @@ fn render_args(saved: &str) -> Vec<String> {
     command.split_whitespace().map(str::to_string).collect()
 }
 
+/// The number a render command line gives `flag` (`--yaw=`).
+fn number_flag(args: &[String], flag: &str) -> f32 {
+    let value = args.iter().find_map(|a| a.strip_prefix(flag));
+    value.expect(flag).parse().unwrap()
+}
+
 /// The eye a render command line names.
 fn eye_of(args: &[String]) -> [f32; 3] {
     let eye = args
@@ -304,6 +310,13 @@ fn keys_fly_the_window_and_render_draws_what_it_shows() {
     key(&["keydown", "e"]);
     std::thread::sleep(Duration::from_millis(300));
     key(&["keyup", "e"]);
+    // A drag 50 pixels to the right with the left button: a turn of 10°.
+    key(&["mousemove", "--window", window, "100", "100"]);
+    std::thread::sleep(Duration::from_millis(200));
+    key(&["mousedown", "1"]);
+    key(&["mousemove", "--window", window, "150", "100"]);
+    std::thread::sleep(Duration::from_millis(200));
+    key(&["mouseup", "1"]);
     std::thread::sleep(Duration::from_secs(2));
     key(&["key", "p"]);
     let second = next_saved(lines);
@@ -314,13 +327,13 @@ fn keys_fly_the_window_and_render_draws_what_it_shows() {
         after[1] > before[1] + 5.0,
         "forward: {before:?} -> {after:?}"
     );
-    let roll: f32 = render_args(&second)
-        .iter()
-        .find_map(|a| a.strip_prefix("--roll="))
-        .unwrap()
-        .parse()
-        .unwrap();
+    let roll = number_flag(&render_args(&second), "--roll=");
     assert!(roll > 1.0, "banked right: roll {roll}");
+    let yaw = number_flag(&render_args(&second), "--yaw=");
+    assert!(
+        (yaw - 100.0).abs() < 0.01,
+        "turned right by the drag: yaw {yaw}"
+    );
     let settings = render_args(&second);
     assert!(settings.contains(&"--shading=nearest".to_string()));
     assert!(settings.contains(&"--vertical-samples=footprint".to_string()));

@@ -190,7 +190,8 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
         threads,
         speed,
         keys: HashSet::new(),
-        drag: None,
+        cursor: None,
+        dragging: false,
         overlay: true,
         window: None,
         surface: None,
@@ -357,8 +358,10 @@ struct App<'s> {
     threads: usize,
     speed: f32,
     keys: HashSet<KeyCode>,
-    /// Where the cursor was while the left button is held.
-    drag: Option<Option<PhysicalPosition<f64>>>,
+    /// Where the cursor is, and whether the left button is held (a drag
+    /// looks around).
+    cursor: Option<PhysicalPosition<f64>>,
+    dragging: bool,
     overlay: bool,
     window: Option<Rc<Window>>,
     surface: Option<softbuffer::Surface<Rc<Window>, Rc<Window>>>,
@@ -737,22 +740,22 @@ impl ApplicationHandler for App<'_> {
                 button: MouseButton::Left,
                 ..
             } => {
-                self.drag = (state == ElementState::Pressed).then_some(None);
+                self.dragging = state == ElementState::Pressed;
             }
             WindowEvent::CursorMoved { position, .. } => {
-                if let Some(last) = &mut self.drag {
-                    if let Some(before) = last.replace(position) {
-                        let (dx, dy) = (position.x - before.x, position.y - before.y);
-                        turn_by(
-                            &mut self.camera,
-                            dx as f32 * DRAG_DEG_PER_PIXEL,
-                            dy as f32 * DRAG_DEG_PER_PIXEL,
-                            0.0,
-                        );
-                        self.redraw = true;
-                    }
+                let before = self.cursor.replace(position);
+                if let (true, Some(before)) = (self.dragging, before) {
+                    let (dx, dy) = (position.x - before.x, position.y - before.y);
+                    turn_by(
+                        &mut self.camera,
+                        dx as f32 * DRAG_DEG_PER_PIXEL,
+                        dy as f32 * DRAG_DEG_PER_PIXEL,
+                        0.0,
+                    );
+                    self.redraw = true;
                 }
             }
+            WindowEvent::CursorLeft { .. } => self.cursor = None,
             WindowEvent::RedrawRequested => {
                 if let Err(e) = self.frame() {
                     self.fail(event_loop, e);
