@@ -21,8 +21,10 @@ use crate::metrics::{
 use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{KernelScene, Scene};
 use crate::sim::trace::Discard;
+use crate::volume::{render_volume, render_volume_touching, Mode, TerrainVolume, VolumeOptions};
 use std::collections::HashSet;
 use std::fmt::Write as _;
+use std::sync::OnceLock;
 use terracast::{
     Camera, Coherence, Probe, RenderOptions, Resolution, Shading, VerticalSamples, View, U8F8,
 };
@@ -36,6 +38,9 @@ pub enum Method {
     VoxelSpace(f64),
     /// The fixed-step march with this step.
     March(f64),
+    /// Qu et al.'s filtered volume, accurate or by its boundary array
+    /// alone, with the default filter, layers and sampling interval.
+    Volume(Mode),
 }
 
 /// A method and its setting, named for tables and the chart.
@@ -137,6 +142,14 @@ pub fn settings() -> Vec<Setting> {
             name: "march 2",
             method: Method::March(2.0),
         },
+        Setting {
+            name: "volume",
+            method: Method::Volume(Mode::Accurate),
+        },
+        Setting {
+            name: "boundary",
+            method: Method::Volume(Mode::Approximate),
+        },
     ]
 }
 
@@ -149,6 +162,28 @@ pub struct BenchScene {
     pub scene: Scene,
     /// The kernel's form of it.
     pub kernel: KernelScene,
+    /// Its filtered volume (`volume`, `boundary`), made when first asked
+    /// for.
+    pub volume: OnceLock<TerrainVolume>,
+}
+
+impl BenchScene {
+    /// `scene` named `name`, in the kernel's form too.
+    pub fn new(name: String, scene: Scene) -> Result<Self> {
+        let kernel = scene.to_kernel()?;
+        Ok(Self {
+            name,
+            scene,
+            kernel,
+            volume: OnceLock::new(),
+        })
+    }
+
+    /// The scene's volume with the default filter and layers.
+    pub fn volume(&self) -> &TerrainVolume {
+        self.volume
+            .get_or_init(|| TerrainVolume::build(&self.scene, &VolumeOptions::default()))
+    }
 }
 
 /// One view of the suite.
@@ -252,6 +287,17 @@ fn render(
             size.1,
             &MarchOptions { step: *step, sky },
         ),
+        Method::Volume(mode) => render_volume(
+            &scene.scene,
+            scene.volume(),
+            camera,
+            size,
+            &VolumeOptions {
+                sky,
+                ..VolumeOptions::default()
+            },
+            *mode,
+        ),
     })
 }
 
@@ -335,6 +381,30 @@ pub fn bytes_touched(
                 }
             });
             seen.len() as u64 * 7
+        }
+        Method::Volume(mode) => {
+            let mut seen = HashSet::new();
+            let options = VolumeOptions::default();
+            let volume = scene.volume();
+            render_volume_touching(
+                &scene.scene,
+                volume,
+                camera,
+                size,
+                &options,
+                *mode,
+                &mut |column, layer| {
+                    seen.insert((column, layer));
+                },
+            );
+            let columns = seen.iter().map(|&(c, _)| c).collect::<HashSet<_>>().len() as u64;
+            // The boundary array's entry and the color of each column; the
+            // accurate mode also each cell's eight densities.
+            columns * 7
+                + match mode {
+                    Mode::Accurate => seen.len() as u64 * 8,
+                    Mode::Approximate => 0,
+                }
         }
     })
 }
@@ -648,11 +718,7 @@ mod tests {
         let scene = |name: &str, width: u32, depth: u32| {
             let n = (width * depth) as usize;
             let map = Scene::new(width, depth, vec![0.0; n], vec![[0; 3]; n]).unwrap();
-            BenchScene {
-                name: name.into(),
-                kernel: map.to_kernel().unwrap(),
-                scene: map,
-            }
+            BenchScene::new(name.into(), map).unwrap()
         };
         let scenes = [
             scene("long", 1024, 8),
@@ -699,12 +765,7 @@ mod tests {
     #[test]
     fn every_setting_reads_some_terrain_and_finer_marches_read_more() {
         let scene = crate::scene::procedural(96, 2);
-        let kernel = scene.to_kernel().unwrap();
-        let bench = BenchScene {
-            name: "small".into(),
-            scene,
-            kernel,
-        };
+        let bench = BenchScene::new("small".into(), scene).unwrap();
         let view = &views(0, &bench.scene)[2];
         let touched: Vec<(&str, u64)> = settings()
             .iter()
@@ -738,12 +799,7 @@ mod tests {
     #[test]
     fn flicker_is_measured_for_every_setting_and_a_still_camera_has_none() {
         let scene = crate::scene::procedural(96, 2);
-        let kernel = scene.to_kernel().unwrap();
-        let scenes = [BenchScene {
-            name: "small".into(),
-            scene,
-            kernel,
-        }];
+        let scenes = [BenchScene::new("small".into(), scene).unwrap()];
         let moving = flicker(&scenes, (32, 24), 3, |_, _| {}).unwrap();
         assert_eq!(moving.len(), settings().len());
         assert!(moving.iter().all(|(_, f)| f.is_finite()), "{moving:?}");

@@ -219,8 +219,10 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
             RED
         } else if setting.starts_with("voxelspace") {
             BLUE
-        } else {
+        } else if setting.starts_with("march") {
             GREEN
+        } else {
+            MAGENTA
         }
     };
     let points: Vec<(i32, i32)> = summaries

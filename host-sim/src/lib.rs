@@ -24,5 +24,6 @@ pub mod sim;
 pub mod stability;
 pub mod tiles;
 pub mod viewer;
+pub mod volume;
 
 pub use error::{Error, Result};

@@ -15,6 +15,7 @@ use crate::kernel::render_kernel;
 use crate::metrics::{psnr, sky_agreement, ssim};
 use crate::reference::{Reference, ReferenceOptions};
 use crate::scene::{color_by_height_and_slope, procedural, Scene};
+use crate::volume::{render_volume, Mode, TerrainVolume, VolumeOptions};
 use std::fmt::Write as _;
 use terracast::{Camera, RenderOptions};
 
@@ -149,7 +150,7 @@ pub fn conditions() -> Result<Vec<Condition>> {
 pub const MIN_SSIM: f64 = 0.3;
 
 /// The methods of the suite.
-pub const METHODS: [&str; 3] = ["kernel", "voxelspace", "march 0.5"];
+pub const METHODS: [&str; 5] = ["kernel", "voxelspace", "march 0.5", "volume", "boundary"];
 
 /// A method at a condition.
 #[derive(Debug, Clone, PartialEq)]
@@ -191,6 +192,16 @@ fn render(method: &str, scene: &Scene, camera: &Camera, size: (u32, u32)) -> Res
                 &RenderOptions::default(),
             )?
             .0
+        }
+        "volume" | "boundary" => {
+            let options = VolumeOptions::default();
+            let volume = TerrainVolume::build(scene, &options);
+            let mode = if method == "volume" {
+                Mode::Accurate
+            } else {
+                Mode::Approximate
+            };
+            render_volume(scene, &volume, camera, size, &options, mode).0
         }
         "voxelspace" => {
             let options = VoxelSpaceOptions {

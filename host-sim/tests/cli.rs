@@ -28,7 +28,14 @@ fn maps_named(height: &str, color: &str) -> (PathBuf, PathBuf) {
 fn renders_png_depth_and_stats_as_the_contract_says() {
     let (h, c) = maps_named("contract-h.png", "contract-c.png");
     let (png, pfm, json) = (temp("v.png"), temp("v.pfm"), temp("v.json"));
-    for method in ["kernel", "reference", "march", "voxelspace"] {
+    for method in [
+        "kernel",
+        "reference",
+        "march",
+        "voxelspace",
+        "volume",
+        "boundary",
+    ] {
         let (code, _, err) = sim(&[
             "render",
             "--height",

@@ -412,6 +412,18 @@ impl View {
         self.lines.count()
     }
 
+    /// The pixels (x, y; y = 0 at the top) of image line `index`, in the
+    /// order the caster casts them: their rays lie in the line's vertical
+    /// plane (to within half a pixel), and along it each ray reaches the
+    /// ground farther from the eye than the one before. Another ray caster
+    /// gets vertical coherence at any pitch and roll from this order; none
+    /// past the last line.
+    pub fn line_pixels(&self, index: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.line(index)
+            .into_iter()
+            .flat_map(move |line| line.pixels(self.height()).map(|p| (p.x, p.y)))
+    }
+
     /// Line `index`, or `None` past the last.
     pub(crate) fn line(&self, index: u32) -> Option<Line> {
         let (sector, k) = self.lines.get(index)?;

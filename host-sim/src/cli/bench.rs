@@ -95,14 +95,7 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
     }
     let scenes = named
         .into_iter()
-        .map(|(name, scene)| {
-            let kernel = scene.to_kernel()?;
-            Ok(BenchScene {
-                name,
-                scene,
-                kernel,
-            })
-        })
+        .map(|(name, scene)| BenchScene::new(name, scene))
         .collect::<Result<Vec<_>>>()?;
     let mut suite: Vec<_> = scenes
         .iter()
