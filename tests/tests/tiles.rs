@@ -459,3 +459,49 @@ fn a_thousand_frames_from_a_misbehaving_source_are_all_drawn_none_with_a_bad_til
         "resident {ended} against {clean_ended}"
     );
 }
+
+/// The window's tiled terrain (`terracast-sim view --terrain`): one cache
+/// kept resident from frame to frame, frames rendered by the line pool on
+/// several threads, draws each view as a render through a fresh cache
+/// does, and knows the ground under the eye.
+#[test]
+fn a_resident_cache_on_many_threads_draws_what_a_fresh_one_does() {
+    use terracast::View;
+    use terracast_sim::tiles::{new_slots, TiledViewer};
+    use terracast_sim::viewer::{render_pool, Pixels};
+    let source = || ProceduralSource::new(8192, 5).unwrap();
+    let mut slots = new_slots();
+    let mut viewer = TiledViewer::new(source(), &mut slots);
+    let options = RenderOptions::default();
+    let size = (96, 72);
+    let top = f32::from(source().world().max_height) / 16.0;
+    for step in 0..6 {
+        let camera = Camera::looking(
+            [4000.0 + 40.0 * step as f32, 3000.0, top + 50.0],
+            30.0 + 10.0 * step as f32,
+            15.0,
+        );
+        let pixels = Pixels::new(size.0, size.1);
+        let (_, misses) = viewer
+            .frame(&camera, size, &options, |surface, local| {
+                let view = View::new(local, size.0, size.1).unwrap();
+                render_pool(surface, &view, &options, PixelRays::Fixed, 3, &pixels)
+            })
+            .unwrap();
+        assert_eq!(misses, 0);
+        let (fresh, _, _) = render_tiled(
+            &mut source(),
+            &camera,
+            size.0,
+            size.1,
+            &options,
+            PixelRays::Fixed,
+        )
+        .unwrap();
+        assert_eq!(pixels.rgb(), fresh.colors.concat(), "frame {step}");
+        let ground = viewer
+            .ground_under(camera.eye)
+            .expect("the ground under the eye is resident");
+        assert!(ground > 0.0 && ground <= top, "{ground}");
+    }
+}
