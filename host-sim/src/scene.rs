@@ -3,10 +3,14 @@
 //! A [`Scene`] keeps heights as `f32` voxels (value × height scale) for the
 //! exact reference, and converts them once to the kernel's U12.4 form.
 
+pub mod geotiff;
 mod load;
 mod procedural;
 
-pub use load::{hgt_spacing, load_colors, load_heights, not_a_height_map, HgtSpacing};
+pub use load::{
+    derived_height_scale, fill_voids, hgt_spacing, load_colors, load_heights, not_a_height_map,
+    HgtSpacing,
+};
 pub use procedural::HeightBands;
 pub use procedural::{color_by_height_and_slope, procedural};
 pub(crate) use procedural::{terrain_color, value_noise, WATER_LEVEL};
@@ -61,6 +65,72 @@ pub fn load_pair(
         None => color_by_height_and_slope(w, d, &heights, seed),
     };
     Scene::new(w, d, heights, colors)
+}
+
+/// Loads a height map and the photos draped over it: none (colored by
+/// height and slope), one stretched over the map's extent (any format, as
+/// [`load_pair`]), or GeoTIFF photos placed by their georeference over a
+/// georeferenced height map, each over the ones before, the points no
+/// photo covers colored by height and slope. One line a placed photo says
+/// how much of the terrain it covers; a photo that covers none of it is
+/// refused.
+pub fn load_scene_files(
+    height: &std::path::Path,
+    colors: &[std::path::PathBuf],
+    scale: f32,
+    seed: u64,
+) -> Result<Scene> {
+    let georeferenced = |path: &std::path::Path| -> Result<Option<geotiff::GeoRef>> {
+        if !geotiff::is_tiff(path) {
+            return Ok(None);
+        }
+        Ok(geotiff::read_georef(path)?.ok())
+    };
+    let grid_at = georeferenced(height)?;
+    let photos_at = colors
+        .iter()
+        .map(|p| georeferenced(p))
+        .collect::<Result<Vec<_>>>()?;
+    let placed =
+        grid_at.is_some() && !photos_at.is_empty() && photos_at.iter().all(Option::is_some);
+    if !placed {
+        return match colors {
+            [] => load_pair(height, None, scale, seed),
+            [one] => load_pair(height, Some(one), scale, seed),
+            _ => Err(Error::new(
+                "several --color photos are placed by their georeference: give GeoTIFF photos over a GeoTIFF height map, or one photo to stretch over the map",
+            )),
+        };
+    }
+    let (w, d, heights) = load_heights(height, scale)?;
+    let mut scene_colors = color_by_height_and_slope(w, d, &heights, seed);
+    let grid_at = grid_at.unwrap_or_else(|| unreachable!("placed photos need a grid"));
+    for (path, at) in colors.iter().zip(photos_at) {
+        let at = at.unwrap_or_else(|| unreachable!("placed photos are georeferenced"));
+        if at.geographic != grid_at.geographic {
+            return Err(Error::new(format!(
+                "photo {} and height map {} are in different coordinate systems (one geographic, one projected)",
+                path.display(),
+                height.display()
+            )));
+        }
+        let photo = geotiff::read_photo(path)?;
+        let covered = geotiff::drape(&mut scene_colors, (w, d), &grid_at, &photo, &at);
+        if covered == 0 {
+            return Err(Error::new(format!(
+                "photo {} does not overlap height map {}",
+                path.display(),
+                height.display()
+            )));
+        }
+        eprintln!(
+            "{}: covers {:.1} % of the terrain, {:.1} photo pixels a grid spacing",
+            path.display(),
+            100.0 * covered as f64 / (f64::from(w) * f64::from(d)),
+            grid_at.pixel[0] / at.pixel[0]
+        );
+    }
+    Scene::new(w, d, heights, scene_colors)
 }
 
 impl Scene {

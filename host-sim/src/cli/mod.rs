@@ -15,7 +15,7 @@ use crate::kernel::{render_kernel_with, PixelRays};
 use crate::output::{stats_json, write_json, write_pfm, write_png};
 use crate::outputs::{OutputId, Outputs};
 use crate::reference::{Reference, ReferenceOptions};
-use crate::scene::{load_pair, procedural, Scene};
+use crate::scene::{load_scene_files, procedural, Scene};
 use crate::volume::{render_volume, Mode, TerrainVolume, VolumeOptions};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
@@ -228,16 +228,20 @@ pub enum Method {
 /// Where the terrain comes from.
 #[derive(Debug, clap::Args)]
 struct SceneArgs {
-    /// Height map: 8/16-bit grayscale PNG or SRTM .hgt. Without it, the
-    /// built-in procedural scene is rendered.
-    #[arg(long, value_name = "H.png")]
+    /// Height map: 8/16-bit grayscale PNG, SRTM .hgt or single-band
+    /// GeoTIFF. Without it, the built-in procedural scene is rendered.
+    #[arg(long, value_name = "H.png|H.hgt|H.tif")]
     height: Option<PathBuf>,
-    /// Color map: RGB, RGBA, gray or palette PNG. Without it, real heights
-    /// are colored by height and slope.
-    #[arg(long, value_name = "C.png")]
-    color: Option<PathBuf>,
+    /// Color map: RGB, RGBA, gray or palette PNG, or an 8-bit TIFF,
+    /// stretched over the height map; or GeoTIFF photos over a GeoTIFF
+    /// height map, placed by their georeference (give --color once for
+    /// each, later over earlier). Without it, real heights are colored by
+    /// height and slope.
+    #[arg(long, value_name = "C.png|C.tif")]
+    color: Vec<PathBuf>,
     /// World height of one height-map unit, in voxels [default: 1; for an
-    /// SRTM .hgt, one meter in voxels of its grid spacing].
+    /// SRTM .hgt or a georeferenced GeoTIFF, one meter in voxels of its
+    /// grid spacing].
     #[arg(long, value_name = "S", value_parser = positive(0.0f32, 1e6), allow_hyphen_values = true)]
     height_scale: Option<f32>,
     /// Side of the procedural scene, used when no --height is given
@@ -662,7 +666,7 @@ impl SceneArgs {
         if let Some(path) = &self.height {
             outputs.input("--height", path);
         }
-        if let Some(path) = &self.color {
+        for path in &self.color {
             outputs.input("--color", path);
         }
     }
@@ -675,29 +679,29 @@ fn load_scene(args: &SceneArgs) -> Result<Scene> {
 /// The scene the arguments name; the built-in one is `default_side` a side
 /// unless --procedural-size says otherwise.
 fn load_scene_or(args: &SceneArgs, default_side: u32) -> Result<Scene> {
-    match (&args.height, &args.color) {
-        (None, Some(_)) => Err(Error::new("--color needs --height")),
-        (None, None) => Ok(procedural(
+    match (&args.height, args.color.as_slice()) {
+        (None, [_, ..]) => Err(Error::new("--color needs --height")),
+        (None, []) => Ok(procedural(
             args.procedural_size.unwrap_or(default_side),
             args.seed,
         )),
-        (Some(h), color) => {
+        (Some(h), colors) => {
             let scale = height_scale(h, args.height_scale)?;
-            load_pair(h, color.as_deref(), scale, args.seed)
+            load_scene_files(h, colors, scale, args.seed)
         }
     }
 }
 
 /// `--height-scale` as given, or derived from an SRTM tile's grid spacing
-/// (saying what it chose), or 1.
+/// or a GeoTIFF's georeference (saying what it chose), or 1.
 fn height_scale(height: &Path, given: Option<f32>) -> Result<f32> {
     if let Some(scale) = given {
         return Ok(scale);
     }
-    match crate::scene::hgt_spacing(height)? {
-        Some(spacing) => {
-            eprintln!("{}", spacing.describe());
-            Ok(spacing.height_scale())
+    match crate::scene::derived_height_scale(height)? {
+        Some((scale, why)) => {
+            eprintln!("{why}");
+            Ok(scale)
         }
         None => Ok(1.0),
     }

@@ -248,7 +248,7 @@ fn terrain_flags(args: &ViewArgs) -> Vec<String> {
     if let Some(path) = &args.scene.height {
         flag("height", path.display().to_string());
     }
-    if let Some(path) = &args.scene.color {
+    for path in &args.scene.color {
         flag("color", path.display().to_string());
     }
     if let Some(scale) = args.scene.height_scale {

@@ -1,8 +1,11 @@
 //! Height and color maps from files.
 //!
-//! Heights: 8- or 16-bit grayscale PNG (any PNG is converted to luma), or an
-//! SRTM `.hgt` tile (square, big-endian `i16` meters; voids, −32768, become
-//! 0). Colors: RGB, RGBA, gray or palette PNG.
+//! Heights: 8- or 16-bit grayscale PNG (any PNG is converted to luma), an
+//! SRTM `.hgt` tile (square, big-endian `i16` meters), or a single-band
+//! GeoTIFF ([`super::geotiff`]). Voids (an `.hgt`'s −32768, a GeoTIFF's
+//! no-data value) are filled from their neighbours ([`fill_voids`]), and
+//! one line says how many. Colors: RGB, RGBA, gray or palette PNG, or an
+//! 8-bit gray, RGB or RGBA TIFF.
 
 use crate::error::{Error, Result};
 use image::{DynamicImage, ImageReader};
@@ -21,6 +24,12 @@ pub fn load_heights(path: &Path, scale: f32) -> Result<(u32, u32, Vec<f32>)> {
         .is_some_and(|e| e.eq_ignore_ascii_case("hgt"));
     if is_hgt {
         return load_hgt(path, scale);
+    }
+    if super::geotiff::is_tiff(path) {
+        let mut raster = super::geotiff::read_heights(path)?;
+        fill_voids(path, raster.width, raster.depth, &mut raster.values)?;
+        let heights = raster.values.into_iter().map(|v| v * scale).collect();
+        return Ok((raster.width, raster.depth, heights));
     }
     let image = open_image(path, "height map")?;
     let (w, h) = (image.width(), image.height());
@@ -63,14 +72,77 @@ fn load_hgt(path: &Path, scale: f32) -> Result<(u32, u32, Vec<f32>)> {
             bytes.len()
         )));
     }
-    let heights = bytes
+    let mut heights: Vec<f32> = bytes
         .chunks_exact(2)
         .map(|b| match i16::from_be_bytes([b[0], b[1]]) {
-            i16::MIN => 0.0,
-            v => f32::from(v) * scale,
+            i16::MIN => f32::NAN,
+            v => f32::from(v),
         })
         .collect();
-    Ok((side as u32, side as u32, heights))
+    fill_voids(path, side as u32, side as u32, &mut heights)?;
+    Ok((
+        side as u32,
+        side as u32,
+        heights.into_iter().map(|h| h * scale).collect(),
+    ))
+}
+
+/// Fills the voids (NaN) of a `width` × `depth` height grid from their
+/// valid neighbours, ring by ring from the edges of each void inward: a
+/// void point with a known one among its eight neighbours takes their mean,
+/// and the next ring sees it as known. Every filled height is a mean of
+/// known heights, so none lies below the lowest valid height around its
+/// void (no pits) or above the highest. Says on one line how many were
+/// filled; refuses a grid that is mostly void. Returns the count.
+pub fn fill_voids(path: &Path, width: u32, depth: u32, heights: &mut [f32]) -> Result<usize> {
+    let voids = heights.iter().filter(|h| h.is_nan()).count();
+    if voids == 0 {
+        return Ok(0);
+    }
+    let total = heights.len();
+    if voids * 2 > total {
+        return Err(Error::new(format!(
+            "height map {} is mostly void: {voids} of its {total} samples have no data",
+            path.display()
+        )));
+    }
+    let (w, d) = (width as usize, depth as usize);
+    let mut ring: Vec<(usize, f32)> = Vec::new();
+    loop {
+        ring.clear();
+        for y in 0..d {
+            for x in 0..w {
+                if !heights[y * w + x].is_nan() {
+                    continue;
+                }
+                let (mut sum, mut n) = (0.0f64, 0u32);
+                for ny in y.saturating_sub(1)..=(y + 1).min(d - 1) {
+                    for nx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                        let h = heights[ny * w + nx];
+                        if !h.is_nan() {
+                            sum += f64::from(h);
+                            n += 1;
+                        }
+                    }
+                }
+                if n > 0 {
+                    ring.push((y * w + x, (sum / f64::from(n)) as f32));
+                }
+            }
+        }
+        if ring.is_empty() {
+            break;
+        }
+        for &(i, h) in &ring {
+            heights[i] = h;
+        }
+    }
+    eprintln!(
+        "{}: filled {voids} void samples ({:.1} %) from their neighbours",
+        path.display(),
+        100.0 * voids as f64 / total as f64
+    );
+    Ok(voids)
 }
 
 /// Loads a color map and fits it to a `width` × `depth` height grid.
@@ -82,7 +154,11 @@ fn load_hgt(path: &Path, scale: f32) -> Result<(u32, u32, Vec<f32>)> {
 /// the grid spacing when the image is finer (box filter) and bilinear when
 /// it is coarser.
 pub fn load_colors(path: &Path, width: u32, depth: u32) -> Result<Vec<Rgb>> {
-    let image = open_image(path, "color map")?.to_rgb8();
+    let image = if super::geotiff::is_tiff(path) {
+        super::geotiff::read_photo(path)?
+    } else {
+        open_image(path, "color map")?.to_rgb8()
+    };
     let (cw, cd) = image.dimensions();
     if (cw, cd) == (width, depth) {
         return Ok(image.pixels().map(|p| p.0).collect());
@@ -150,6 +226,30 @@ fn open_image(path: &Path, what: &str) -> Result<DynamicImage> {
     reader
         .decode()
         .map_err(|e| Error::new(format!("cannot decode {what} {}: {e}", path.display())))
+}
+
+/// The height scale a map's own georeference gives (an SRTM `.hgt`'s
+/// grid spacing, a GeoTIFF's pixel size) and one line saying what it
+/// chose; `None` for a map without one (a PNG, a TIFF without a
+/// georeference, which also gets a line).
+pub fn derived_height_scale(path: &Path) -> Result<Option<(f32, String)>> {
+    if let Some(spacing) = hgt_spacing(path)? {
+        return Ok(Some((spacing.height_scale(), spacing.describe())));
+    }
+    if !super::geotiff::is_tiff(path) {
+        return Ok(None);
+    }
+    let raster = super::geotiff::read_heights(path)?;
+    Ok(match raster.georef {
+        Ok(georef) => Some(georef.height_scale(raster.depth)),
+        Err(why) => {
+            eprintln!(
+                "{} is not georeferenced ({why}): its heights are taken as voxels (--height-scale to change)",
+                path.display()
+            );
+            None
+        }
+    })
 }
 
 /// Meters along one arc-second of latitude (and of longitude at the
@@ -243,6 +343,45 @@ fn latitude_from_name(name: &str) -> Option<f64> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn voids_are_filled_from_their_neighbours_without_pits() {
+        // A 6 × 5 slope with a 3 × 2 hole and a void at a corner.
+        let (w, d) = (6u32, 5u32);
+        let mut heights: Vec<f32> = (0..w * d).map(|i| (i % w * 10 + i / w) as f32).collect();
+        for (x, y) in [(2, 1), (3, 1), (4, 1), (2, 2), (3, 2), (4, 2), (0, 0)] {
+            heights[(y * w + x) as usize] = f32::NAN;
+        }
+        let filled = fill_voids(Path::new("slope.tif"), w, d, &mut heights).unwrap();
+        assert_eq!(filled, 7);
+        assert!(heights.iter().all(|h| h.is_finite()));
+        // Inside the hole's ring of known heights: no pit, no peak.
+        let ring = [
+            (1, 0),
+            (2, 0),
+            (3, 0),
+            (4, 0),
+            (5, 0),
+            (1, 1),
+            (5, 1),
+            (1, 2),
+            (5, 2),
+        ]
+        .into_iter()
+        .chain([(1, 3), (2, 3), (3, 3), (4, 3), (5, 3)])
+        .map(|(x, y)| heights[y * w as usize + x]);
+        let (low, high) = ring.fold((f32::MAX, f32::MIN), |(a, b), h| (a.min(h), b.max(h)));
+        for (x, y) in [(2, 1), (3, 1), (4, 1), (2, 2), (3, 2), (4, 2)] {
+            let h = heights[y * w as usize + x];
+            assert!((low..=high).contains(&h), "{h} outside {low}..{high}");
+        }
+        // No voids: nothing to do. Mostly void: refused in one line.
+        assert_eq!(fill_voids(Path::new("x"), w, d, &mut heights).unwrap(), 0);
+        let mut holes = vec![f32::NAN; 30];
+        holes[0] = 1.0;
+        let e = fill_voids(Path::new("void.tif"), w, d, &mut holes).unwrap_err();
+        assert!(e.to_string().contains("mostly void: 29 of its 30"), "{e}");
+    }
+
     use super::*;
 
     #[test]

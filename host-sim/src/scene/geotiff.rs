@@ -1,0 +1,514 @@
+//! GeoTIFF rasters (the `tiff` crate): heights in any integer or float
+//! sample format with their no-data value (the GDAL_NODATA tag; for int16
+//! without it, SRTM's −32768), photos in 8-bit gray, RGB or RGBA, and the
+//! georeference of either (ModelPixelScale with ModelTiepoint, or an
+//! unrotated ModelTransformation; geographic or projected by the
+//! GeoKeyDirectory's model type).
+
+use crate::error::{Error, Result};
+use image::RgbImage;
+use std::fs::File;
+use std::io::BufReader;
+use std::path::Path;
+use tiff::decoder::{Decoder, DecodingResult};
+use tiff::tags::Tag;
+use tiff::ColorType;
+
+/// Where a raster lies: the model coordinates of its top-left corner and
+/// the size of a pixel (x east, y south, both positive).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GeoRef {
+    /// Model x and y of the top-left pixel's outer corner.
+    pub origin: [f64; 2],
+    /// Pixel width and height in model units.
+    pub pixel: [f64; 2],
+    /// Longitude and latitude in degrees (EPSG:4326 and the like), rather
+    /// than a projection's linear units.
+    pub geographic: bool,
+    /// Meters a linear unit of a projected raster (1, or a foot's).
+    pub meters_per_unit: f64,
+}
+
+/// Meters along a degree of latitude (and of longitude at the equator).
+const METERS_PER_DEGREE: f64 = 111_132.0;
+
+impl GeoRef {
+    /// Meters between samples east-west and north-south; a geographic
+    /// raster's east-west spacing is taken at its middle latitude.
+    pub fn spacing_m(&self, height: u32) -> (f64, f64) {
+        if self.geographic {
+            let middle = self.origin[1] - self.pixel[1] * f64::from(height) / 2.0;
+            let east = self.pixel[0] * METERS_PER_DEGREE * middle.to_radians().cos();
+            (east, self.pixel[1] * METERS_PER_DEGREE)
+        } else {
+            (
+                self.pixel[0] * self.meters_per_unit,
+                self.pixel[1] * self.meters_per_unit,
+            )
+        }
+    }
+
+    /// The height scale that puts heights in meters into voxels of the
+    /// grid's spacing (the mean of the two directions), and one line
+    /// saying so.
+    pub fn height_scale(&self, height: u32) -> (f32, String) {
+        let (east, north) = self.spacing_m(height);
+        let voxel = (east + north) / 2.0;
+        let how = if self.geographic {
+            let middle = self.origin[1] - self.pixel[1] * f64::from(height) / 2.0;
+            format!(
+                "{:.6}° samples at latitude {middle:.2} are {east:.1} m east-west and {north:.1} m north-south",
+                self.pixel[1]
+            )
+        } else {
+            format!("samples are {east:.2} m east-west and {north:.2} m north-south")
+        };
+        (
+            (1.0 / voxel) as f32,
+            format!("height scale 1/{voxel:.2}: {how}; --height-scale overrides"),
+        )
+    }
+}
+
+fn open(path: &Path, what: &str) -> Result<Decoder<BufReader<File>>> {
+    let file = File::open(path)
+        .map_err(|e| Error::new(format!("cannot open {what} {}: {e}", path.display())))?;
+    Decoder::new(BufReader::new(file))
+        .map_err(|e| Error::new(format!("cannot read {what} {}: {e}", path.display())))
+}
+
+fn failed(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
+    Error::new(format!("cannot decode {what} {}: {e}", path.display()))
+}
+
+/// The raster's georeference, or `None` (with what is missing) when it has
+/// none or only a rotated one.
+fn georef(decoder: &mut Decoder<BufReader<File>>) -> std::result::Result<GeoRef, &'static str> {
+    let doubles = |decoder: &mut Decoder<BufReader<File>>, tag| {
+        decoder
+            .find_tag(tag)
+            .ok()
+            .flatten()
+            .and_then(|v| v.into_f64_vec().ok())
+    };
+    let scale = doubles(decoder, Tag::ModelPixelScaleTag);
+    let tiepoint = doubles(decoder, Tag::ModelTiepointTag);
+    let transformation = doubles(decoder, Tag::ModelTransformationTag);
+    let (origin, pixel) = match (scale, tiepoint, transformation) {
+        (Some(s), Some(t), _) if s.len() >= 2 && t.len() >= 6 => {
+            ([t[3] - t[0] * s[0], t[4] + t[1] * s[1]], [s[0], s[1]])
+        }
+        (_, _, Some(m)) if m.len() >= 16 => {
+            if m[1] != 0.0 || m[4] != 0.0 {
+                return Err("its ModelTransformation rotates it");
+            }
+            ([m[3], m[7]], [m[0], -m[5]])
+        }
+        _ => return Err("it has no ModelPixelScale and ModelTiepoint"),
+    };
+    let positive = pixel[0] > 0.0 && pixel[1] > 0.0;
+    if !(positive && origin.iter().all(|v| v.is_finite())) {
+        return Err("its pixel scale is not positive");
+    }
+    // GeoKeyDirectory: a header of four shorts, then keys of four
+    // (id, location, count, value). 1024 is the model type (1 projected,
+    // 2 geographic), 3076 the projection's linear unit (EPSG unit codes).
+    let keys = decoder
+        .find_tag(Tag::GeoKeyDirectoryTag)
+        .ok()
+        .flatten()
+        .and_then(|v| v.into_u16_vec().ok())
+        .unwrap_or_default();
+    let key = |id: u16| {
+        keys.get(4..)
+            .unwrap_or(&[])
+            .chunks_exact(4)
+            .find(|k| k[0] == id && k[1] == 0)
+            .map(|k| k[3])
+    };
+    let geographic = match key(1024) {
+        Some(model) => model == 2,
+        // No keys: degrees if it looks like degrees.
+        None => origin[0].abs() <= 180.0 && origin[1].abs() <= 90.0 && pixel[0] < 0.1,
+    };
+    let meters_per_unit = match key(3076) {
+        Some(9002) => 0.3048,
+        Some(9003) => 1200.0 / 3937.0,
+        _ => 1.0,
+    };
+    Ok(GeoRef {
+        origin,
+        pixel,
+        geographic,
+        meters_per_unit,
+    })
+}
+
+/// The georeference of the TIFF at `path` (its tags alone are read), or
+/// why it has none.
+pub fn read_georef(path: &Path) -> Result<std::result::Result<GeoRef, &'static str>> {
+    let mut decoder = open(path, "GeoTIFF")?;
+    Ok(georef(&mut decoder))
+}
+
+/// Drapes `photo`, which lies at `photo_at`, over the grid of `width` ×
+/// `depth` points lying at `grid_at` (pixel-is-area: a sample stands for
+/// its pixel's center): each grid point the photo covers takes the mean
+/// of the photo's pixels over the point's own footprint (a box as wide as
+/// the grid's spacing, at most 64 photo pixels a side), and the others
+/// keep their colors. Returns the points covered.
+pub fn drape(
+    colors: &mut [terracast::Rgb],
+    (width, depth): (u32, u32),
+    grid_at: &GeoRef,
+    photo: &RgbImage,
+    photo_at: &GeoRef,
+) -> usize {
+    let (pw, ph) = (i64::from(photo.width()), i64::from(photo.height()));
+    // Photo pixels across a grid point's footprint.
+    let reach = [0, 1].map(|i| (grid_at.pixel[i] / photo_at.pixel[i] / 2.0).clamp(0.5, 32.0));
+    let mut covered = 0;
+    for gy in 0..depth {
+        let my = grid_at.origin[1] - (f64::from(gy) + 0.5) * grid_at.pixel[1];
+        let v = (photo_at.origin[1] - my) / photo_at.pixel[1] - 0.5;
+        if v < -0.5 || v > ph as f64 - 0.5 {
+            continue;
+        }
+        for gx in 0..width {
+            let mx = grid_at.origin[0] + (f64::from(gx) + 0.5) * grid_at.pixel[0];
+            let u = (mx - photo_at.origin[0]) / photo_at.pixel[0] - 0.5;
+            if u < -0.5 || u > pw as f64 - 0.5 {
+                continue;
+            }
+            let (x0, x1) = ((u - reach[0]).ceil() as i64, (u + reach[0]).floor() as i64);
+            let (y0, y1) = ((v - reach[1]).ceil() as i64, (v + reach[1]).floor() as i64);
+            let (mut sum, mut n) = ([0u64; 3], 0u64);
+            for y in y0.max(0)..=y1.min(ph - 1) {
+                for x in x0.max(0)..=x1.min(pw - 1) {
+                    let p = photo.get_pixel(x as u32, y as u32).0;
+                    (0..3).for_each(|i| sum[i] += u64::from(p[i]));
+                    n += 1;
+                }
+            }
+            if n == 0 {
+                continue;
+            }
+            colors[(gy * width + gx) as usize] = sum.map(|c| ((c + n / 2) / n) as u8);
+            covered += 1;
+        }
+    }
+    covered
+}
+
+/// A height raster: row-major values, NaN where it has no data.
+#[derive(Debug, Clone)]
+pub struct HeightRaster {
+    /// Samples a row.
+    pub width: u32,
+    /// Rows.
+    pub depth: u32,
+    /// Heights in the file's units, top row first; NaN for no data.
+    pub values: Vec<f32>,
+    /// Where it lies, or why that is unknown.
+    pub georef: std::result::Result<GeoRef, &'static str>,
+}
+
+/// Reads the heights of a single-band GeoTIFF.
+pub fn read_heights(path: &Path) -> Result<HeightRaster> {
+    let what = "height map";
+    let mut decoder = open(path, what)?;
+    let (width, depth) = decoder.dimensions().map_err(|e| failed(path, what, e))?;
+    let color = decoder.colortype().map_err(|e| failed(path, what, e))?;
+    if !matches!(color, ColorType::Gray(_)) {
+        return Err(Error::new(format!(
+            "height map {} is a {color:?} TIFF: a height map has one band of samples",
+            path.display()
+        )));
+    }
+    let no_data: Option<f64> = decoder
+        .find_tag(Tag::GdalNodata)
+        .ok()
+        .flatten()
+        .and_then(|v| v.into_string().ok())
+        .and_then(|s| s.trim().trim_end_matches('\0').parse().ok());
+    let georef = georef(&mut decoder);
+    let image = decoder.read_image().map_err(|e| failed(path, what, e))?;
+    let mut values: Vec<f32> = match image {
+        DecodingResult::U8(v) => v.into_iter().map(f32::from).collect(),
+        DecodingResult::U16(v) => v.into_iter().map(f32::from).collect(),
+        DecodingResult::U32(v) => v.into_iter().map(|x| x as f32).collect(),
+        DecodingResult::I8(v) => v.into_iter().map(f32::from).collect(),
+        DecodingResult::I16(v) => v
+            .into_iter()
+            .map(|x| match (x, no_data) {
+                // SRTM's void, where the file names no other.
+                (i16::MIN, None) => f32::NAN,
+                _ => f32::from(x),
+            })
+            .collect(),
+        DecodingResult::I32(v) => v.into_iter().map(|x| x as f32).collect(),
+        DecodingResult::F32(v) => v,
+        DecodingResult::F64(v) => v.into_iter().map(|x| x as f32).collect(),
+        other => {
+            return Err(Error::new(format!(
+                "height map {} has {} samples: GeoTIFF heights are 8-, 16- or 32-bit integers or 32- or 64-bit floats",
+                path.display(),
+                sample_kind(&other)
+            )))
+        }
+    };
+    if let Some(no_data) = no_data {
+        let no_data = no_data as f32;
+        for v in &mut values {
+            if *v == no_data {
+                *v = f32::NAN;
+            }
+        }
+    }
+    // Values no height can be (infinities) are no data too.
+    for v in &mut values {
+        if v.is_infinite() {
+            *v = f32::NAN;
+        }
+    }
+    if values.len() != width as usize * depth as usize {
+        return Err(failed(path, what, "fewer samples than its size"));
+    }
+    Ok(HeightRaster {
+        width,
+        depth,
+        values,
+        georef,
+    })
+}
+
+fn sample_kind(result: &DecodingResult) -> &'static str {
+    match result {
+        DecodingResult::U64(_) => "64-bit integer",
+        DecodingResult::I64(_) => "64-bit signed integer",
+        DecodingResult::F16(_) => "16-bit float",
+        _ => "unsupported",
+    }
+}
+
+/// Reads a photo: 8-bit gray, gray with alpha, RGB or RGBA (alpha is
+/// dropped).
+pub fn read_photo(path: &Path) -> Result<RgbImage> {
+    let what = "color map";
+    let mut decoder = open(path, what)?;
+    let (width, height) = decoder.dimensions().map_err(|e| failed(path, what, e))?;
+    let color = decoder.colortype().map_err(|e| failed(path, what, e))?;
+    let channels = match color {
+        ColorType::Gray(8) => 1,
+        ColorType::GrayA(8) => 2,
+        ColorType::RGB(8) => 3,
+        ColorType::RGBA(8) => 4,
+        other => {
+            return Err(Error::new(format!(
+                "color map {} is a {other:?} TIFF: a photo is 8-bit gray, RGB or RGBA",
+                path.display()
+            )))
+        }
+    };
+    let DecodingResult::U8(bytes) = decoder.read_image().map_err(|e| failed(path, what, e))? else {
+        return Err(failed(path, what, "its samples are not bytes"));
+    };
+    let pixels = width as usize * height as usize;
+    if bytes.len() < pixels * channels {
+        return Err(failed(path, what, "fewer samples than its size"));
+    }
+    let rgb: Vec<u8> = bytes
+        .chunks_exact(channels)
+        .take(pixels)
+        .flat_map(|p| match channels {
+            1 | 2 => [p[0]; 3],
+            _ => [p[0], p[1], p[2]],
+        })
+        .collect();
+    RgbImage::from_raw(width, height, rgb).ok_or_else(|| failed(path, what, "bad size"))
+}
+
+/// Whether `path` names a TIFF by its extension.
+pub fn is_tiff(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tiff::encoder::{colortype, TiffEncoder};
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("terracast-geotiff-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir.join(name)
+    }
+
+    /// Writes a 4 × 3 one-band TIFF of `C` samples with `tags` (tag,
+    /// doubles) and an optional GDAL_NODATA string.
+    fn write<C: colortype::ColorType>(
+        name: &str,
+        data: &[C::Inner],
+        tags: &[(Tag, &[f64])],
+        no_data: Option<&str>,
+    ) -> std::path::PathBuf
+    where
+        [C::Inner]: tiff::encoder::TiffValue,
+    {
+        let path = temp(name);
+        let mut encoder = TiffEncoder::new(File::create(&path).unwrap()).unwrap();
+        let mut image = encoder.new_image::<C>(4, 3).unwrap();
+        for &(tag, values) in tags {
+            image.encoder().write_tag(tag, values).unwrap();
+        }
+        if let Some(text) = no_data {
+            image.encoder().write_tag(Tag::GdalNodata, text).unwrap();
+        }
+        image.write_data(data).unwrap();
+        path
+    }
+
+    const GEOGRAPHIC: [(Tag, &[f64]); 2] = [
+        (Tag::ModelPixelScaleTag, &[0.001, 0.001, 0.0]),
+        (Tag::ModelTiepointTag, &[0.0, 0.0, 0.0, 20.0, -34.0, 0.0]),
+    ];
+
+    #[test]
+    fn heights_of_every_sample_format_with_their_no_data() {
+        let int16 = write::<colortype::GrayI16>(
+            "i16.tif",
+            &[10, 20, i16::MIN, 40, 50, 60, 70, 80, 90, 100, 110, -5],
+            &GEOGRAPHIC,
+            None,
+        );
+        let raster = read_heights(&int16).unwrap();
+        assert_eq!((raster.width, raster.depth), (4, 3));
+        assert!(raster.values[2].is_nan(), "SRTM's void");
+        assert_eq!(raster.values[11], -5.0);
+        let float = write::<colortype::Gray32Float>(
+            "f32.tif",
+            &[
+                1.5, -9999.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0,
+            ],
+            &GEOGRAPHIC,
+            Some("-9999"),
+        );
+        let raster = read_heights(&float).unwrap();
+        assert_eq!(raster.values[0], 1.5);
+        assert!(raster.values[1].is_nan(), "GDAL_NODATA");
+        let unsigned = write::<colortype::Gray16>("u16.tif", &[7; 12], &[], None);
+        let raster = read_heights(&unsigned).unwrap();
+        assert_eq!(raster.values, vec![7.0; 12]);
+        assert_eq!(
+            raster.georef,
+            Err("it has no ModelPixelScale and ModelTiepoint")
+        );
+    }
+
+    #[test]
+    fn a_georeference_gives_the_height_scale_in_meters() {
+        let path = write::<colortype::Gray16>("geo.tif", &[0; 12], &GEOGRAPHIC, None);
+        let georef = read_heights(&path).unwrap().georef.unwrap();
+        assert!(georef.geographic);
+        assert_eq!(georef.origin, [20.0, -34.0]);
+        // 0.001° of latitude is 111.1 m; of longitude at 34°S, 92.1 m.
+        let (east, north) = georef.spacing_m(3);
+        assert!(
+            (north - 111.132).abs() < 0.01 && (east - 92.13).abs() < 0.05,
+            "{east} {north}"
+        );
+        let (scale, why) = georef.height_scale(3);
+        assert!((1.0 / scale - 101.63).abs() < 0.05, "{scale}");
+        assert!(why.contains("latitude -34.00"), "{why}");
+        // Projected, in meters: the pixel size is the spacing.
+        let projected = write::<colortype::Gray16>(
+            "utm.tif",
+            &[0; 12],
+            &[
+                (Tag::ModelPixelScaleTag, &[2.0, 2.0, 0.0]),
+                (
+                    Tag::ModelTiepointTag,
+                    &[0.0, 0.0, 0.0, 500_000.0, 3_800_000.0, 0.0],
+                ),
+            ],
+            None,
+        );
+        let georef = read_heights(&projected).unwrap().georef.unwrap();
+        assert!(!georef.geographic);
+        assert_eq!(georef.height_scale(3).0, 0.5);
+    }
+
+    /// A 4 × 2 RGB photo at `origin` (degrees), 0.0005° pixels.
+    fn photo_at(name: &str, origin: [f64; 2]) -> std::path::PathBuf {
+        let path = temp(name);
+        let mut encoder = TiffEncoder::new(File::create(&path).unwrap()).unwrap();
+        let mut image = encoder.new_image::<colortype::RGB8>(4, 2).unwrap();
+        let scale: &[f64] = &[0.0005, 0.0005, 0.0];
+        let tiepoint: &[f64] = &[0.0, 0.0, 0.0, origin[0], origin[1], 0.0];
+        image
+            .encoder()
+            .write_tag(Tag::ModelPixelScaleTag, scale)
+            .unwrap();
+        image
+            .encoder()
+            .write_tag(Tag::ModelTiepointTag, tiepoint)
+            .unwrap();
+        image.write_data(&[250u8; 24]).unwrap();
+        path
+    }
+
+    #[test]
+    fn photos_lie_where_their_georeference_puts_them() {
+        // Heights: 4 × 3 samples of 0.001° from (20, −34).
+        let heights = write::<colortype::Gray16>("grid.tif", &[5; 12], &GEOGRAPHIC, None);
+        // A photo over the grid's top-left corner, 0.002° by 0.001°: the
+        // two points whose centers (0.0005° and 0.0015° in) it covers.
+        let corner = photo_at("corner.tif", [20.0, -34.0]);
+        let scene = crate::scene::load_scene_files(&heights, &[corner], 1.0, 1).unwrap();
+        let bright = |c: &terracast::Rgb| *c == [250; 3];
+        let covered: Vec<bool> = scene.colors.iter().map(bright).collect();
+        assert_eq!(
+            covered,
+            [true, true, false, false, false, false, false, false, false, false, false, false]
+        );
+        // Far away: refused in one line.
+        let far = photo_at("far.tif", [30.0, -10.0]);
+        let e = crate::scene::load_scene_files(&heights, std::slice::from_ref(&far), 1.0, 1)
+            .unwrap_err();
+        assert!(e.to_string().contains("does not overlap"), "{e}");
+        // Several photos over a height map without a georeference.
+        let plain = write::<colortype::Gray16>("plain.tif", &[5; 12], &[], None);
+        let e = crate::scene::load_scene_files(&plain, &[far.clone(), far], 1.0, 1).unwrap_err();
+        assert!(e.to_string().contains("several --color photos"), "{e}");
+    }
+
+    #[test]
+    fn photos_and_bad_files_are_read_or_refused_in_one_line() {
+        let path = temp("rgba.tif");
+        let mut encoder = TiffEncoder::new(File::create(&path).unwrap()).unwrap();
+        let rgba: Vec<u8> = (0..4 * 3).flat_map(|i| [i as u8, 100, 200, 0]).collect();
+        encoder
+            .write_image::<colortype::RGBA8>(4, 3, &rgba)
+            .unwrap();
+        let photo = read_photo(&path).unwrap();
+        assert_eq!(photo.dimensions(), (4, 3));
+        assert_eq!(photo.get_pixel(3, 2).0, [11, 100, 200]);
+        // A photo as heights, heights as a photo, 16-bit RGB: refused.
+        let e = read_heights(&path).unwrap_err().to_string();
+        assert!(e.contains("one band"), "{e}");
+        let heights = write::<colortype::Gray32Float>("h.tif", &[0.0; 12], &[], None);
+        assert!(read_photo(&heights)
+            .unwrap_err()
+            .to_string()
+            .contains("8-bit"));
+        // Truncated: an error, not a panic.
+        let bytes = std::fs::read(&path).unwrap();
+        let cut = temp("cut.tif");
+        for keep in [0, 8, 40, bytes.len() / 2, bytes.len() - 1] {
+            std::fs::write(&cut, &bytes[..keep]).unwrap();
+            let e = read_photo(&cut).unwrap_err().to_string();
+            assert!(e.contains("cut.tif") && !e.contains('\n'), "{e}");
+        }
+    }
+}
