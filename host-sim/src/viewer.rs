@@ -137,9 +137,28 @@ pub struct Settings {
     pub rays: PixelRays,
     /// Whether the governor holds the frame time.
     pub governor: bool,
+    /// The resolution the resolution key switches to next (so that a
+    /// pixel-to-voxel ratio given at the start comes back).
+    other_resolution: Resolution,
 }
 
 impl Settings {
+    /// The settings a window starts with.
+    pub fn new(options: RenderOptions, rays: PixelRays, governor: bool) -> Self {
+        let other_resolution = match options.resolution {
+            Resolution::Single => Resolution::Multi {
+                pixel_to_voxel: U8F8::ONE,
+            },
+            Resolution::Multi { .. } => Resolution::Single,
+        };
+        Self {
+            options,
+            rays,
+            governor,
+            other_resolution,
+        }
+    }
+
     /// Subvoxel or nearest shading.
     pub fn toggle_shading(&mut self) {
         self.options.shading = match self.options.shading {
@@ -150,12 +169,7 @@ impl Settings {
 
     /// The pyramid's levels, or level 0 only.
     pub fn toggle_resolution(&mut self) {
-        self.options.resolution = match self.options.resolution {
-            Resolution::Single => Resolution::Multi {
-                pixel_to_voxel: U8F8::ONE,
-            },
-            Resolution::Multi { .. } => Resolution::Single,
-        };
+        core::mem::swap(&mut self.options.resolution, &mut self.other_resolution);
     }
 
     /// One ray a pixel, or rays by footprint.
@@ -776,15 +790,20 @@ mod tests {
 
     #[test]
     fn the_render_command_names_every_setting_the_window_used() {
-        let mut settings = Settings {
-            options: RenderOptions::default(),
-            rays: PixelRays::ByFootprint,
-            governor: true,
-        };
-        settings.toggle_shading();
-        settings.options.resolution = Resolution::Multi {
+        let given = Resolution::Multi {
             pixel_to_voxel: U8F8::from_bits(300),
         };
+        let options = RenderOptions {
+            resolution: given,
+            ..RenderOptions::default()
+        };
+        let mut settings = Settings::new(options, PixelRays::ByFootprint, true);
+        settings.toggle_shading();
+        // Single resolution and back: the ratio given comes back.
+        settings.toggle_resolution();
+        assert_eq!(settings.options.resolution, Resolution::Single);
+        settings.toggle_resolution();
+        assert_eq!(settings.options.resolution, given);
         let options = settings.options;
         let camera = Camera::looking([1.5, 2.25, 3.0], 10.0, 20.0);
         let args = render_arguments(

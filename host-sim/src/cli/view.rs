@@ -109,11 +109,11 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
         .transpose()?;
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
     let options = args.kernel.options(sky);
-    let settings = Settings {
+    let settings = Settings::new(
         options,
-        rays: args.kernel.vertical_samples.1,
-        governor: args.governor == Switch::On,
-    };
+        args.kernel.vertical_samples.1,
+        args.governor == Switch::On,
+    );
     let mut slots;
     let mut scene_storage = None;
     let mut scenic = None;
