@@ -151,6 +151,17 @@ pub fn read_georef(path: &Path) -> Result<std::result::Result<GeoRef, &'static s
     Ok(georef(&mut decoder))
 }
 
+/// The height scale the georeference of the height map at `path` gives
+/// and the line saying so ([`GeoRef::height_scale`]), from its tags and
+/// size alone; or why it has no georeference.
+pub fn height_scale(path: &Path) -> Result<std::result::Result<(f32, String), &'static str>> {
+    let mut decoder = open(path, "height map")?;
+    let (_, rows) = decoder
+        .dimensions()
+        .map_err(|e| failed(path, "height map", e))?;
+    Ok(georef(&mut decoder).map(|georef| georef.height_scale(rows)))
+}
+
 /// Drapes `photo`, which lies at `photo_at`, over the grid of `width` ×
 /// `depth` points lying at `grid_at` (pixel-is-area: a sample stands for
 /// its pixel's center): each grid point the photo covers takes the mean

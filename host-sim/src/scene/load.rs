@@ -240,9 +240,8 @@ pub fn derived_height_scale(path: &Path) -> Result<Option<(f32, String)>> {
     if !super::geotiff::is_tiff(path) {
         return Ok(None);
     }
-    let raster = super::geotiff::read_heights(path)?;
-    Ok(match raster.georef {
-        Ok(georef) => Some(georef.height_scale(raster.depth)),
+    Ok(match super::geotiff::height_scale(path)? {
+        Ok(scale) => Some(scale),
         Err(why) => {
             eprintln!(
                 "{} is not georeferenced ({why}): its heights are taken as voxels (--height-scale to change)",
