@@ -43,6 +43,7 @@
 #![deny(missing_docs, unsafe_code, missing_debug_implementations)]
 #![deny(rustdoc::broken_intra_doc_links)]
 
+mod atmosphere;
 mod caster;
 mod color;
 pub mod config;
@@ -50,6 +51,7 @@ mod divide;
 mod pool;
 mod probe;
 mod pyramid;
+mod relief;
 pub mod roughness;
 mod sink;
 mod surface;
@@ -58,6 +60,10 @@ pub mod tiles;
 mod view;
 mod warp;
 
+pub use atmosphere::{
+    Atmosphere, AtmosphereError, AtmosphereFrame, AtmosphereSink, Fog, PreparedAtmosphere, Sun,
+    VISIBILITY_CONTRAST,
+};
 pub use color::Rgb;
 
 pub use caster::{
@@ -72,6 +78,7 @@ pub use pyramid::{
     level_count, level_side, pyramid_bytes, pyramid_cells, pyramid_points, wavelet_row,
     HeightFilter, Pyramid, PyramidError, MAX_LEVELS,
 };
+pub use relief::{shade_relief, Relief, ReliefError};
 pub use sink::{Framebuffer, FramebufferError, Sample, Sink};
 pub use surface::{Extent, Grid, Surface};
 pub use terrain::{Terrain, TerrainError};

@@ -40,6 +40,13 @@ pub trait Sink {
     fn put(&mut self, x: u32, y: u32, sample: Sample);
 }
 
+impl<S: Sink + ?Sized> Sink for &mut S {
+    #[inline]
+    fn put(&mut self, x: u32, y: u32, sample: Sample) {
+        (**self).put(x, y, sample);
+    }
+}
+
 /// A caller-provided framebuffer: a color per pixel, optionally a distance
 /// per pixel, row-major with y = 0 at the top.
 #[derive(Debug)]

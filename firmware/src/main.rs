@@ -12,7 +12,10 @@
 //!    would receive;
 //! 3. renders it again with every ray cast from the eye (coherence off),
 //!    written as `frame-K-from-eye.rgb`: the same rays with many more
-//!    steps, which separates the cost of a step from that of a ray.
+//!    steps, which separates the cost of a step from that of a ray;
+//! 4. renders it again with the flight's sky, sun and fog
+//!    (`Atmosphere::FLIGHT`), written as `frame-K-atmosphere.rgb`: what
+//!    the atmosphere costs a pixel.
 //!
 //! The renders, and the render plus the transfer, are timed with SysTick. Under QEMU's `-icount` the clock
 //! advances by instruction count, so ticks convert to instructions exactly
@@ -36,8 +39,8 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
-    pyramid_cells, pyramid_points, render, Coherence, Framebuffer, HeightFilter, NoProbe, Pyramid,
-    RenderOptions, Resolution, Rgb, View, U8F8,
+    pyramid_cells, pyramid_points, render, Atmosphere, Coherence, Framebuffer, HeightFilter,
+    NoProbe, Pyramid, RenderOptions, Resolution, Rgb, View, U8F8,
 };
 use terracast_board::{scene::BoardScene, wire::frame_capture_bytes, CaptureBus, SpiDisplay};
 
@@ -272,6 +275,10 @@ fn run() -> Result<(), &'static str> {
         ..options
     };
 
+    let air = Atmosphere::FLIGHT
+        .prepare()
+        .map_err(|_| "the kernel refused the flight's atmosphere")?;
+
     let mut results: heapless::String<1024> = heapless::String::new();
     let _ = writeln!(
         results,
@@ -291,7 +298,14 @@ fn run() -> Result<(), &'static str> {
         let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
             .map_err(|_| "framebuffer too small")?;
         let start = ticks();
-        render(&pyramid, &view, &options, &mut framebuffer, &mut NoProbe);
+        // scripts/board-profile with ATMOSPHERE=1 profiles the render under
+        // the flight's atmosphere in its place.
+        if option_env!("TERRACAST_BOARD_ATMOSPHERE").is_some() {
+            let mut hazy = air.sink(&view, &mut framebuffer);
+            render(&pyramid, &view, &options, &mut hazy, &mut NoProbe);
+        } else {
+            render(&pyramid, &view, &options, &mut framebuffer, &mut NoProbe);
+        }
         let kernel_ticks = ticks() - start;
 
         let bus = CaptureBus::new(capture);
@@ -342,9 +356,25 @@ fn run() -> Result<(), &'static str> {
         name.clear();
         let _ = write!(name, "frame-{index}-from-eye.rgb\0");
         write_host_file(&name, frame.as_flattened())?;
+
+        // The same view under the flight's sky, sun and fog.
+        let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+            .map_err(|_| "framebuffer too small")?;
+        let start = ticks();
+        render(
+            &pyramid,
+            &view,
+            &options,
+            &mut air.sink(&view, &mut framebuffer),
+            &mut NoProbe,
+        );
+        let atmosphere_ticks = ticks() - start;
+        name.clear();
+        let _ = write!(name, "frame-{index}-atmosphere.rgb\0");
+        write_host_file(&name, frame.as_flattened())?;
         let _ = writeln!(
             results,
-            "frame {index} kernel_ticks {kernel_ticks} display_ticks {display_ticks} from_eye_ticks {from_eye_ticks}"
+            "frame {index} kernel_ticks {kernel_ticks} display_ticks {display_ticks} from_eye_ticks {from_eye_ticks} atmosphere_ticks {atmosphere_ticks}"
         );
         hprintln!(
             "terracast-firmware: frame {} rendered in {} ticks ({} with the display)",

@@ -18,7 +18,11 @@
 //! * `sky against terrain`: the default kernel from above the map's top,
 //!   45° up (all sky) against 45° down (all terrain), and their ratio;
 //! * `roll`: the default kernel at pitch 10° from the same eye, rolled 0°
-//!   to 90°, each frame's time against the level one's.
+//!   to 90°, each frame's time against the level one's;
+//! * `atmosphere`: the default kernel at pitch 2°, 15° and 45° from the
+//!   same eye without an atmosphere, with fog (the flight's, no sun) and
+//!   with the flight's sky, sun and fog (`Atmosphere::FLIGHT`), each
+//!   frame's time against the one without.
 //!
 //!     cargo bench -p terracast-sim --bench kernel
 //!
@@ -28,8 +32,8 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
 use terracast::{
-    render, render_level_columns, Camera, Coherence, CountingProbe, NoProbe, RenderOptions,
-    Resolution, View,
+    render, render_level_columns, Atmosphere, Camera, Coherence, CountingProbe, NoProbe,
+    PreparedAtmosphere, RenderOptions, Resolution, View,
 };
 use terracast_sim::baselines::{voxel_space, VoxelSpaceOptions};
 use terracast_sim::kernel::SampleBuffer;
@@ -40,6 +44,24 @@ use terracast_sim::scene::{load_pair, procedural, Scene};
 const SIZE: (u32, u32) = (640, 480);
 const PITCHES: [f32; 6] = [2.0, 5.0, 15.0, 30.0, 60.0, 90.0];
 const ROLLS: [f32; 5] = [0.0, 15.0, 30.0, 45.0, 90.0];
+const ATMOSPHERE_PITCHES: [f32; 3] = [2.0, 15.0, 45.0];
+
+/// The `atmosphere` group's settings: none, fog without the sun, and the
+/// flight's.
+fn atmospheres() -> [(&'static str, Option<PreparedAtmosphere>); 3] {
+    let fog = Atmosphere {
+        sun: None,
+        ..Atmosphere::FLIGHT
+    };
+    [
+        ("off", None),
+        ("fog", Some(fog.prepare().expect("fog"))),
+        (
+            "flight",
+            Some(Atmosphere::FLIGHT.prepare().expect("flight")),
+        ),
+    ]
+}
 
 fn scene() -> (Scene, &'static str) {
     let dir = std::env::var_os("TERRACAST_DATA")
@@ -271,6 +293,35 @@ fn main() {
         }
         group.finish();
     }
+    {
+        let mut group = criterion.benchmark_group("atmosphere");
+        group.throughput(Throughput::Elements(pixels));
+        group.sample_size(10);
+        let default = RenderOptions::default();
+        let levels = levels_for(&default);
+        let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+        for pitch in ATMOSPHERE_PITCHES {
+            let view = View::new(&camera(pitch), SIZE.0, SIZE.1).expect("view");
+            for (label, air) in atmospheres() {
+                group.bench_function(
+                    BenchmarkId::from_parameter(format!("{label}-{pitch}")),
+                    |b| {
+                        b.iter(|| match &air {
+                            Some(air) => render(
+                                &levels,
+                                &view,
+                                &default,
+                                &mut air.sink(&view, &mut buffer),
+                                &mut NoProbe,
+                            ),
+                            None => render(&levels, &view, &default, &mut buffer, &mut NoProbe),
+                        })
+                    },
+                );
+            }
+        }
+        group.finish();
+    }
     criterion.final_summary();
 
     let mean_ns =
@@ -377,6 +428,8 @@ fn main() {
         );
     }
 
+    atmosphere_table(&out_dir, pixels, run_started);
+
     println!("\n| roll (pitch 10) | steps/pixel | ns/pixel | time against roll 0 |");
     println!("|---|---|---|---|");
     let level = mean_ns("roll", "0");
@@ -395,6 +448,28 @@ fn main() {
                 ns / level
             ),
             _ => println!("| {roll} | {spp:.2} | (not measured in this run) | |"),
+        }
+    }
+}
+
+/// The `atmosphere` group as a table: ns a pixel, and the time against
+/// the same frame without an atmosphere.
+fn atmosphere_table(out_dir: &Path, pixels: u64, run_started: std::time::SystemTime) {
+    let mean_ns = |label: &str| estimate_ns(&out_dir.join("atmosphere").join(label), run_started);
+    println!("\n| pitch | no atmosphere ns/pixel | fog ns/pixel | against none | sky, sun and fog ns/pixel | against none |");
+    println!("|---|---|---|---|---|---|");
+    for pitch in ATMOSPHERE_PITCHES {
+        let [off, fog, flight] = ["off", "fog", "flight"].map(|l| mean_ns(&format!("{l}-{pitch}")));
+        match (off, fog, flight) {
+            (Some(off), Some(fog), Some(flight)) => println!(
+                "| {pitch} | {:.1} | {:.1} | {:.2}x | {:.1} | {:.2}x |",
+                off / pixels as f64,
+                fog / pixels as f64,
+                fog / off,
+                flight / pixels as f64,
+                flight / off
+            ),
+            _ => println!("| {pitch} | (not measured in this run) | | | | |"),
         }
     }
 }

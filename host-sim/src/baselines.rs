@@ -234,6 +234,7 @@ mod tests {
         let options = ReferenceOptions {
             supersample: 2,
             sky: terracast::config::DEFAULT_SKY,
+            ..ReferenceOptions::default()
         };
         Reference::new(scene).render(camera, 96, 64, &options).0
     }

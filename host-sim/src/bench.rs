@@ -432,6 +432,7 @@ pub fn run(
             &ReferenceOptions {
                 supersample: 3,
                 sky,
+                ..ReferenceOptions::default()
             },
         );
         let mut renders = Vec::with_capacity(settings.len());
@@ -568,6 +569,7 @@ pub fn flicker(
                 let options = ReferenceOptions {
                     supersample: 3,
                     sky,
+                    ..ReferenceOptions::default()
                 };
                 reference.render(c, size.0, size.1, &options).0.colors
             })

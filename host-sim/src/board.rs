@@ -9,8 +9,8 @@ use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
 use terracast::{
-    pyramid_cells, pyramid_points, render, Camera, Coherence, CountingProbe, Framebuffer,
-    HeightFilter, NoProbe, Pyramid, RenderOptions, View,
+    pyramid_cells, pyramid_points, render, Atmosphere, Camera, Coherence, CountingProbe,
+    Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid, RenderOptions, View,
 };
 use terracast_board::scene::{BoardScene, Header};
 use terracast_board::wire::frame_capture_bytes;
@@ -97,6 +97,12 @@ pub struct FrameCheck {
     pub from_eye_color_fetches: u64,
     /// See `from_eye_differing_pixels`.
     pub from_eye_ticks: u64,
+    /// The same view under the flight's sky, sun and fog
+    /// (`Atmosphere::FLIGHT`): pixels that differ between board and host,
+    /// and board ticks.
+    pub atmosphere_differing_pixels: usize,
+    /// See `atmosphere_differing_pixels`.
+    pub atmosphere_ticks: u64,
 }
 
 /// The kernel's cost on the board, in instructions: what
@@ -120,6 +126,7 @@ impl FrameCheck {
             && self.wire_identical
             && self.display_differing_pixels == 0
             && self.from_eye_differing_pixels == 0
+            && self.atmosphere_differing_pixels == 0
     }
 }
 
@@ -183,14 +190,14 @@ impl BoardReport {
         let per_tick = self.instructions_per_tick;
         let pixels = f64::from(self.image.0) * f64::from(self.image.1);
         let mut out = String::from(
-            "view  frame       wire       display  steps/px  colors/px  instr/px  instr/step  instr/px with display  from eye: frame  steps/px  colors/px  instr/px\n",
+            "view  frame       wire       display  steps/px  colors/px  instr/px  instr/step  instr/px with display  from eye: frame  steps/px  colors/px  instr/px  atmosphere: frame  instr/px\n",
         );
         for f in &self.frames {
             let verdict = |ok: bool| if ok { "identical" } else { "DIFFERENT" };
             let instructions = f.kernel_ticks as f64 * per_tick;
             let _ = writeln!(
                 out,
-                "{:>4}  {:<10}  {:<9}  {:<7}  {:>8.2}  {:>9.2}  {:>8.0}  {:>10.0}  {:>21.0}  {:>15}  {:>8.2}  {:>9.2}  {:>8.0}",
+                "{:>4}  {:<10}  {:<9}  {:<7}  {:>8.2}  {:>9.2}  {:>8.0}  {:>10.0}  {:>21.0}  {:>15}  {:>8.2}  {:>9.2}  {:>8.0}  {:>17}  {:>8.0}",
                 f.index,
                 verdict(f.differing_pixels == 0),
                 verdict(f.wire_identical),
@@ -208,8 +215,19 @@ impl BoardReport {
                 f.from_eye_steps as f64 / pixels,
                 f.from_eye_color_fetches as f64 / pixels,
                 f.from_eye_ticks as f64 * per_tick / pixels,
+                verdict(f.atmosphere_differing_pixels == 0),
+                f.atmosphere_ticks as f64 * per_tick / pixels,
             );
         }
+        let plain: u64 = self.frames.iter().map(|f| f.kernel_ticks).sum();
+        let with_air: u64 = self.frames.iter().map(|f| f.atmosphere_ticks).sum();
+        let views = self.frames.len().max(1) as f64;
+        let _ = writeln!(
+            out,
+            "with the flight's sky, sun and fog: {:.0} instructions a pixel, {:.3}x the default render's",
+            with_air as f64 * per_tick / pixels / views,
+            with_air as f64 / plain.max(1) as f64
+        );
         let fit = self.cost_fit();
         let _ = writeln!(
             out,
@@ -259,6 +277,9 @@ pub struct HostFrame {
     pub from_eye_steps: u64,
     /// See `from_eye_rgb`.
     pub from_eye_color_fetches: u64,
+    /// The view under the flight's atmosphere: what the board writes as
+    /// `frame-K-atmosphere.rgb`.
+    pub atmosphere_rgb: Vec<u8>,
 }
 
 /// A board scene file read into aligned storage.
@@ -324,20 +345,35 @@ impl SceneFile {
             coherence: Coherence::Off,
             ..options
         };
+        let air = Atmosphere::FLIGHT
+            .prepare()
+            .map_err(|e| Error::new(e.to_string()))?;
         let mut frames = Vec::new();
         for (index, camera) in header.views().iter().enumerate() {
             let view = View::new(camera, width, height)
                 .map_err(|e| Error::new(format!("bad board view {index}: {e}")))?;
-            let frame = |options: &RenderOptions| -> Result<(Vec<u8>, CountingProbe)> {
+            let frame = |options: &RenderOptions,
+                         air: Option<&PreparedAtmosphere>|
+             -> Result<(Vec<u8>, CountingProbe)> {
                 let mut colors = vec![[0u8; 3]; width as usize * height as usize];
                 let mut framebuffer = Framebuffer::new(&mut colors, width, height)
                     .map_err(|e| Error::new(e.to_string()))?;
                 let mut probe = CountingProbe::default();
-                render(&pyramid, &view, options, &mut framebuffer, &mut probe);
+                match air {
+                    Some(air) => render(
+                        &pyramid,
+                        &view,
+                        options,
+                        &mut air.sink(&view, &mut framebuffer),
+                        &mut probe,
+                    ),
+                    None => render(&pyramid, &view, options, &mut framebuffer, &mut probe),
+                }
                 Ok((colors.into_iter().flatten().collect(), probe))
             };
-            let (rgb, counts) = frame(&options)?;
-            let (from_eye_rgb, from_eye_counts) = frame(&from_eye)?;
+            let (rgb, counts) = frame(&options, None)?;
+            let (from_eye_rgb, from_eye_counts) = frame(&from_eye, None)?;
+            let (atmosphere_rgb, _) = frame(&options, Some(&air))?;
             frames.push(HostFrame {
                 rgb,
                 wire: display_capture(&pyramid, &view, &options, width, height)?,
@@ -346,6 +382,7 @@ impl SceneFile {
                 from_eye_rgb,
                 from_eye_steps: from_eye_counts.steps,
                 from_eye_color_fetches: from_eye_counts.color_fetches,
+                atmosphere_rgb,
             });
         }
         Ok(frames)
@@ -381,6 +418,10 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
         let differing_pixels = compare(format!("frame-{index}.rgb"), &host.rgb)?;
         let from_eye_differing_pixels =
             compare(format!("frame-{index}-from-eye.rgb"), &host.from_eye_rgb)?;
+        let atmosphere_differing_pixels = compare(
+            format!("frame-{index}-atmosphere.rgb"),
+            &host.atmosphere_rgb,
+        )?;
         let board_wire = read(&from.join(format!("wire-{index}.bin")))?;
         let mut shown = vec![0u16; pixels];
         decode(&board_wire, &mut shown, width, height)
@@ -390,7 +431,7 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
             .zip(host.rgb.chunks_exact(3))
             .filter(|(shown, host)| **shown != rgb565([host[0], host[1], host[2]]))
             .count();
-        let (kernel_ticks, display_ticks, from_eye_ticks) =
+        let (kernel_ticks, display_ticks, from_eye_ticks, atmosphere_ticks) =
             *results.frames.get(index).ok_or_else(|| {
                 Error::new(format!("board-results.txt has no timing for frame {index}"))
             })?;
@@ -407,6 +448,8 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
             from_eye_steps: host.from_eye_steps,
             from_eye_color_fetches: host.from_eye_color_fetches,
             from_eye_ticks,
+            atmosphere_differing_pixels,
+            atmosphere_ticks,
         });
     }
     Ok(BoardReport {
@@ -461,8 +504,8 @@ struct BoardResults {
     /// Instructions and ticks of the calibration loop.
     calibration: Option<(u64, u64)>,
     pyramid_ticks: u64,
-    /// Kernel, displayed and from-eye ticks of each frame.
-    frames: Vec<(u64, u64, u64)>,
+    /// Kernel, displayed, from-eye and atmosphere ticks of each frame.
+    frames: Vec<(u64, u64, u64, u64)>,
 }
 
 impl BoardResults {
@@ -504,11 +547,12 @@ fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
                 results.calibration = Some((int(n)?, int(t)?));
             }
             ["pyramid_ticks", n] => results.pyramid_ticks = int(n)?,
-            ["frame", k, "kernel_ticks", n, "display_ticks", m, "from_eye_ticks", o] => {
+            ["frame", k, "kernel_ticks", n, "display_ticks", m, "from_eye_ticks", o, "atmosphere_ticks", a] =>
+            {
                 if int(k)? != results.frames.len() as u64 {
                     return Err(bad());
                 }
-                results.frames.push((int(n)?, int(m)?, int(o)?));
+                results.frames.push((int(n)?, int(m)?, int(o)?, int(a)?));
             }
             _ => return Err(bad()),
         }
@@ -584,11 +628,11 @@ mod tests {
     #[test]
     fn results_are_read_and_bad_lines_named() {
         let ok = parse_results(
-            b"calibration instructions 400 ticks 10\npyramid_ticks 12\nframe 0 kernel_ticks 5 display_ticks 7 from_eye_ticks 9\nframe 1 kernel_ticks 6 display_ticks 8 from_eye_ticks 10\n",
+            b"calibration instructions 400 ticks 10\npyramid_ticks 12\nframe 0 kernel_ticks 5 display_ticks 7 from_eye_ticks 9 atmosphere_ticks 6\nframe 1 kernel_ticks 6 display_ticks 8 from_eye_ticks 10 atmosphere_ticks 7\n",
         )
         .unwrap();
         assert_eq!(ok.pyramid_ticks, 12);
-        assert_eq!(ok.frames, vec![(5, 7, 9), (6, 8, 10)]);
+        assert_eq!(ok.frames, vec![(5, 7, 9, 6), (6, 8, 10, 7)]);
         assert_eq!(ok.instructions_per_tick().unwrap(), 40.0);
         let uncalibrated = parse_results(b"pyramid_ticks 12\n").unwrap();
         assert!(uncalibrated.instructions_per_tick().is_err());

@@ -25,8 +25,8 @@ use crate::metrics::psnr;
 use crate::scene::{KernelScene, Scene};
 use crate::sim::Machine;
 use terracast::{
-    control_points, with_margin, Camera, CountingProbe, Framebuffer, Governor, RenderOptions, Rgb,
-    Sample, View, Warp, MAX_COLOR_FETCHES_A_RAY,
+    control_points, with_margin, Camera, CountingProbe, Framebuffer, Governor, PreparedAtmosphere,
+    RenderOptions, Rgb, Sample, View, Warp, MAX_COLOR_FETCHES_A_RAY,
 };
 
 /// A camera path: keyframes in time, linearly interpolated.
@@ -195,6 +195,8 @@ pub struct FlyOptions {
     pub measure_warp: bool,
     /// The kernel's settings (the governor moves their level bias).
     pub render: RenderOptions,
+    /// Sky, sun and fog over every render (the warped frames carry it).
+    pub atmosphere: Option<PreparedAtmosphere>,
 }
 
 impl Default for FlyOptions {
@@ -208,6 +210,7 @@ impl Default for FlyOptions {
             margin: 1.2,
             measure_warp: true,
             render: RenderOptions::default(),
+            atmosphere: None,
         }
     }
 }
@@ -372,7 +375,16 @@ pub fn fly(
         let mut frame = Framebuffer::with_distances(&mut colors, &mut distances, size.0, size.1)
             .map_err(|e| Error::new(e.to_string()))?;
         let mut counts = CountingProbe::default();
-        let cost = governor.render(&pyramid, &view, &options.render, &mut frame, &mut counts);
+        let cost = match &options.atmosphere {
+            Some(air) => governor.render(
+                &pyramid,
+                &view,
+                &options.render,
+                &mut air.sink(&view, &mut frame),
+                &mut counts,
+            ),
+            None => governor.render(&pyramid, &view, &options.render, &mut frame, &mut counts),
+        };
         let seconds = (rays * c.per_ray
             + counts.color_fetches * c.per_color
             + cost.steps * c.per_step) as f64
@@ -451,8 +463,7 @@ pub fn fly(
         }
         let warp_psnr = (kind == Kind::Warped && options.measure_warp)
             .then(|| {
-                true_view(kernel, &display, options.size, &options.render)
-                    .map(|truth| psnr(&image, &truth))
+                true_view(kernel, &display, options.size, options).map(|truth| psnr(&image, &truth))
             })
             .transpose()?;
         frames.push(DisplayFrame {
@@ -484,9 +495,16 @@ fn true_view(
     kernel: &KernelScene,
     camera: &Camera,
     size: (u32, u32),
-    options: &RenderOptions,
+    options: &FlyOptions,
 ) -> Result<Vec<Rgb>> {
-    let (frame, _) = crate::kernel::render_kernel(kernel, camera, size.0, size.1, options)?;
+    let (frame, _) = crate::kernel::render_kernel_in(
+        kernel,
+        camera,
+        size,
+        &options.render,
+        crate::kernel::PixelRays::Fixed,
+        options.atmosphere.as_ref(),
+    )?;
     Ok(frame.colors)
 }
 

@@ -6,8 +6,8 @@ use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
-    render, render_by_footprint, Camera, Coherence, CountingProbe, Probe, RenderOptions, Sample,
-    Sink, Surface, View,
+    render, render_by_footprint, Camera, Coherence, CountingProbe, PreparedAtmosphere, Probe,
+    RenderOptions, Sample, Sink, Surface, View,
 };
 
 /// How many rays each pixel gets.
@@ -95,8 +95,21 @@ pub fn render_kernel_with(
     options: &RenderOptions,
     rays: PixelRays,
 ) -> Result<(Frame, RenderStats)> {
+    render_kernel_in(scene, camera, (width, height), options, rays, None)
+}
+
+/// [`render_kernel_with`] with `atmosphere` over the frame (when given).
+pub fn render_kernel_in(
+    scene: &KernelScene,
+    camera: &Camera,
+    (width, height): (u32, u32),
+    options: &RenderOptions,
+    rays: PixelRays,
+    atmosphere: Option<&PreparedAtmosphere>,
+) -> Result<(Frame, RenderStats)> {
     let pyramid = scene.pyramid_for(options)?;
-    let (frame, mut stats) = render_surface_with(&pyramid, camera, width, height, options, rays)?;
+    let (frame, mut stats) =
+        render_surface_in(&pyramid, camera, (width, height), options, rays, atmosphere)?;
     stats.resident_bytes = pyramid.bytes() as u64;
     if let Some(levels) = &mut stats.levels {
         levels.levels = pyramid.levels();
@@ -125,12 +138,35 @@ pub fn render_surface_with<T: Surface + ?Sized>(
     options: &RenderOptions,
     rays: PixelRays,
 ) -> Result<(Frame, RenderStats)> {
+    render_surface_in(surface, camera, (width, height), options, rays, None)
+}
+
+/// [`render_surface_with`] with `atmosphere` over the frame (when given):
+/// the kernel's fixed-point sky and fog, pixel by pixel as the kernel
+/// finishes them, inside the render's time.
+pub fn render_surface_in<T: Surface + ?Sized>(
+    surface: &T,
+    camera: &Camera,
+    (width, height): (u32, u32),
+    options: &RenderOptions,
+    rays: PixelRays,
+    atmosphere: Option<&PreparedAtmosphere>,
+) -> Result<(Frame, RenderStats)> {
     let view =
         View::new(camera, width, height).map_err(|e| Error::new(format!("bad view: {e}")))?;
     let mut buffer = SampleBuffer::new(width, height);
     let mut probe = CountingProbe::default();
     let started = Instant::now();
-    rays.render(surface, &view, options, &mut buffer, &mut probe);
+    match atmosphere {
+        Some(air) => rays.render(
+            surface,
+            &view,
+            options,
+            &mut air.sink(&view, &mut buffer),
+            &mut probe,
+        ),
+        None => rays.render(surface, &view, options, &mut buffer, &mut probe),
+    }
     let render_ns = started.elapsed().as_nanos() as u64;
 
     let rays = ContractCamera::new(camera, width, height);

@@ -5,6 +5,7 @@
 //! accuracy is measured against, and provides the `terracast-sim` command.
 #![deny(missing_docs, unsafe_code)]
 
+pub mod atmosphere;
 pub mod baselines;
 pub mod bench;
 pub mod board;

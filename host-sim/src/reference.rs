@@ -13,7 +13,7 @@ use crate::frame::{Frame, RenderStats};
 use crate::scene::Scene;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
-use terracast::{Camera, Rgb};
+use terracast::{Atmosphere, Camera, Rgb};
 
 /// The exact renderer for one scene.
 #[derive(Debug)]
@@ -48,6 +48,9 @@ pub struct ReferenceOptions {
     pub supersample: u32,
     /// Color of rays that miss.
     pub sky: Rgb,
+    /// Sky, sun and fog, exact (`Atmosphere::exact`), over every ray's
+    /// color; `sky` is unused with it.
+    pub atmosphere: Option<Atmosphere>,
 }
 
 impl Default for ReferenceOptions {
@@ -55,6 +58,7 @@ impl Default for ReferenceOptions {
         Self {
             supersample: 4,
             sky: terracast::config::DEFAULT_SKY,
+            atmosphere: None,
         }
     }
 }
@@ -244,9 +248,20 @@ impl<'s> Reference<'s> {
                                             f64::from(px) + (f64::from(sx) + 0.5) / f64::from(n),
                                             f64::from(py) + (f64::from(sy) + 0.5) / f64::from(n),
                                         );
-                                        let c = match self.intersect(rays.eye, dir, &mut count) {
-                                            Some(hit) => self.color_at(hit.x, hit.y),
-                                            None => options.sky.map(f64::from),
+                                        let hit = self.intersect(rays.eye, dir, &mut count);
+                                        let c = match (hit, &options.atmosphere) {
+                                            (Some(hit), None) => self.color_at(hit.x, hit.y),
+                                            (None, None) => options.sky.map(f64::from),
+                                            (hit, Some(air)) => {
+                                                let eye = rays.eye[2];
+                                                let at = hit.map(|hit| {
+                                                    (hit.t * length(dir), eye + hit.t * dir[2])
+                                                });
+                                                let color = hit.map_or([0.0; 3], |hit| {
+                                                    self.color_at(hit.x, hit.y)
+                                                });
+                                                air.exact(dir, eye, at, color)
+                                            }
                                         };
                                         (0..3).for_each(|k| sum[k] += c[k]);
                                     }

@@ -231,6 +231,7 @@ pub fn run(size: (u32, u32), mut progress: impl FnMut(usize, usize)) -> Result<V
         let options = ReferenceOptions {
             supersample: 2,
             sky: terracast::config::DEFAULT_SKY,
+            ..ReferenceOptions::default()
         };
         let (exact, _) =
             Reference::new(&condition.scene).render(&condition.camera, size.0, size.1, &options);

@@ -16,8 +16,9 @@ use embedded_graphics::text::{Baseline, Text};
 use std::sync::atomic::{AtomicU32, Ordering};
 use terracast::config::{MAX_EYE_HEIGHT, PITCH_RANGE_DEG};
 use terracast::{
-    render_line, render_line_by_footprint, Camera, Coherence, CountingProbe, Grid, LinePool, Probe,
-    RenderOptions, Resolution, Sample, Shading, Sink, Surface, View, Wait, U8F8,
+    render_line, render_line_by_footprint, AtmosphereFrame, Camera, Coherence, CountingProbe, Grid,
+    LinePool, PreparedAtmosphere, Probe, RenderOptions, Resolution, Sample, Shading, Sink, Surface,
+    View, Wait, U8F8,
 };
 
 /// How far above the ground the eye stays, voxels.
@@ -328,13 +329,21 @@ impl Pixels {
     }
 }
 
-/// A worker's sink into [`Pixels`].
-struct PixelSink<'a>(&'a Pixels);
+/// A worker's sink into [`Pixels`], with the atmosphere over each pixel
+/// where there is one.
+struct PixelSink<'a>(
+    &'a Pixels,
+    Option<(&'a PreparedAtmosphere, AtmosphereFrame)>,
+);
 
 impl Sink for PixelSink<'_> {
     #[inline]
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
-        let [r, g, b] = sample.color.map(u32::from);
+        let color = match &self.1 {
+            Some((air, frame)) => air.color(frame, x, y, &sample),
+            None => sample.color,
+        };
+        let [r, g, b] = color.map(u32::from);
         if let Some(word) = self
             .0
             .words
@@ -346,13 +355,14 @@ impl Sink for PixelSink<'_> {
 }
 
 /// Renders `view` into `pixels` (its size) with `threads` workers taking
-/// lines from one [`LinePool`]; returns the frame's steps (walk steps and
-/// bound tests). The image is [`terracast::render`]'s (or
-/// [`terracast::render_by_footprint`]'s), bit for bit.
+/// lines from one [`LinePool`], with `atmosphere` over it where given;
+/// returns the frame's steps (walk steps and bound tests). The image is
+/// [`terracast::render`]'s (or [`terracast::render_by_footprint`]'s), bit
+/// for bit.
 pub fn render_pool<T: Surface + Sync + ?Sized>(
     surface: &T,
     view: &View,
-    options: &RenderOptions,
+    (options, atmosphere): (&RenderOptions, Option<&PreparedAtmosphere>),
     rays: PixelRays,
     threads: usize,
     pixels: &Pixels,
@@ -361,7 +371,7 @@ pub fn render_pool<T: Surface + Sync + ?Sized>(
     pool.publish(0);
     let worker = || {
         let mut probe = CountingProbe::default();
-        let mut sink = PixelSink(pixels);
+        let mut sink = PixelSink(pixels, atmosphere.map(|air| (air, air.frame(view))));
         loop {
             match pool.take() {
                 Ok(task) => render_one(
@@ -667,7 +677,7 @@ mod tests {
             }
             for threads in [1, 3] {
                 let pixels = Pixels::new(80, 50);
-                let steps = render_pool(&pyramid, &view, &options, rays, threads, &pixels);
+                let steps = render_pool(&pyramid, &view, (&options, None), rays, threads, &pixels);
                 assert!(steps > 0);
                 assert_eq!(pixels.rgb(), colors.concat(), "{rays:?}, {threads} threads");
             }

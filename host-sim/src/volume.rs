@@ -616,6 +616,7 @@ mod tests {
                 &ReferenceOptions {
                     supersample: 1,
                     sky: VolumeOptions::default().sky,
+                    ..ReferenceOptions::default()
                 },
             );
             assert!(

@@ -47,7 +47,14 @@ fn scene_and_board_output(name: &str) -> (PathBuf, PathBuf) {
             &frame.from_eye_rgb,
         )
         .unwrap();
-        results += &format!("frame {k} kernel_ticks 1000 display_ticks 1100 from_eye_ticks 3000\n");
+        std::fs::write(
+            board.join(format!("frame-{k}-atmosphere.rgb")),
+            &frame.atmosphere_rgb,
+        )
+        .unwrap();
+        results += &format!(
+            "frame {k} kernel_ticks 1000 display_ticks 1100 from_eye_ticks 3000 atmosphere_ticks 1050\n"
+        );
     }
     std::fs::write(board.join("board-results.txt"), results).unwrap();
     (scene, board)
@@ -59,6 +66,10 @@ fn identical_output_passes_and_reports_instructions_per_pixel_last() {
     let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("all frames identical"), "{out}");
+    assert!(
+        out.contains("with the flight's sky, sun and fog: 35 instructions a pixel, 1.050x"),
+        "{out}"
+    );
     // 1000 ticks x 40 instructions over 40 x 30 pixels.
     assert_eq!(
         out.lines().last(),
@@ -110,6 +121,17 @@ fn one_changed_byte_of_a_frame_or_the_wire_fails() {
     let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
     assert_eq!(code, 1, "{out}");
     assert!(err.contains("differ in view(s) 1"), "{err}");
+
+    // And in a frame under the atmosphere.
+    bytes[99] ^= 4;
+    std::fs::write(&from_eye, &bytes).unwrap();
+    let hazy = board.join("frame-3-atmosphere.rgb");
+    let mut bytes = std::fs::read(&hazy).unwrap();
+    bytes[7] ^= 1;
+    std::fs::write(&hazy, &bytes).unwrap();
+    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    assert_eq!(code, 1, "{out}");
+    assert!(err.contains("differ in view(s) 3"), "{err}");
 }
 
 #[test]

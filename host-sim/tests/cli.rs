@@ -385,3 +385,56 @@ fn the_window_without_a_display_or_with_bad_input_says_so_in_one_line() {
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
     }
 }
+
+#[test]
+fn every_method_renders_the_atmosphere_and_bad_settings_get_one_line() {
+    let frame = |name: &str, extra: &[&str]| {
+        let png = temp(name);
+        let mut args = vec![
+            "render",
+            "--procedural-size",
+            "128",
+            "--size",
+            "48x27",
+            "--pitch",
+            "4",
+            "--out",
+            s(&png),
+        ];
+        args.extend_from_slice(extra);
+        let (code, _, err) = sim(&args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        image::open(&png).unwrap().to_rgb8()
+    };
+    for method in ["kernel", "reference", "voxelspace", "march"] {
+        let plain = frame(&format!("air-plain-{method}.png"), &["--method", method]);
+        let hazy = frame(
+            &format!("air-hazy-{method}.png"),
+            &["--method", method, "--atmosphere", "on"],
+        );
+        // The top row is sky: the gradient, not the contract's flat sky.
+        assert_eq!(
+            plain.get_pixel(0, 0).0,
+            terracast::config::DEFAULT_SKY,
+            "{method}"
+        );
+        assert_ne!(plain, hazy, "{method}");
+    }
+    let out = temp("air-bad.png");
+    for (extra, says) in [
+        (vec!["--fog", "2"], "--fog"),
+        (vec!["--sun", "10"], "AZ,EL"),
+        (vec!["--relief", "sometimes"], "--relief"),
+        (
+            vec!["--terrain", "procedural:4096", "--relief", "shadows"],
+            "--relief needs a terrain in memory",
+        ),
+    ] {
+        let mut args = vec!["render", "--out", s(&out)];
+        args.extend_from_slice(&extra);
+        let (code, _, err) = sim(&args);
+        assert_ne!(code, 0, "{extra:?}");
+        assert!(err.contains(says), "{extra:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}

@@ -485,7 +485,14 @@ fn a_resident_cache_on_many_threads_draws_what_a_fresh_one_does() {
         let (_, misses) = viewer
             .frame(&camera, size, &options, |surface, local| {
                 let view = View::new(local, size.0, size.1).unwrap();
-                render_pool(surface, &view, &options, PixelRays::Fixed, 3, &pixels)
+                render_pool(
+                    surface,
+                    &view,
+                    (&options, None),
+                    PixelRays::Fixed,
+                    3,
+                    &pixels,
+                )
             })
             .unwrap();
         assert_eq!(misses, 0);

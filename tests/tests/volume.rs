@@ -36,6 +36,7 @@ fn reference(scene: &Scene, camera: &Camera) -> Frame {
     let options = ReferenceOptions {
         supersample: 3,
         sky: terracast::config::DEFAULT_SKY,
+        ..ReferenceOptions::default()
     };
     Reference::new(scene)
         .render(camera, SIZE.0, SIZE.1, &options)

@@ -60,6 +60,8 @@ pub(super) struct FlyArgs {
     #[arg(long, value_name = "REPORT.json")]
     report: Option<PathBuf>,
     #[command(flatten)]
+    atmosphere: super::atmosphere::AtmosphereArgs,
+    #[command(flatten)]
     kernel: super::KernelArgs,
 }
 
@@ -104,7 +106,9 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
         .as_deref()
         .map(|path| outputs.output("--report", path))
         .transpose()?;
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    args.atmosphere
+        .shade(&mut scene, true, !args.scene.color.is_empty())?;
     let path = match &args.path {
         Some(file) => super::load_path(file)?,
         None => Path::scenic(&scene),
@@ -123,6 +127,7 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
         margin: args.margin,
         measure_warp: !args.no_measure,
         render: args.kernel.fixed_rays_options()?,
+        atmosphere: args.atmosphere.prepared(true)?,
     };
     let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
     let bar = ProgressBar::new(u64::from(frames)).with_style(

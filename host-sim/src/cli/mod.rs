@@ -1,6 +1,7 @@
 //! The `terracast-sim` command line (the view contract,
 //! `shared/spec/view-contract.md` beside the repository).
 
+mod atmosphere;
 mod bench;
 mod fly;
 mod paging;
@@ -11,7 +12,7 @@ mod view;
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
 use crate::board::{board_views, verify, write_scene};
 use crate::error::{Error, Result};
-use crate::kernel::{render_kernel_with, PixelRays};
+use crate::kernel::{render_kernel_in, PixelRays};
 use crate::output::{stats_json, write_json, write_pfm, write_png};
 use crate::outputs::{OutputId, Outputs};
 use crate::reference::{Reference, ReferenceOptions};
@@ -377,6 +378,8 @@ struct RenderArgs {
     #[arg(long, value_enum, default_value_t = Method::Kernel)]
     method: Method,
     #[command(flatten)]
+    atmosphere: atmosphere::AtmosphereArgs,
+    #[command(flatten)]
     kernel: KernelArgs,
     /// Voxel Space: growth of the slice spacing each slice.
     #[arg(long, default_value_t = 0.005, value_name = "G",
@@ -494,7 +497,10 @@ fn render_command(args: RenderArgs) -> Result<()> {
     if let Some(spec) = &args.terrain {
         return paging::render_tiled_command(&args, spec, outputs, files);
     }
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    args.atmosphere
+        .shade(&mut scene, false, !args.scene.color.is_empty())?;
+    let air = args.atmosphere.atmosphere(false);
     let [yaw, pitch] = DEFAULT_YAW_PITCH;
     let camera = args
         .camera
@@ -510,26 +516,28 @@ fn render_command(args: RenderArgs) -> Result<()> {
             "--method voxelspace cannot roll (its columns stay vertical): use --roll 0".to_string(),
         ));
     }
-    let (frame, stats) = match args.method {
+    let (mut frame, stats) = match args.method {
         Method::Kernel => {
             // The kernel's terrain first: heights out of its range are the
             // problem to report, before the camera placed over them.
             let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
             check_view()?;
             let options = args.kernel.options(sky);
-            render_kernel_with(
+            let prepared = args.atmosphere.prepared(false)?;
+            render_kernel_in(
                 &kernel,
                 &camera,
-                width,
-                height,
+                (width, height),
                 &options,
                 args.kernel.vertical_samples.1,
+                prepared.as_ref(),
             )?
         }
         Method::Reference => {
             let options = ReferenceOptions {
                 supersample: args.supersample,
                 sky,
+                atmosphere: air,
             };
             Reference::new(&scene).render(&camera, width, height, &options)
         }
@@ -565,6 +573,13 @@ fn render_command(args: RenderArgs) -> Result<()> {
             render_volume(&scene, &volume, &camera, (width, height), &options, mode)
         }
     };
+    // The kernel and the reference put the atmosphere on ray by ray; the
+    // others' frames get it from their depth.
+    if let (Some(air), Method::Voxelspace | Method::March | Method::Volume | Method::Boundary) =
+        (&air, args.method)
+    {
+        crate::atmosphere::apply_exact(&mut frame, &camera, air);
+    }
     let stats = stats_json(&stats, width, height, frame.sky_pixels());
     files.write(&outputs, &frame, &stats)?;
     outputs.commit()

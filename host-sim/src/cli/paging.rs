@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::output::{stats_json, write_png};
 use crate::outputs::Outputs;
 use crate::tiles::{
-    pack, page_flight, render_tiled, PackInput, PageOptions, PagedFrame, Terrain, SLOTS, TILE,
+    pack, page_flight, render_tiled_in, PackInput, PageOptions, PagedFrame, Terrain, SLOTS, TILE,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -93,6 +93,7 @@ pub(super) fn render_tiled_command(
     if args.method != Method::Kernel {
         return Err(Error::new("--terrain renders with --method kernel only"));
     }
+    args.atmosphere.check_tiled()?;
     let mut terrain = Terrain::open(spec, args.scene.seed)?;
     let world = terrain.world();
     let [yaw, pitch] = super::DEFAULT_YAW_PITCH;
@@ -123,13 +124,13 @@ pub(super) fn render_tiled_command(
         height,
     )
     .map_err(view_error)?;
-    let (frame, stats, tiled) = render_tiled(
+    let (frame, stats, tiled) = render_tiled_in(
         &mut terrain,
         &camera,
-        width,
-        height,
+        (width, height),
         &options,
         args.kernel.vertical_samples.1,
+        args.atmosphere.prepared(false)?.as_ref(),
     )?;
     let mut json = stats_json(&stats, width, height, frame.sky_pixels());
     json["tiles"] = serde_json::to_value(tiled).map_err(|e| Error::new(e.to_string()))?;

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::time::Instant;
 use terracast::config::DEFAULT_HFOV_DEG;
-use terracast::{Camera, Pyramid, RenderOptions, Resolution, Rgb, View};
+use terracast::{Camera, PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, View};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
 use winit::event::{ElementState, MouseButton, WindowEvent};
@@ -73,6 +73,8 @@ pub(super) struct ViewArgs {
     #[arg(long, value_name = "SECONDS", value_parser = positive(0.0f32, 3600.0), allow_hyphen_values = true)]
     measure: Option<f32>,
     #[command(flatten)]
+    atmosphere: super::atmosphere::AtmosphereArgs,
+    #[command(flatten)]
     kernel: KernelArgs,
 }
 
@@ -116,9 +118,11 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
     );
     let mut slots;
     let mut scene_storage = None;
+    let mut early_event_loop = None;
     let mut scenic = None;
     let world = match &args.terrain {
         Some(spec) => {
+            args.atmosphere.check_tiled()?;
             let terrain = Terrain::open(spec, args.scene.seed)?;
             if let (Terrain::File(file), Some(wanted)) = (&terrain, args.kernel.height_filter) {
                 if file.filter() != terracast::HeightFilter::from(wanted) {
@@ -132,7 +136,13 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
             World::Tiled(Box::new(TiledViewer::new(terrain, &mut slots)))
         }
         None => {
-            let scene = load_scene(&args.scene)?;
+            let mut scene = load_scene(&args.scene)?;
+            // The display before the relief shading, which takes a while
+            // and says so.
+            need_display()?;
+            early_event_loop = Some(connect()?);
+            args.atmosphere
+                .shade(&mut scene, true, !args.scene.color.is_empty())?;
             let eye = scene.default_eye();
             scenic = Some(crate::fly::Path::scenic(&scene));
             let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
@@ -163,15 +173,11 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
     let speed = args
         .speed
         .unwrap_or((side_x.min(side_y) as f32 / 10.0).clamp(1.0, 100.0));
-    // The window is X11's (a Wayland desktop serves it through XWayland,
-    // which sets DISPLAY).
-    if std::env::var_os("DISPLAY").is_none_or(|v| v.is_empty()) {
-        return Err(Error::new(
-            "no display to open a window on (DISPLAY is not set): run it on a desktop, or under xvfb-run",
-        ));
-    }
-    let event_loop = EventLoop::new()
-        .map_err(|e| Error::new(format!("cannot connect to the display: {}", os_message(&e))))?;
+    need_display()?;
+    let event_loop = match early_event_loop {
+        Some(event_loop) => event_loop,
+        None => connect()?,
+    };
     println!(
         "terracast view: {}x{} window, {threads} thread(s), governor {}; {KEYS_HELP}",
         args.size.0,
@@ -180,6 +186,7 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
     );
     let mut app = App {
         terrain_flags: terrain_flags(&args),
+        atmosphere: args.atmosphere.prepared(true)?,
         save_prefix: args.save_prefix.clone(),
         world,
         camera,
@@ -235,6 +242,23 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
     Ok(())
 }
 
+/// The window is X11's (a Wayland desktop serves it through XWayland,
+/// which sets DISPLAY): without one, say so.
+fn need_display() -> Result<()> {
+    if std::env::var_os("DISPLAY").is_none_or(|v| v.is_empty()) {
+        return Err(Error::new(
+            "no display to open a window on (DISPLAY is not set): run it on a desktop, or under xvfb-run",
+        ));
+    }
+    Ok(())
+}
+
+/// The window's event loop: the connection to the display.
+fn connect() -> Result<EventLoop<()>> {
+    EventLoop::new()
+        .map_err(|e| Error::new(format!("cannot connect to the display: {}", os_message(&e))))
+}
+
 /// The flags that name the terrain, for the `render` command line.
 fn terrain_flags(args: &ViewArgs) -> Vec<String> {
     let mut flags = Vec::new();
@@ -261,6 +285,10 @@ fn terrain_flags(args: &ViewArgs) -> Vec<String> {
     if let Some(filter) = args.kernel.height_filter {
         flag("height-filter", filter.name());
     }
+    flags.extend(
+        args.atmosphere
+            .arguments(true, !args.scene.color.is_empty()),
+    );
     flags
 }
 
@@ -307,7 +335,7 @@ impl World<'_> {
     fn render(
         &mut self,
         camera: &Camera,
-        options: &RenderOptions,
+        options: (&RenderOptions, Option<&PreparedAtmosphere>),
         rays: PixelRays,
         threads: usize,
         pixels: &Pixels,
@@ -316,8 +344,8 @@ impl World<'_> {
         match self {
             Self::Memory { full, flat, .. } => {
                 let view = View::new(camera, size.0, size.1).map_err(view_error)?;
-                let surface: &Pyramid = if options.resolution == Resolution::Single
-                    && !options.hierarchical_first_hit
+                let surface: &Pyramid = if options.0.resolution == Resolution::Single
+                    && !options.0.hierarchical_first_hit
                 {
                     flat
                 } else {
@@ -326,10 +354,11 @@ impl World<'_> {
                 Ok(render_pool(surface, &view, options, rays, threads, pixels))
             }
             Self::Tiled(viewer) => {
-                let (steps, _misses) = viewer.frame(camera, size, options, |surface, local| {
-                    let view = View::new(local, size.0, size.1).map_err(view_error)?;
-                    Ok::<_, Error>(render_pool(surface, &view, options, rays, threads, pixels))
-                })?;
+                let (steps, _misses) =
+                    viewer.frame(camera, size, options.0, |surface, local| {
+                        let view = View::new(local, size.0, size.1).map_err(view_error)?;
+                        Ok::<_, Error>(render_pool(surface, &view, options, rays, threads, pixels))
+                    })?;
                 steps
             }
         }
@@ -348,6 +377,8 @@ struct Shown {
 
 struct App<'s> {
     terrain_flags: Vec<String>,
+    /// Sky, sun and fog over every frame.
+    atmosphere: Option<PreparedAtmosphere>,
     save_prefix: String,
     world: World<'s>,
     camera: Camera,
@@ -508,9 +539,13 @@ impl App<'_> {
         let options = self.settings.options;
         let rays = self.settings.rays;
         let began = Instant::now();
-        let steps = self
-            .world
-            .render(&self.camera, &options, rays, self.threads, &self.pixels)?;
+        let steps = self.world.render(
+            &self.camera,
+            (&options, self.atmosphere.as_ref()),
+            rays,
+            self.threads,
+            &self.pixels,
+        )?;
         let figures = FrameFigures {
             seconds: began.elapsed().as_secs_f64(),
             pixels: u64::from(size.0) * u64::from(size.1),

@@ -8,12 +8,12 @@
 use super::{new_slots, SLOTS, TILE};
 use crate::error::{Error, Result};
 use crate::frame::{Frame, RenderStats};
-use crate::kernel::{render_surface, render_surface_with, PixelRays};
+use crate::kernel::{render_surface, render_surface_in, PixelRays};
 use serde::Serialize;
 use terracast::tiles::{
     footprint_under, FootprintView, Tile, TileCache, TileKey, TileSource, TiledSurface,
 };
-use terracast::{Camera, RenderOptions};
+use terracast::{Camera, PreparedAtmosphere, RenderOptions};
 
 /// Footprint list capacity: far more than a 32 MiB cache holds.
 const FOOTPRINT: usize = 16_384;
@@ -120,6 +120,18 @@ pub fn render_tiled<S: TileSource<TILE>>(
     options: &RenderOptions,
     rays: PixelRays,
 ) -> Result<(Frame, RenderStats, TiledRender)> {
+    render_tiled_in(source, camera, (width, height), options, rays, None)
+}
+
+/// [`render_tiled`] with `atmosphere` over the frame (when given).
+pub fn render_tiled_in<S: TileSource<TILE>>(
+    source: &mut S,
+    camera: &Camera,
+    (width, height): (u32, u32),
+    options: &RenderOptions,
+    rays: PixelRays,
+    atmosphere: Option<&PreparedAtmosphere>,
+) -> Result<(Frame, RenderStats, TiledRender)> {
     let world = source.world();
     let mut slots = new_slots();
     let mut cache = TileCache::<TILE, SLOTS>::new(world, &mut slots);
@@ -134,13 +146,13 @@ pub fn render_tiled<S: TileSource<TILE>>(
         &mut needed,
     )?;
     let surface = TiledSurface::around(&cache, camera.eye);
-    let (frame, mut stats) = render_surface_with(
+    let (frame, mut stats) = render_surface_in(
         &surface,
         &local_camera(&surface, camera)?,
-        width,
-        height,
+        (width, height),
         options,
         rays,
+        atmosphere,
     )?;
     stats.resident_bytes = cache.resident_bytes() as u64;
     let cache_stats = cache.stats();

@@ -1,0 +1,1014 @@
+//! Sky, sun and layered fog: what a ray sees on its way to the terrain or
+//! past it, in fixed point.
+//!
+//! The model (every formula here is also written out in floating point,
+//! [`Atmosphere::exact`], which the host's reference renders with):
+//!
+//! - **Sky**: a gradient from the horizon color to the zenith color by the
+//!   sine `s` of the ray's elevation, weighted `1 − (1 − s)²` (rays below
+//!   the horizon take the horizon color). Cheap per sky pixel: a table
+//!   of 257 colors by sine, blended between neighbours.
+//! - **Sun**: a disc of the sun's color within `disc_deg` of its direction
+//!   and a glow out to `glow_deg`, blending the sky toward the sun's color
+//!   by `½·g²`, `g = 1 − sin²θ / sin²θ_glow` (`θ` the angle to the sun).
+//! - **Fog** of a density that is the ground layer's up to a `ceiling`
+//!   and halves every `halving` voxels above it (or stays: uniform fog).
+//!   The optical depth along a ray is integrated in closed form: through
+//!   heights `a` to `b` over a length `L` it is `L·(F(b) − F(a))/(b − a)`
+//!   times the ground density, `F` the density's integral over height
+//!   (`L·density` where `b ≈ a`), and to the sky `(F(∞) − F(a)) / s`. A
+//!   color keeps `2^−τ` of itself (`τ` in halvings) and takes the fog's
+//!   color for the rest. The ground density is set by the visibility: the
+//!   distance at which ground fog leaves 2 % of a color.
+//!
+//! A frame gets its atmosphere through [`AtmosphereSink`], which wraps any
+//! [`Sink`]: each finished pixel's direction comes from the [`View`], its
+//! hit's distance and height from its [`Sample`]. What depends on the eye
+//! is tabled once a frame (the fogged sky by sine, the mean density from
+//! the eye to each height); a pixel then takes multiplies, table lookups
+//! and one blend: no float, no division, no 64-bit square root.
+//!
+//! ```
+//! use terracast::{Atmosphere, Camera, Framebuffer, NoProbe, Pyramid, RenderOptions, Terrain, View, render};
+//! let (heights, colors) = ([0u16; 64], [[90, 140, 60]; 64]);
+//! let pyramid = Pyramid::flat(Terrain::new(8, 8, &heights, &colors).unwrap());
+//! let view = View::new(&Camera::looking([4.0, 0.0, 3.0], 90.0, 5.0), 32, 24).unwrap();
+//! let air = Atmosphere::FLIGHT.prepare().unwrap();
+//! let mut pixels = [[0u8; 3]; 32 * 24];
+//! let mut frame = Framebuffer::new(&mut pixels, 32, 24).unwrap();
+//! render(&pyramid, &view, &RenderOptions::default(), &mut air.sink(&view, &mut frame), &mut NoProbe);
+//! // The top row is sky: the gradient, no longer the flat sky color.
+//! assert_ne!(pixels[0], RenderOptions::default().sky);
+//! ```
+
+use crate::caster::walk::lerp;
+use crate::color::Rgb;
+use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS};
+use crate::divide::div_trunc;
+use crate::sink::{Sample, Sink};
+use crate::view::View;
+use core::fmt;
+
+/// What fog of the ground layer's density leaves of a color at the
+/// visibility distance: 2 % (the meteorological visibility).
+pub const VISIBILITY_CONTRAST: f64 = 0.02;
+/// The glow's strength at the disc's edge: half the way to the sun's color.
+const GLOW_STRENGTH_Q8: u32 = 128;
+/// Sky colors by the sine of the elevation: entry `i` at sine `i/256`.
+const SKY_STEPS: usize = 256;
+/// Fog tables by height: an entry every 4 voxels from 0 to 4096 (heights
+/// are U12.4, below 4096).
+const HEIGHT_STEP_BITS: u32 = 2;
+const HEIGHT_STEPS: usize = 4096 >> HEIGHT_STEP_BITS;
+/// `2^−i/256` for `i` in 0..=256, Q16.
+const EXP2_STEPS: usize = 256;
+/// Fixed-point formats: directions Q20, heights and lengths Q8.
+const DIR_BITS: u32 = 20;
+const Q8: u32 = 8;
+
+/// A sun in the sky.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sun {
+    /// Its heading, from +x toward +y (as a camera's yaw), degrees.
+    pub azimuth_deg: f32,
+    /// Its height above the horizon, degrees.
+    pub elevation_deg: f32,
+    /// The disc's color.
+    pub color: Rgb,
+    /// The disc's angular radius, degrees.
+    pub disc_deg: f32,
+    /// The glow's angular radius, degrees (at least the disc's).
+    pub glow_deg: f32,
+}
+
+impl Sun {
+    /// The unit vector toward the sun.
+    pub fn direction(&self) -> [f64; 3] {
+        let (azimuth, elevation) = (
+            f64::from(self.azimuth_deg).to_radians(),
+            f64::from(self.elevation_deg).to_radians(),
+        );
+        let horizontal = libm::cos(elevation);
+        [
+            horizontal * libm::cos(azimuth),
+            horizontal * libm::sin(azimuth),
+            libm::sin(elevation),
+        ]
+    }
+}
+
+/// Fog: the ground layer's density up to a ceiling, thinning above it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fog {
+    /// The fog's color.
+    pub color: Rgb,
+    /// The distance, voxels, at which fog of the ground layer's density
+    /// leaves 2 % of a color ([`VISIBILITY_CONTRAST`]); at least 8.
+    pub visibility: f32,
+    /// The ground layer's top, voxels (at least 0).
+    pub ceiling: f32,
+    /// Above the ceiling the density halves every `halving` voxels;
+    /// `None`: it does not fall (uniform fog, which hides the sky too).
+    pub halving: Option<f32>,
+}
+
+impl Fog {
+    /// The density at height `h`, relative to the ground layer's.
+    pub fn density(&self, h: f64) -> f64 {
+        let ceiling = f64::from(self.ceiling);
+        match self.halving {
+            Some(halving) if h > ceiling => libm::exp2(-(h - ceiling) / f64::from(halving)),
+            _ => 1.0,
+        }
+    }
+
+    /// The density's integral over height from 0 to `h` (`F`; negative
+    /// below 0), voxels.
+    pub fn column(&self, h: f64) -> f64 {
+        let ceiling = f64::from(self.ceiling);
+        match self.halving {
+            Some(halving) if h > ceiling => {
+                let halving = f64::from(halving);
+                ceiling + halving / core::f64::consts::LN_2 * (1.0 - self.density(h))
+            }
+            _ => h,
+        }
+    }
+
+    /// `F(∞)`: the whole column, `None` for uniform fog.
+    pub fn column_to_infinity(&self) -> Option<f64> {
+        self.halving
+            .map(|halving| f64::from(self.ceiling) + f64::from(halving) / core::f64::consts::LN_2)
+    }
+
+    /// Halvings of a color a voxel of ground-density fog takes.
+    pub fn halvings_per_voxel(&self) -> f64 {
+        -libm::log2(VISIBILITY_CONTRAST) / f64::from(self.visibility)
+    }
+
+    /// What a straight path of `length` voxels from height `a` to height
+    /// `b` leaves of a color (exact).
+    pub fn transmittance(&self, length: f64, a: f64, b: f64) -> f64 {
+        let mean = if (b - a).abs() < 1e-9 {
+            self.density(0.5 * (a + b))
+        } else {
+            (self.column(b) - self.column(a)) / (b - a)
+        };
+        libm::exp2(-self.halvings_per_voxel() * length * mean)
+    }
+
+    /// What the path from height `a` up to the sky at elevation sine `s`
+    /// leaves of the sky's color (exact): nothing at or below the horizon,
+    /// nor through uniform fog.
+    pub fn transmittance_to_sky(&self, a: f64, s: f64) -> f64 {
+        match self.column_to_infinity() {
+            Some(all) if s > 0.0 => {
+                libm::exp2(-self.halvings_per_voxel() * (all - self.column(a)) / s)
+            }
+            _ => 0.0,
+        }
+    }
+}
+
+/// A frame's sky, sun and fog, as a user sets them (see the module).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Atmosphere {
+    /// The sky's color at the horizon (and below it).
+    pub horizon: Rgb,
+    /// The sky's color straight up.
+    pub zenith: Rgb,
+    /// A sun, if any.
+    pub sun: Option<Sun>,
+    /// Fog, if any.
+    pub fog: Option<Fog>,
+}
+
+/// Why an atmosphere could not be prepared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AtmosphereError {
+    /// A number is NaN or infinite.
+    NotFinite,
+    /// The sun is below the horizon or its disc and glow are out of order.
+    Sun,
+    /// The fog's visibility is under 8 voxels, its ceiling below 0 or its
+    /// halving height not positive.
+    Fog,
+}
+
+impl fmt::Display for AtmosphereError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::NotFinite => "atmosphere value is NaN or infinite",
+            Self::Sun => "sun needs elevation 0 to 90 degrees and 0 < disc <= glow <= 90 degrees",
+            Self::Fog => "fog needs visibility >= 8 voxels, ceiling >= 0 and halving height > 0",
+        })
+    }
+}
+
+impl core::error::Error for AtmosphereError {}
+
+impl Atmosphere {
+    /// The flight's atmosphere: a blue gradient, a sun in the south-west
+    /// at 35°, and haze in a ground layer 30 voxels deep, halving every
+    /// 45 voxels above it, with 2500 voxels' visibility.
+    pub const FLIGHT: Self = Self {
+        horizon: [196, 214, 230],
+        zenith: [62, 110, 190],
+        sun: Some(Sun {
+            azimuth_deg: 225.0,
+            elevation_deg: 35.0,
+            color: [255, 246, 220],
+            disc_deg: 0.6,
+            glow_deg: 12.0,
+        }),
+        fog: Some(Fog {
+            color: [196, 210, 222],
+            visibility: 2500.0,
+            ceiling: 30.0,
+            halving: Some(45.0),
+        }),
+    };
+
+    /// The sky's color (no fog) along the unit direction `e`, exact.
+    pub fn sky_exact(&self, e: [f64; 3]) -> [f64; 3] {
+        let gradient = sky_weight(e[2]);
+        let (horizon, zenith) = (self.horizon.map(f64::from), self.zenith.map(f64::from));
+        let sky = core::array::from_fn(|i| horizon[i] + (zenith[i] - horizon[i]) * gradient);
+        let Some(sun) = &self.sun else {
+            return sky;
+        };
+        let s = sun.direction();
+        let dot = e[0] * s[0] + e[1] * s[1] + e[2] * s[2];
+        let cross = [
+            e[1] * s[2] - e[2] * s[1],
+            e[2] * s[0] - e[0] * s[2],
+            e[0] * s[1] - e[1] * s[0],
+        ];
+        let q = cross.iter().map(|c| c * c).sum::<f64>();
+        let color = sun.color.map(f64::from);
+        let (disc, glow) = (sine_squared(sun.disc_deg), sine_squared(sun.glow_deg));
+        if dot <= 0.0 || q >= glow {
+            sky
+        } else if q <= disc {
+            color
+        } else {
+            let g = 1.0 - q / glow;
+            let t = f64::from(GLOW_STRENGTH_Q8) / 256.0 * g * g;
+            core::array::from_fn(|i| sky[i] + (color[i] - sky[i]) * t)
+        }
+    }
+
+    /// What a ray from an eye at height `eye_z` along direction `d` shows,
+    /// exact: `color` seen through the fog at `hit` (the hit's distance
+    /// from the eye and its height), or the sky where there is no hit.
+    /// The reference renders with this.
+    pub fn exact(
+        &self,
+        d: [f64; 3],
+        eye_z: f64,
+        hit: Option<(f64, f64)>,
+        color: [f64; 3],
+    ) -> [f64; 3] {
+        let length = libm::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        let e = d.map(|v| v / length);
+        let (seen, transmittance) = match hit {
+            Some((distance, height)) => (
+                color,
+                self.fog
+                    .map_or(1.0, |fog| fog.transmittance(distance, eye_z, height)),
+            ),
+            None => (
+                self.sky_exact(e),
+                self.fog
+                    .map_or(1.0, |fog| fog.transmittance_to_sky(eye_z, e[2])),
+            ),
+        };
+        let fog = self.fog.map_or([0; 3], |fog| fog.color).map(f64::from);
+        core::array::from_fn(|i| fog[i] + (seen[i] - fog[i]) * transmittance)
+    }
+
+    /// Checks the settings and builds the fixed-point tables (once; a
+    /// frame then needs only [`PreparedAtmosphere::sink`]).
+    pub fn prepare(&self) -> Result<PreparedAtmosphere, AtmosphereError> {
+        if let Some(sun) = &self.sun {
+            let numbers = [
+                sun.azimuth_deg,
+                sun.elevation_deg,
+                sun.disc_deg,
+                sun.glow_deg,
+            ];
+            if numbers.iter().any(|v| !v.is_finite()) {
+                return Err(AtmosphereError::NotFinite);
+            }
+            let in_order =
+                sun.disc_deg > 0.0 && sun.disc_deg <= sun.glow_deg && sun.glow_deg <= 90.0;
+            if !((0.0..=90.0).contains(&sun.elevation_deg) && in_order) {
+                return Err(AtmosphereError::Sun);
+            }
+        }
+        if let Some(fog) = &self.fog {
+            let numbers = [fog.visibility, fog.ceiling, fog.halving.unwrap_or(1.0)];
+            if numbers.iter().any(|v| !v.is_finite()) {
+                return Err(AtmosphereError::NotFinite);
+            }
+            if fog.visibility < 8.0 || fog.ceiling < 0.0 || fog.halving.is_some_and(|h| h <= 0.0) {
+                return Err(AtmosphereError::Fog);
+            }
+        }
+        let (horizon, zenith) = (self.horizon.map(f64::from), self.zenith.map(f64::from));
+        let sky = core::array::from_fn(|i| {
+            let w = sky_weight(i as f64 / SKY_STEPS as f64);
+            core::array::from_fn(|c| round_channel(horizon[c] + (zenith[c] - horizon[c]) * w))
+        });
+        let sun = self.sun.map(|sun| SunTable {
+            direction: sun.direction().map(|v| to_fixed(v, DIR_BITS)),
+            disc: to_fixed(sine_squared(sun.disc_deg), 2 * DIR_BITS),
+            glow: to_fixed(sine_squared(sun.glow_deg), 2 * DIR_BITS).max(1),
+            glow_cosine: to_fixed(
+                libm::cos(f64::from(sun.glow_deg).to_radians()),
+                2 * DIR_BITS,
+            ) - (1 << 26),
+            color: sun.color,
+        });
+        let fog = self.fog.map(|fog| FogTable {
+            fog,
+            halvings_q32: to_fixed(fog.halvings_per_voxel(), 32) as u32,
+            column: core::array::from_fn(|i| {
+                to_fixed(fog.column((i << HEIGHT_STEP_BITS) as f64), Q8) as i32
+            }),
+            density: core::array::from_fn(|i| {
+                to_fixed(fog.density((i << HEIGHT_STEP_BITS) as f64), 16) as u32
+            }),
+        });
+        Ok(PreparedAtmosphere {
+            sky,
+            sun,
+            fog,
+            exp2: core::array::from_fn(|i| {
+                to_fixed(libm::exp2(-(i as f64) / EXP2_STEPS as f64), 16) as u32
+            }),
+        })
+    }
+}
+
+/// The gradient's weight of the zenith color at elevation sine `s`.
+fn sky_weight(s: f64) -> f64 {
+    let below = 1.0 - s.clamp(0.0, 1.0);
+    1.0 - below * below
+}
+
+fn sine_squared(deg: f32) -> f64 {
+    let s = libm::sin(f64::from(deg).to_radians());
+    s * s
+}
+
+fn to_fixed(v: f64, bits: u32) -> i64 {
+    libm::round(v * (1u64 << bits) as f64) as i64
+}
+
+fn round_channel(v: f64) -> u8 {
+    libm::round(v).clamp(0.0, 255.0) as u8
+}
+
+/// An [`Atmosphere`] in fixed point, ready for frames.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PreparedAtmosphere {
+    sky: [Rgb; SKY_STEPS + 1],
+    sun: Option<SunTable>,
+    fog: Option<FogTable>,
+    exp2: [u32; EXP2_STEPS + 1],
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct SunTable {
+    /// Unit vector, Q20; the disc's and the glow's sin² of their radius,
+    /// Q40.
+    direction: [i64; 3],
+    disc: i64,
+    glow: i64,
+    /// The cosine of the glow's radius, Q40, less a margin for the unit
+    /// vector's rounding.
+    glow_cosine: i64,
+    color: Rgb,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+struct FogTable {
+    fog: Fog,
+    /// Halvings a voxel at ground density, Q32 (below 1: the visibility
+    /// is at least 8 voxels).
+    halvings_q32: u32,
+    /// `F` (Q8 voxels) and the density (Q16) every 4 voxels of height.
+    column: [i32; HEIGHT_STEPS + 1],
+    density: [u32; HEIGHT_STEPS + 1],
+}
+
+/// What a frame's pixels share: the view's directions in Q20 and the eye.
+/// A pixel's direction is below 2^7 in size (the widest field of view
+/// and the tallest image), so its components and their steps fit 32 bits.
+#[derive(Debug, Clone, Copy)]
+pub struct AtmosphereFrame {
+    base: [i32; 3],
+    per_column: [i32; 3],
+    per_row: [i32; 3],
+    top_row: i32,
+    /// The eye's height, Q16.
+    eye_q16: i64,
+    /// The sky as this eye sees it through the fog, by sine as
+    /// [`PreparedAtmosphere`]'s gradient, and what the fog leaves of the
+    /// sky there (in 1/256; for the sun's disc and glow, which go on
+    /// before the fog).
+    sky: [Rgb; SKY_STEPS + 1],
+    sky_weights: [u16; SKY_STEPS + 1],
+    /// The mean density (Q16) from the eye to each height of the fog's
+    /// tables.
+    mean: [u32; HEIGHT_STEPS + 1],
+}
+
+impl PreparedAtmosphere {
+    /// What `view`'s pixels share.
+    pub fn frame(&self, view: &View) -> AtmosphereFrame {
+        let q20 = |v: [fixed::types::I32F32; 3]| v.map(|c| (c.to_bits() >> (32 - DIR_BITS)) as i32);
+        let eye_q16 = view.eye[2].to_bits();
+        let eye = eye_q16 as f64 / f64::from(1u32 << COORD_FRAC_BITS);
+        let (eye_column, sky_column) = match &self.fog {
+            Some(table) => {
+                let here = table.fog.column(eye);
+                (
+                    to_fixed(here, Q8),
+                    table
+                        .fog
+                        .column_to_infinity()
+                        .map(|all| to_fixed((all - here).max(0.0), Q8)),
+                )
+            }
+            None => (0, None),
+        };
+        let sky_weights: [u16; SKY_STEPS + 1] = core::array::from_fn(|i| match &self.fog {
+            None => 256,
+            Some(table) => match sky_column {
+                // Sine i/256, Q20.
+                Some(column) if i > 0 => {
+                    self.transmitted(table, over_sine(column as u64, (i as u32) << 12)) as u16
+                }
+                _ => 0,
+            },
+        });
+        let fog_color = self.fog.as_ref().map_or([0; 3], |table| table.fog.color);
+        let sky = core::array::from_fn(|i| lerp(fog_color, self.sky[i], u32::from(sky_weights[i])));
+        // The mean density from the eye to each height of the table:
+        // `(F(b) − F(a)) / (b − a)`, the density midway within a voxel of
+        // the eye's height.
+        let eye_q8 = eye_q16 >> (COORD_FRAC_BITS - Q8);
+        let mean = core::array::from_fn(|i| match &self.fog {
+            None => 0,
+            Some(table) => {
+                let height = (i as i64) << (HEIGHT_STEP_BITS + Q8);
+                let rise = height - eye_q8;
+                if rise.abs() < 1 << Q8 {
+                    table.density_at((height + eye_q8) / 2) as u32
+                } else {
+                    let columns = table.column_at(height) - eye_column;
+                    div_trunc(columns << 16, rise).clamp(0, 1 << 16) as u32
+                }
+            }
+        });
+        AtmosphereFrame {
+            sky,
+            sky_weights,
+            mean,
+            base: q20(view.base),
+            per_column: q20(view.per_column),
+            per_row: q20(view.per_row),
+            top_row: view.height() as i32 - 1,
+            eye_q16,
+        }
+    }
+
+    /// A sink that gives each pixel of `view` this atmosphere and passes
+    /// it on to `sink`.
+    pub fn sink<'a, S: Sink>(&'a self, view: &View, sink: S) -> AtmosphereSink<'a, S> {
+        AtmosphereSink {
+            air: self,
+            frame: self.frame(view),
+            sink,
+        }
+    }
+
+    /// The color of pixel `(x, y)` (y = 0 at the top) of `frame` whose ray
+    /// saw `sample`: the sky's (gradient, sun, fog to the sky) where it saw
+    /// sky, else the sample's color through the fog to its hit.
+    pub fn color(&self, frame: &AtmosphereFrame, x: u32, y: u32, sample: &Sample) -> Rgb {
+        let fog = self.fog.as_ref();
+        if fog.is_none() && !sample.is_sky() {
+            return sample.color;
+        }
+        let (column, row) = (x as i32, frame.top_row - y as i32);
+        // Each product is one 32 × 32-bit multiply; the sum fits 32 bits.
+        let d: [i32; 3] = core::array::from_fn(|i| {
+            (i64::from(frame.base[i])
+                + i64::from(column) * i64::from(frame.per_column[i])
+                + i64::from(row) * i64::from(frame.per_row[i])) as i32
+        });
+        let unit = Unit::new(d);
+        let Some(table) = fog.filter(|_| !sample.is_sky()) else {
+            return self.sky_color(frame, d, &unit);
+        };
+        // The hit's distance from the eye: its major-axis distance or its
+        // height below the eye, whichever the direction conditions better,
+        // over that component of the unit direction (at least 1/√3: the
+        // larger of the two is the largest of the three).
+        let (major, vertical) = (
+            d[0].unsigned_abs().max(d[1].unsigned_abs()),
+            d[2].unsigned_abs(),
+        );
+        let (along, component) = if major >= vertical {
+            (sample.distance, major)
+        } else {
+            let drop = (frame.eye_q16 - i64::from(sample.elevation)).unsigned_abs();
+            (drop.min(u64::from(u32::MAX)) as u32, vertical)
+        };
+        let distance_q8 = (u64::from(along) * u64::from(reciprocal_q16(unit.of_size(component))))
+            >> (16 + 16 - Q8);
+        // The density integrated along the path (Q8 voxels at ground
+        // density): the distance times the mean density from the eye to
+        // the hit's height.
+        let height_q8 = i64::from(sample.elevation) >> (COORD_FRAC_BITS - Q8);
+        let mean_q16 = between(&frame.mean, height_q8.max(0)) as u64;
+        let weight = self.transmitted(table, (distance_q8 * mean_q16) >> 16);
+        lerp(table.fog.color, sample.color, weight)
+    }
+
+    /// The sky along `d` (Q20, `unit` its unit direction), through the
+    /// fog: the frame's fogged gradient by the sine of the elevation,
+    /// blended between neighbouring entries, and near the sun its disc and
+    /// glow over the gradient, then the fog.
+    fn sky_color(&self, frame: &AtmosphereFrame, d: [i32; 3], unit: &Unit) -> Rgb {
+        let up = unit.of(d[2]);
+        let sine = up.clamp(0, 1 << DIR_BITS);
+        let at = (sine >> (DIR_BITS - 8)) as usize;
+        let fraction = ((sine >> (DIR_BITS - 16)) & 0xFF) as u32;
+        let between = |table: &[Rgb; SKY_STEPS + 1]| match table.get(at + 1) {
+            Some(&next) => lerp(table[at.min(SKY_STEPS)], next, fraction),
+            None => table[SKY_STEPS],
+        };
+        let Some(sun) = &self.sun else {
+            return between(&frame.sky);
+        };
+        let e = [unit.of(d[0]), unit.of(d[1]), up];
+        if !sun.near(e) {
+            return between(&frame.sky);
+        }
+        let color = sun.over(between(&self.sky), e);
+        let Some(table) = &self.fog else {
+            return color;
+        };
+        let weights = &frame.sky_weights;
+        let low = u32::from(weights[at.min(SKY_STEPS)]);
+        let high = u32::from(weights[(at + 1).min(SKY_STEPS)]);
+        let weight = low + (((high - low.min(high)) * fraction) >> 8);
+        lerp(table.fog.color, color, weight)
+    }
+
+    /// What fog leaves of a color over `column_q8` voxels at ground
+    /// density, in 1/256.
+    fn transmitted(&self, table: &FogTable, column_q8: u64) -> u32 {
+        // Both below 2^32: one 32 × 32-bit product.
+        let column = u64::from(column_q8.min(u64::from(u32::MAX)) as u32);
+        let halvings_q16 = (column * u64::from(table.halvings_q32)) >> (32 + Q8 - 16);
+        (self.exp2_negative(halvings_q16) + 128) >> 8
+    }
+
+    /// `2^−x` for `x` in Q16, Q16.
+    fn exp2_negative(&self, x_q16: u64) -> u32 {
+        let whole = x_q16 >> 16;
+        if whole >= 17 {
+            return 0;
+        }
+        let fraction = (x_q16 & 0xFFFF) as u32;
+        let (at, within) = ((fraction >> 8) as usize, fraction & 0xFF);
+        let (low, high) = (self.exp2[at], self.exp2[(at + 1).min(EXP2_STEPS)]);
+        (low - (((low - high) * within) >> 8)) >> whole
+    }
+}
+
+/// Scales a direction (Q20, at least 1 and below 2^7 long) to unit
+/// length without a division: its squared length's top 32 bits brought
+/// into [2^30, 2^32) by an even shift, and `1/√` of that from a table by
+/// its top 9 bits, blended by the next 16 (within a part in 2^16).
+struct Unit {
+    /// `1/√u` (Q30, `u` the normalized squared length in [1/4, 1)) and
+    /// the shift that turns a component times it into Q20.
+    inverse: i64,
+    shift: u32,
+}
+
+impl Unit {
+    fn new(d: [i32; 3]) -> Self {
+        let squared: u64 = d
+            .iter()
+            .map(|&v| (i64::from(v) * i64::from(v)) as u64)
+            .sum();
+        // At least 2^40 (|d| >= 1): the bits dropped are below a part in 2^16.
+        let top = (squared.clamp(1 << 40, (1 << 56) - 1) >> 24) as u32;
+        let half_shift = top.leading_zeros() / 2;
+        let m = top << (2 * half_shift);
+        let at = (m >> 23) as usize - 128;
+        let fraction = u64::from((m >> 7) & 0xFFFF);
+        let (low, high) = (
+            u64::from(INVERSE_ROOTS[at]),
+            u64::from(INVERSE_ROOTS[at + 1]),
+        );
+        // |d| = √u · 2^(8 − half_shift) in units of 2^20: a component c
+        // (Q20) over it is c · (1/√u) · 2^(half_shift − 8), Q20.
+        Self {
+            inverse: (low - (((low - high) * fraction) >> 16)) as i64,
+            shift: 30 + 8 - half_shift,
+        }
+    }
+
+    /// Component `c` of the direction, of the unit direction (Q20).
+    fn of(&self, c: i32) -> i64 {
+        (i64::from(c) * self.inverse) >> self.shift
+    }
+
+    /// `c` as [`Unit::of`] for a component's size.
+    fn of_size(&self, c: u32) -> u32 {
+        ((u64::from(c) * self.inverse as u64) >> self.shift) as u32
+    }
+}
+
+/// `1/√(i/512)` in Q30 for `i` in 128..=512: `√(2^69 / i)`.
+const INVERSE_ROOTS: [u32; 385] = {
+    let mut roots = [0u32; 385];
+    let mut i = 0;
+    while i < 385 {
+        roots[i] = ((1u128 << 69) / (i as u128 + 128)).isqrt() as u32;
+        i += 1;
+    }
+    roots
+};
+
+/// `1/x` in Q16 for `x` (Q20) from 1/2 to 1 (a unit direction's largest
+/// component is at least 1/√3), from a table by its top 8 bits below
+/// 1, blended by the next 12.
+fn reciprocal_q16(x: u32) -> u32 {
+    let x = x.clamp(1 << (DIR_BITS - 1), 1 << DIR_BITS);
+    let at = (x >> 12) as usize - 128;
+    let fraction = x & 0xFFF;
+    let (low, high) = (RECIPROCALS[at], RECIPROCALS[(at + 1).min(128)]);
+    low - (((low - high) * fraction) >> 12)
+}
+
+/// `256 / (i + 128)` in Q16 for `i` in 0..=128.
+const RECIPROCALS: [u32; 129] = {
+    let mut reciprocals = [0u32; 129];
+    let mut i = 0;
+    while i < 129 {
+        reciprocals[i] = (1 << 24) / (i as u32 + 128);
+        i += 1;
+    }
+    reciprocals
+};
+
+/// `column · 2^20 / sine` (`column` Q8 voxels, below 2^31; `sine` Q20,
+/// positive): a 32-bit divide of both brought under 2^32 where the
+/// sine keeps 8 bits, else the full division (within a degree of the
+/// horizon, where little is left of the sky anyway).
+fn over_sine(column: u64, sine: u32) -> u64 {
+    let scaled = column << DIR_BITS;
+    let shift = (64 - scaled.leading_zeros()).saturating_sub(32);
+    if sine >> shift >= 1 << 8 {
+        u64::from((scaled >> shift) as u32 / (sine >> shift))
+    } else {
+        div_trunc(scaled as i64, i64::from(sine)) as u64
+    }
+}
+
+impl SunTable {
+    /// Whether unit direction `e` (Q20) is within the glow's reach: one
+    /// dot product, so that most of the sky skips the rest.
+    fn near(&self, e: [i64; 3]) -> bool {
+        let s = self.direction;
+        e[0] * s[0] + e[1] * s[1] + e[2] * s[2] > self.glow_cosine
+    }
+
+    /// The sky `color` along unit direction `e` (Q20) with the sun's disc
+    /// and glow over it.
+    fn over(&self, color: Rgb, e: [i64; 3]) -> Rgb {
+        let s = self.direction;
+        if e[0] * s[0] + e[1] * s[1] + e[2] * s[2] <= 0 {
+            return color;
+        }
+        let cross = [
+            (e[1] * s[2] - e[2] * s[1]) >> DIR_BITS,
+            (e[2] * s[0] - e[0] * s[2]) >> DIR_BITS,
+            (e[0] * s[1] - e[1] * s[0]) >> DIR_BITS,
+        ];
+        let sine_squared: i64 = cross.iter().map(|c| c * c).sum();
+        if sine_squared >= self.glow {
+            color
+        } else if sine_squared <= self.disc {
+            self.color
+        } else {
+            let g = div_trunc((self.glow - sine_squared) << 8, self.glow) as u32;
+            lerp(color, self.color, (g * g * GLOW_STRENGTH_Q8) >> 16)
+        }
+    }
+}
+
+impl FogTable {
+    /// `F` at height `h` (both Q8 voxels), linear between the table's
+    /// entries; below 0 the ground layer's density goes on (`F(h) = h`).
+    fn column_at(&self, h: i64) -> i64 {
+        if h <= 0 {
+            return h;
+        }
+        between(&self.column, h)
+    }
+
+    /// The density (Q16) at height `h` (Q8 voxels): the ground layer's
+    /// below 0.
+    fn density_at(&self, h: i64) -> i64 {
+        between(&self.density, h.max(0))
+    }
+}
+
+/// `table` (an entry every 4 voxels of height) at height `h >= 0` (Q8),
+/// linear between entries, held past the last.
+fn between<T: Copy + Into<i64>>(table: &[T; HEIGHT_STEPS + 1], h: i64) -> i64 {
+    let step_q8 = HEIGHT_STEP_BITS + Q8;
+    let at = (h >> step_q8) as usize;
+    match (table.get(at), table.get(at + 1)) {
+        (Some(&low), Some(&high)) => {
+            let (low, high): (i64, i64) = (low.into(), high.into());
+            low + (((high - low) * (h & ((1 << step_q8) - 1))) >> step_q8)
+        }
+        _ => table[HEIGHT_STEPS].into(),
+    }
+}
+
+/// A [`Sink`] that gives each pixel its atmosphere (see
+/// [`PreparedAtmosphere::color`]) and passes it on.
+#[derive(Debug)]
+pub struct AtmosphereSink<'a, S> {
+    air: &'a PreparedAtmosphere,
+    frame: AtmosphereFrame,
+    sink: S,
+}
+
+impl<S: Sink> Sink for AtmosphereSink<'_, S> {
+    #[inline]
+    fn put(&mut self, x: u32, y: u32, sample: Sample) {
+        let color = self.air.color(&self.frame, x, y, &sample);
+        self.sink.put(x, y, Sample { color, ..sample });
+    }
+}
+
+// Heights in samples are I16.16; the tables' are U12.4 voxels' range.
+const _: () = assert!(HEIGHT_FRAC_BITS <= Q8);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Camera;
+
+    fn view() -> View {
+        View::new(&Camera::looking([100.0, 50.0, 80.0], 30.0, 8.0), 96, 64).unwrap()
+    }
+
+    fn exact_color(air: &Atmosphere, view: &View, x: u32, y: u32, sample: &Sample) -> [f64; 3] {
+        let row = i64::from(view.height()) - 1 - i64::from(y);
+        let d: [f64; 3] = core::array::from_fn(|i| {
+            (view.base[i].to_bits()
+                + i64::from(x) * view.per_column[i].to_bits()
+                + row * view.per_row[i].to_bits()) as f64
+                / 2f64.powi(32)
+        });
+        let eye = view.eye[2].to_num::<f64>();
+        let hit = (!sample.is_sky()).then(|| {
+            let major = d[0].abs().max(d[1].abs());
+            let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            (
+                f64::from(sample.distance) / 65536.0 * length / major,
+                f64::from(sample.elevation) / 65536.0,
+            )
+        });
+        air.exact(d, eye, hit, sample.color.map(f64::from))
+    }
+
+    #[test]
+    fn fixed_point_matches_the_exact_model_within_two_levels() {
+        let view = view();
+        let mut hazy = Atmosphere::FLIGHT;
+        // The sun in view, so its disc and glow are tested too.
+        hazy.sun = hazy.sun.map(|sun| Sun {
+            azimuth_deg: 34.0,
+            elevation_deg: 3.0,
+            ..sun
+        });
+        let clear = Atmosphere { fog: None, ..hazy };
+        for air in [hazy, clear] {
+            let prepared = air.prepare().unwrap();
+            let frame = prepared.frame(&view);
+            let mut worst = 0.0f64;
+            let mut sun_pixels = 0;
+            for y in 0..64 {
+                for x in 0..96 {
+                    let samples = [
+                        Sample {
+                            color: [200, 60, 20],
+                            distance: Sample::SKY,
+                            elevation: 0,
+                        },
+                        Sample {
+                            color: [200, 60, 20],
+                            distance: (x * 97 + y * 13 + 1) << 14,
+                            elevation: ((x as i32 * 5) % 90) << 16,
+                        },
+                    ];
+                    for sample in samples {
+                        let kernel = prepared.color(&frame, x, y, &sample);
+                        let exact = exact_color(&air, &view, x, y, &sample);
+                        if sample.is_sky() && kernel == air.sun.unwrap().color {
+                            sun_pixels += 1;
+                        }
+                        for c in 0..3 {
+                            worst = worst.max((f64::from(kernel[c]) - exact[c]).abs());
+                        }
+                    }
+                }
+            }
+            assert!(
+                air.fog.is_some() || sun_pixels > 0,
+                "the sun's disc is in view"
+            );
+            assert!(worst <= 2.0, "worst channel difference {worst}");
+        }
+    }
+
+    #[test]
+    fn fog_fades_smoothly_with_distance_without_bands() {
+        // A level ray at the ground layer's height, one sixteenth of a
+        // voxel farther each time, out to four visibilities: what the fog
+        // leaves never rises and never drops by more than one 256th at
+        // once (the 8-bit blend's own step), so no band shows.
+        let air = Atmosphere::FLIGHT.prepare().unwrap();
+        let table = air.fog.as_ref().unwrap();
+        let mut before = 256;
+        let mut seen = 0;
+        for step in 0..(4 * 2500 * 16) {
+            let column_q8 = step * 16;
+            let weight = air.transmitted(table, column_q8);
+            assert!(weight <= before, "rises at {step}");
+            assert!(
+                before - weight <= 1,
+                "a band at {step}: {before} to {weight}"
+            );
+            before = weight;
+            seen |= 1 << (weight.min(255) / 32);
+        }
+        assert_eq!(seen, 0xFF, "runs the whole range");
+        // At the visibility distance 2 % is left: 5 of 256.
+        let at_visibility = air.transmitted(table, 2500 << 8);
+        assert!((4..=6).contains(&at_visibility), "{at_visibility}");
+    }
+
+    #[test]
+    fn the_sky_gradient_has_no_bands_from_horizon_to_zenith() {
+        let air = Atmosphere {
+            fog: None,
+            sun: None,
+            ..Atmosphere::FLIGHT
+        }
+        .prepare()
+        .unwrap();
+        let frame = air.frame(&view());
+        let level = [1 << DIR_BITS, 0, 0];
+        let mut before = air.sky_color(&frame, level, &Unit::new(level));
+        assert_eq!(before, Atmosphere::FLIGHT.horizon);
+        for step in 1..=4096 {
+            let angle = f64::from(step) / 4096.0 * core::f64::consts::FRAC_PI_2;
+            let d = [angle.cos(), 0.0, angle.sin()].map(|v| (v * f64::from(1 << DIR_BITS)) as i32);
+            let color = air.sky_color(&frame, d, &Unit::new(d));
+            for c in 0..3 {
+                assert!(color[c].abs_diff(before[c]) <= 1, "a band at {step}");
+            }
+            before = color;
+        }
+        assert!(before
+            .iter()
+            .zip(Atmosphere::FLIGHT.zenith)
+            .all(|(a, b)| a.abs_diff(b) <= 1));
+    }
+
+    #[test]
+    fn uniform_fog_hides_the_sky_and_layered_fog_does_not() {
+        let view = view();
+        let sky = Sample {
+            color: [0; 3],
+            distance: Sample::SKY,
+            elevation: 0,
+        };
+        let fog = Atmosphere::FLIGHT.fog.unwrap();
+        let uniform = Atmosphere {
+            fog: Some(Fog {
+                halving: None,
+                ..fog
+            }),
+            sun: None,
+            ..Atmosphere::FLIGHT
+        };
+        let prepared = uniform.prepare().unwrap();
+        assert_eq!(
+            prepared.color(&prepared.frame(&view), 40, 0, &sky),
+            fog.color
+        );
+        let layered = Atmosphere {
+            sun: None,
+            ..Atmosphere::FLIGHT
+        }
+        .prepare()
+        .unwrap();
+        let top = layered.color(&layered.frame(&view), 40, 0, &sky);
+        assert_ne!(top, fog.color);
+    }
+
+    #[test]
+    fn the_sink_changes_colors_only() {
+        let view = view();
+        let air = Atmosphere::FLIGHT.prepare().unwrap();
+        let mut got = None;
+        struct Keep<'a>(&'a mut Option<Sample>);
+        impl Sink for Keep<'_> {
+            fn put(&mut self, _: u32, _: u32, sample: Sample) {
+                *self.0 = Some(sample);
+            }
+        }
+        let hit = Sample {
+            color: [10, 200, 30],
+            distance: 900 << 16,
+            elevation: 20 << 16,
+        };
+        air.sink(&view, Keep(&mut got)).put(3, 50, hit);
+        let got = got.unwrap();
+        assert_eq!((got.distance, got.elevation), (hit.distance, hit.elevation));
+        assert_ne!(got.color, hit.color, "900 voxels of haze show");
+    }
+
+    #[test]
+    fn unit_directions_and_reciprocals_are_within_a_part_in_2_to_the_14() {
+        // Directions from length 1 to 100, every way.
+        for step in 0..20_000 {
+            let t = f64::from(step);
+            let length = 1.0 + 99.0 * (t * 0.618).fract().powi(3);
+            let (a, b) = (t * 0.37, t * 0.11);
+            let true_unit = [a.cos() * b.cos(), a.sin() * b.cos(), b.sin()];
+            let d = true_unit.map(|v| (v * length * f64::from(1 << DIR_BITS)).round() as i32);
+            let exact = {
+                let n = d.map(f64::from);
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                n.map(|v| v / len * f64::from(1 << DIR_BITS))
+            };
+            let unit = Unit::new(d);
+            for i in 0..3 {
+                let got = unit.of(d[i]) as f64;
+                assert!(
+                    (got - exact[i]).abs() <= 1.0 + f64::from(1 << 6),
+                    "{d:?}: {got} against {}",
+                    exact[i]
+                );
+            }
+        }
+        for x in (1 << 19..=1 << 20).step_by(37) {
+            let exact = f64::from(1u32 << 16) * f64::from(1u32 << 20) / f64::from(x);
+            let got = f64::from(reciprocal_q16(x));
+            assert!(
+                (got - exact).abs() <= exact / f64::from(1 << 14),
+                "1/{x}: {got} against {exact}"
+            );
+        }
+    }
+
+    #[test]
+    fn bad_settings_are_refused() {
+        let mut air = Atmosphere::FLIGHT;
+        air.fog = air.fog.map(|fog| Fog {
+            visibility: 2.0,
+            ..fog
+        });
+        assert_eq!(air.prepare().unwrap_err(), AtmosphereError::Fog);
+        let mut air = Atmosphere::FLIGHT;
+        air.sun = air.sun.map(|sun| Sun {
+            disc_deg: 20.0,
+            ..sun
+        });
+        assert_eq!(air.prepare().unwrap_err(), AtmosphereError::Sun);
+        let mut air = Atmosphere::FLIGHT;
+        air.sun = air.sun.map(|sun| Sun {
+            azimuth_deg: f32::NAN,
+            ..sun
+        });
+        assert_eq!(air.prepare().unwrap_err(), AtmosphereError::NotFinite);
+    }
+}

@@ -1,0 +1,150 @@
+//! Sky, sun and fog: the kernel's fixed-point atmosphere against the
+//! reference's exact one.
+//!
+//! * On the accuracy views (Comanche C1W/D1, C7W/D7 and C14/D14, the
+//!   views of `accuracy.rs`), the kernel with the flight's atmosphere
+//!   scores within 0.5 dB of the same view without it (each against the
+//!   reference rendered the same way), and sees sky where it did before.
+//! * Without real terrain, the same on two views of the built-in scene,
+//!   one with the sun in view.
+
+use terracast::{Atmosphere, Camera, RenderOptions, Sun};
+use terracast_sim::frame::Frame;
+use terracast_sim::kernel::{render_kernel_in, PixelRays};
+use terracast_sim::metrics::{psnr, sky_agreement};
+use terracast_sim::reference::{Reference, ReferenceOptions};
+use terracast_sim::scene::{procedural, Scene};
+use terracast_tests::{comanche, data_dir};
+
+/// The kernel's and the reference's frames of `camera`, with `air` or
+/// without.
+fn both(scene: &Scene, camera: &Camera, size: (u32, u32), air: Option<Atmosphere>) -> [Frame; 2] {
+    let prepared = air.map(|air| air.prepare().unwrap());
+    let kernel = scene.to_kernel().unwrap();
+    let (k, _) = render_kernel_in(
+        &kernel,
+        camera,
+        size,
+        &RenderOptions::default(),
+        PixelRays::Fixed,
+        prepared.as_ref(),
+    )
+    .unwrap();
+    let options = ReferenceOptions {
+        atmosphere: air,
+        ..ReferenceOptions::default()
+    };
+    let (r, _) = Reference::new(scene).render(camera, size.0, size.1, &options);
+    [k, r]
+}
+
+/// PSNR with the atmosphere and without, and the sky agreement with it;
+/// records a failure when the atmosphere costs more than 0.5 dB.
+fn compare(
+    name: &str,
+    scene: &Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    air: Atmosphere,
+    failures: &mut Vec<String>,
+) -> f64 {
+    let [k, r] = both(scene, camera, size, None);
+    let [fk, fr] = both(scene, camera, size, Some(air));
+    let (clear, hazy) = (psnr(&k.colors, &r.colors), psnr(&fk.colors, &fr.colors));
+    let agree = sky_agreement(&fk.depth, &fr.depth);
+    println!(
+        "{name}: PSNR {clear:6.2} dB without the atmosphere, {hazy:6.2} dB with it ({:+.2} dB), sky agreement {:.3} %",
+        hazy - clear,
+        agree * 100.0
+    );
+    assert_ne!(k.colors, fk.colors, "{name}: the atmosphere shows");
+    if hazy < clear - 0.5 {
+        failures.push(format!(
+            "{name}: {hazy:.2} dB with it, {clear:.2} dB without"
+        ));
+    }
+    if agree < 0.995 {
+        failures.push(format!("{name}: sky agreement {agree}"));
+    }
+    hazy - clear
+}
+
+#[test]
+fn the_atmosphere_keeps_the_kernel_within_half_a_decibel_on_the_built_in_scene() {
+    let scene = procedural(512, 1);
+    let mut failures = Vec::new();
+    let eye = [256.0, 20.0, scene.max_height() + 30.0];
+    let level = Camera::looking(eye, 90.0, 6.0);
+    compare(
+        "level",
+        &scene,
+        &level,
+        (240, 135),
+        Atmosphere::FLIGHT,
+        &mut failures,
+    );
+    // Toward a low sun, with a little sky above the ridges.
+    let mut toward_sun = Atmosphere::FLIGHT;
+    toward_sun.sun = toward_sun.sun.map(|sun| Sun {
+        azimuth_deg: 95.0,
+        elevation_deg: 4.0,
+        ..sun
+    });
+    let up = Camera::looking(eye, 90.0, -2.0);
+    compare(
+        "toward the sun",
+        &scene,
+        &up,
+        (240, 135),
+        toward_sun,
+        &mut failures,
+    );
+    assert!(failures.is_empty(), "{failures:?}");
+}
+
+/// The views of `accuracy.rs`: four over the map and three grazing.
+const VIEWS: [([f32; 3], f32, f32); 7] = [
+    ([200.0, 300.0, 140.0], 20.0, 0.0),
+    ([800.0, 250.0, 150.0], 110.0, 15.0),
+    ([760.0, 820.0, 170.0], 200.0, 30.0),
+    ([300.0, 700.0, 220.0], 300.0, 45.0),
+    ([20.0, 40.0, 120.0], 45.0, 2.0),
+    ([1000.0, 500.0, 110.0], 180.0, 0.0),
+    ([500.0, 1000.0, 130.0], 265.0, 5.0),
+];
+
+#[test]
+fn the_atmosphere_keeps_the_kernel_within_half_a_decibel_on_the_accuracy_views() {
+    let Some(data) =
+        data_dir("the_atmosphere_keeps_the_kernel_within_half_a_decibel_on_the_accuracy_views")
+    else {
+        return;
+    };
+    let mut failures = Vec::new();
+    let mut changes = Vec::new();
+    for (color, height) in [("1W", "1"), ("7W", "7"), ("14", "14")] {
+        let scene = comanche(&data, color, height);
+        for (eye, yaw, pitch) in VIEWS {
+            let camera = Camera::looking(eye, yaw, pitch);
+            let name = format!("C{color}/D{height} yaw {yaw:>5} pitch {pitch:>4}");
+            changes.push(compare(
+                &name,
+                &scene,
+                &camera,
+                (640, 360),
+                Atmosphere::FLIGHT,
+                &mut failures,
+            ));
+        }
+    }
+    let (low, high) = changes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &c| {
+            (l.min(c), h.max(c))
+        });
+    println!(
+        "with the atmosphere: {low:+.2} to {high:+.2} dB over {} views",
+        changes.len()
+    );
+    assert!(failures.is_empty(), "{failures:?}");
+}
