@@ -146,6 +146,17 @@ impl Fog {
         -libm::log2(VISIBILITY_CONTRAST) / f64::from(self.visibility)
     }
 
+    /// The distance (voxels) from an eye at height `eye` beyond which a
+    /// hit at or below `highest` keeps less than a 512th of its color (half
+    /// an 8-bit level): the path there never rises above the higher of
+    /// the two, so its density is never below the density there. Terrain
+    /// farther than this shows as fog: a renderer may stop its rays there
+    /// and a tile cache leave the tiles beyond it unloaded.
+    pub fn opaque_distance(&self, eye: f64, highest: f64) -> f64 {
+        let thinnest = self.density(eye.max(highest));
+        9.0 / (self.halvings_per_voxel() * thinnest)
+    }
+
     /// What a straight path of `length` voxels from height `a` to height
     /// `b` leaves of a color (exact).
     pub fn transmittance(&self, length: f64, a: f64, b: f64) -> f64 {
@@ -988,6 +999,43 @@ mod tests {
                 "1/{x}: {got} against {exact}"
             );
         }
+    }
+
+    #[test]
+    fn past_the_opaque_distance_no_hit_below_the_highest_shows() {
+        for fog in [
+            Atmosphere::FLIGHT.fog.unwrap(),
+            Fog {
+                halving: None,
+                ..Atmosphere::FLIGHT.fog.unwrap()
+            },
+        ] {
+            for (eye, highest) in [(10.0, 5.0), (200.0, 180.0), (50.0, 300.0), (400.0, 20.0)] {
+                let far = fog.opaque_distance(eye, highest);
+                for hit in [0.0, highest / 3.0, highest] {
+                    // Along the path, or farther.
+                    for length in [far, far * 1.5] {
+                        let kept = fog.transmittance(length, eye, hit);
+                        assert!(
+                            kept <= 1.0 / 512.0 + 1e-12,
+                            "{fog:?} {eye} {highest} {hit}: {kept}"
+                        );
+                    }
+                }
+                // And no sooner than it must: a level path at the higher
+                // of the two keeps exactly a 512th there.
+                let top = f64::max(eye, highest);
+                let kept = fog.transmittance(far, top, top);
+                assert!((kept * 512.0 - 1.0).abs() < 1e-9, "{kept}");
+            }
+        }
+        // Uniform fog of visibility 2500: about 4000 voxels.
+        let uniform = Fog {
+            halving: None,
+            visibility: 2500.0,
+            ..Atmosphere::FLIGHT.fog.unwrap()
+        };
+        assert!((uniform.opaque_distance(100.0, 50.0) - 3986.6).abs() < 0.1);
     }
 
     #[test]

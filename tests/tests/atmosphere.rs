@@ -7,13 +7,16 @@
 //!   reference rendered the same way), and sees sky where it did before.
 //! * Without real terrain, the same on two views of the built-in scene,
 //!   one with the sun in view.
+//! * What fog's opaque distance would spare a tiled terrain's footprint.
 
-use terracast::{Atmosphere, Camera, RenderOptions, Sun};
+use terracast::tiles::TileSource;
+use terracast::{Atmosphere, Camera, Fog, RenderOptions, Sun};
 use terracast_sim::frame::Frame;
 use terracast_sim::kernel::{render_kernel_in, PixelRays};
 use terracast_sim::metrics::{psnr, sky_agreement};
 use terracast_sim::reference::{Reference, ReferenceOptions};
 use terracast_sim::scene::{procedural, Scene};
+use terracast_sim::tiles::{footprint_beyond, ProceduralSource};
 use terracast_tests::{comanche, data_dir};
 
 /// The kernel's and the reference's frames of `camera`, with `air` or
@@ -147,4 +150,60 @@ fn the_atmosphere_keeps_the_kernel_within_half_a_decibel_on_the_accuracy_views()
         changes.len()
     );
     assert!(failures.is_empty(), "{failures:?}");
+}
+
+/// What fog's opaque distance spares a tiled terrain: the footprint tiles
+/// wholly beyond it, on the procedural 131072² world from `page`'s eye
+/// (over the world's middle, 100 voxels above its highest point) at
+/// pitch 20° (`page`'s start) and 5°, 320 × 240, hfov 60°.
+#[test]
+fn fog_spares_the_footprint_beyond_its_opaque_distance() {
+    let mut source = ProceduralSource::new(131_072, 1).unwrap();
+    let world = source.world();
+    let highest = f64::from(world.max_height) / 16.0;
+    let eye = [65_536.0, 65_536.0, highest as f32 + 100.0];
+    let flight = Atmosphere::FLIGHT.fog.unwrap();
+    let fogs = [
+        ("the flight's layered fog", flight),
+        (
+            "uniform fog, visibility 2500",
+            Fog {
+                halving: None,
+                ..flight
+            },
+        ),
+        (
+            "uniform fog, visibility 800",
+            Fog {
+                halving: None,
+                visibility: 800.0,
+                ..flight
+            },
+        ),
+    ];
+    let mut spared = Vec::new();
+    for pitch in [20.0, 5.0] {
+        let camera = Camera::looking(eye, 0.0, pitch);
+        for (name, fog) in fogs {
+            let far = fog.opaque_distance(f64::from(eye[2]), highest);
+            let (all, beyond) = footprint_beyond(
+                &mut source,
+                &camera,
+                (320, 240),
+                &RenderOptions::default(),
+                far,
+            )
+            .unwrap();
+            println!(
+                "pitch {pitch:>4}: {name}: opaque past {far:.0} voxels; {beyond} of {all} footprint tiles ({:.1} %) lie beyond",
+                100.0 * beyond as f64 / all as f64
+            );
+            spared.push(beyond);
+        }
+    }
+    // The flight's layer is below this eye: its fog is thin where the
+    // eye looks from, and it spares nothing; dense uniform fog spares
+    // the far footprint.
+    assert_eq!(spared[0], 0);
+    assert!(spared[5] > 0, "{spared:?}");
 }

@@ -13,8 +13,8 @@ mod procedural;
 pub use file::{TilesFile, FORMAT_VERSION};
 pub use pack::{pack, PackInput, PackSummary};
 pub use paging::{
-    page_flight, render_tiled, render_tiled_in, PageOptions, PageReport, PagedFrame, TiledRender,
-    TiledViewer,
+    footprint_beyond, page_flight, render_tiled, render_tiled_in, PageOptions, PageReport,
+    PagedFrame, TiledRender, TiledViewer,
 };
 pub use procedural::ProceduralSource;
 

@@ -110,6 +110,48 @@ fn local_camera(surface: &TiledSurface<'_, '_, TILE, SLOTS>, camera: &Camera) ->
     Ok(local)
 }
 
+/// The tiles of `camera`'s footprint at `size` (as a render through the
+/// cache loads them), and how many of them lie wholly farther than
+/// `distance` voxels from the eye (horizontally, so farther along any
+/// ray): what a renderer that stops its rays there would not need (fog's
+/// opaque distance, `terracast::Fog::opaque_distance`).
+pub fn footprint_beyond<S: TileSource<TILE>>(
+    source: &mut S,
+    camera: &Camera,
+    size: (u32, u32),
+    options: &RenderOptions,
+    distance: f64,
+) -> Result<(usize, usize)> {
+    let world = source.world();
+    let mut slots = new_slots();
+    let mut cache = TileCache::<TILE, SLOTS>::new(world, &mut slots);
+    let mut needed = Box::new(Keys::new());
+    cache.begin_frame();
+    load_view(
+        &mut cache,
+        source,
+        camera,
+        size,
+        options.level_bias(world.roughness),
+        &mut needed,
+    )?;
+    let [x, y, _] = camera.eye.map(f64::from);
+    let beyond = needed
+        .iter()
+        .filter(|key| {
+            // The tile's points, in voxels: `TILE` a side, `2^level` apart.
+            let spacing = f64::from(1u32 << key.level);
+            let side = TILE as f64 * spacing;
+            let (x0, y0) = (f64::from(key.x) * side, f64::from(key.y) * side);
+            let (x1, y1) = (x0 + side - spacing, y0 + side - spacing);
+            let dx = (x0 - x).max(x - x1).max(0.0);
+            let dy = (y0 - y).max(y - y1).max(0.0);
+            dx.hypot(dy) > distance
+        })
+        .count();
+    Ok((needed.len(), beyond))
+}
+
 /// Renders one view of `source` (camera in world coordinates) through a
 /// cache of [`SLOTS`] tiles, loading the view's footprint first.
 pub fn render_tiled<S: TileSource<TILE>>(
