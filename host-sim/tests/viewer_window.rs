@@ -301,9 +301,11 @@ fn keys_fly_the_window_and_render_draws_what_it_shows() {
 
     // Forward (toward +y at a heading of 90°) for a moment, then bank
     // right a little: the camera moves as the keys say. Nearest shading
-    // and rays by footprint on: the render command says so.
+    // and rays by footprint on, the sky and fog off: the render command
+    // says so.
     key(&["key", "1"]);
     key(&["key", "3"]);
+    key(&["key", "5"]);
     key(&["keydown", "w"]);
     std::thread::sleep(Duration::from_millis(600));
     key(&["keyup", "w"]);
@@ -335,6 +337,9 @@ fn keys_fly_the_window_and_render_draws_what_it_shows() {
         "turned right by the drag: yaw {yaw}"
     );
     let settings = render_args(&second);
+    assert!(render_args(&first).contains(&"--atmosphere=on".to_string()));
+    assert!(settings.contains(&"--atmosphere=off".to_string()));
+    assert!(settings.contains(&"--relief=shadows".to_string()));
     assert!(settings.contains(&"--shading=nearest".to_string()));
     assert!(settings.contains(&"--vertical-samples=footprint".to_string()));
 

@@ -94,9 +94,11 @@ impl AtmosphereArgs {
 
     /// The sky, sun and fog asked for (none when off).
     pub(super) fn atmosphere(&self, default: bool) -> Option<Atmosphere> {
-        if !self.on(default) {
-            return None;
-        }
+        self.on(default).then(|| self.settings())
+    }
+
+    /// The sky, sun and fog these flags describe, on or off.
+    fn settings(&self) -> Atmosphere {
         let flight = Atmosphere::FLIGHT;
         let sun = flight.sun.map(|sun| match self.sun {
             Some([azimuth_deg, elevation_deg]) => terracast::Sun {
@@ -115,7 +117,15 @@ impl AtmosphereArgs {
                 ..fog
             }),
         };
-        Some(Atmosphere { sun, fog, ..flight })
+        Atmosphere { sun, fog, ..flight }
+    }
+
+    /// [`AtmosphereArgs::settings`] in fixed point, for a window that
+    /// turns them on and off.
+    pub(super) fn prepared_settings(&self) -> Result<PreparedAtmosphere> {
+        self.settings()
+            .prepare()
+            .map_err(|e| Error::new(e.to_string()))
     }
 
     /// [`AtmosphereArgs::atmosphere`] in fixed point, for the kernel.
@@ -166,12 +176,14 @@ impl AtmosphereArgs {
         Ok(())
     }
 
-    /// The flags that ask for exactly these settings (as resolved for a
-    /// command whose default is `default`, on a scene with or without a
-    /// `photo`), for a `render` command line that draws the same frame.
-    pub(super) fn arguments(&self, default: bool, photo: bool) -> Vec<String> {
+    /// The flags that ask for exactly these settings, with the sky, sun
+    /// and fog `on` or off whatever the flags say and the relief as
+    /// resolved for a command whose default is `default`, on a scene with
+    /// or without a `photo`: for a `render` command line that draws the
+    /// same frame.
+    pub(super) fn arguments(&self, on: bool, default: bool, photo: bool) -> Vec<String> {
         let mut flags = Vec::new();
-        match self.atmosphere(default) {
+        match on.then(|| self.settings()) {
             None => flags.push("--atmosphere=off".to_string()),
             Some(air) => {
                 flags.push("--atmosphere=on".to_string());
@@ -270,7 +282,7 @@ mod tests {
             ),
         ] {
             let first = parse(&line).unwrap();
-            let flags = first.arguments(default, photo);
+            let flags = first.arguments(first.on(default), default, photo);
             let again = parse(&flags.iter().map(String::as_str).collect::<Vec<_>>()).unwrap();
             // The render command's default is off: the flags must not need it.
             assert_eq!(

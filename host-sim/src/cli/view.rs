@@ -95,7 +95,7 @@ const STILL_AFTER: std::time::Duration = std::time::Duration::from_millis(300);
 const KEYS_HELP: &str =
     "keys: W/S forward/back, A/D sideways, R/F up/down, arrows turn and pitch, Q/E bank, \
 drag with the left button to look, +/- speed; 1 shading, 2 resolution, 3 rays by footprint, \
-4 coherence, G governor, H on-screen line; P save the view; Esc quit";
+4 coherence, 5 sky and fog, G governor, H on-screen line; P save the view; Esc quit";
 
 pub(super) fn view_command(args: ViewArgs) -> Result<()> {
     let threads = threads_or_cores(args.threads)?;
@@ -186,7 +186,12 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
     );
     let mut app = App {
         terrain_flags: terrain_flags(&args),
-        atmosphere: args.atmosphere.prepared(true)?,
+        atmosphere: args.atmosphere.prepared_settings()?,
+        atmosphere_on: args.atmosphere.atmosphere(true).is_some(),
+        atmosphere_flags: [false, true].map(|on| {
+            args.atmosphere
+                .arguments(on, true, !args.scene.color.is_empty())
+        }),
         save_prefix: args.save_prefix.clone(),
         world,
         camera,
@@ -285,10 +290,6 @@ fn terrain_flags(args: &ViewArgs) -> Vec<String> {
     if let Some(filter) = args.kernel.height_filter {
         flag("height-filter", filter.name());
     }
-    flags.extend(
-        args.atmosphere
-            .arguments(true, !args.scene.color.is_empty()),
-    );
     flags
 }
 
@@ -369,6 +370,8 @@ impl World<'_> {
 #[derive(Debug, Clone, Copy)]
 struct Shown {
     camera: Camera,
+    /// Whether the sky, sun and fog were on.
+    atmosphere_on: bool,
     options: RenderOptions,
     rays: PixelRays,
     size: (u32, u32),
@@ -377,8 +380,11 @@ struct Shown {
 
 struct App<'s> {
     terrain_flags: Vec<String>,
-    /// Sky, sun and fog over every frame.
-    atmosphere: Option<PreparedAtmosphere>,
+    /// Sky, sun and fog over every frame while on (5 turns them on and
+    /// off), and the `render` flags that ask for them off and on.
+    atmosphere: PreparedAtmosphere,
+    atmosphere_on: bool,
+    atmosphere_flags: [Vec<String>; 2],
     save_prefix: String,
     world: World<'s>,
     camera: Camera,
@@ -541,7 +547,7 @@ impl App<'_> {
         let began = Instant::now();
         let steps = self.world.render(
             &self.camera,
-            (&options, self.atmosphere.as_ref()),
+            (&options, self.atmosphere_on.then_some(&self.atmosphere)),
             rays,
             self.threads,
             &self.pixels,
@@ -565,6 +571,7 @@ impl App<'_> {
         }
         self.shown = Some(Shown {
             camera: self.camera,
+            atmosphere_on: self.atmosphere_on,
             options,
             rays,
             size,
@@ -579,11 +586,12 @@ impl App<'_> {
         self.pixels.enlarge_to(&mut buffer, window_size);
         if self.overlay {
             let text = format!(
-                "{}  {}x{}  {}  {}",
+                "{}  {}x{}  {}{}  {}",
                 figures.describe(),
                 size.0,
                 size.1,
                 self.settings.describe(),
+                if self.atmosphere_on { " fog" } else { "" },
                 describe_camera(&self.camera)
             );
             draw_line_of_text(&mut buffer, window_size.0, &text);
@@ -614,8 +622,10 @@ impl App<'_> {
             .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))?;
         outputs.commit()?;
         let replay = format!("{}-{}.render.png", self.save_prefix, path_number(&path));
+        let mut flags = self.terrain_flags.clone();
+        flags.extend_from_slice(&self.atmosphere_flags[usize::from(shown.atmosphere_on)]);
         let args = render_arguments(
-            &self.terrain_flags,
+            &flags,
             &shown.camera,
             shown.size,
             &shown.options,
@@ -657,6 +667,7 @@ impl App<'_> {
             KeyCode::Digit2 => self.settings.toggle_resolution(),
             KeyCode::Digit3 => self.settings.toggle_rays(),
             KeyCode::Digit4 => self.settings.next_coherence(),
+            KeyCode::Digit5 => self.atmosphere_on = !self.atmosphere_on,
             KeyCode::KeyG => self.settings.governor = !self.settings.governor,
             KeyCode::KeyH => {
                 // The same view with or without the line: drawn at the
