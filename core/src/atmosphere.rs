@@ -460,7 +460,9 @@ impl PreparedAtmosphere {
             Some(table) => match sky_column {
                 // Sine i/256, Q20.
                 Some(column) if i > 0 => {
-                    self.transmitted(table, over_sine(column as u64, (i as u32) << 12)) as u16
+                    // Once a frame: a plain division.
+                    let over_sine = div_trunc(column << DIR_BITS, (i as i64) << 12);
+                    self.transmitted(table, over_sine as u64) as u16
                 }
                 _ => 0,
             },
@@ -682,35 +684,19 @@ const RECIPROCALS: [u32; 129] = {
     reciprocals
 };
 
-/// `column · 2^20 / sine` (`column` Q8 voxels, below 2^31; `sine` Q20,
-/// positive): a 32-bit divide of both brought under 2^32 where the
-/// sine keeps 8 bits, else the full division (within a degree of the
-/// horizon, where little is left of the sky anyway).
-fn over_sine(column: u64, sine: u32) -> u64 {
-    let scaled = column << DIR_BITS;
-    let shift = (64 - scaled.leading_zeros()).saturating_sub(32);
-    if sine >> shift >= 1 << 8 {
-        u64::from((scaled >> shift) as u32 / (sine >> shift))
-    } else {
-        div_trunc(scaled as i64, i64::from(sine)) as u64
-    }
-}
-
 impl SunTable {
     /// Whether unit direction `e` (Q20) is within the glow's reach: one
-    /// dot product, so that most of the sky skips the rest.
+    /// dot product, so that most of the sky skips the rest. The glow is
+    /// at most 90° wide, so that is in the sun's half of the sky too.
     fn near(&self, e: [i64; 3]) -> bool {
         let s = self.direction;
-        e[0] * s[0] + e[1] * s[1] + e[2] * s[2] > self.glow_cosine
+        e[0] * s[0] + e[1] * s[1] + e[2] * s[2] > self.glow_cosine.max(0)
     }
 
-    /// The sky `color` along unit direction `e` (Q20) with the sun's disc
-    /// and glow over it.
+    /// The sky `color` along unit direction `e` (Q20, [`SunTable::near`]
+    /// the sun) with the sun's disc and glow over it.
     fn over(&self, color: Rgb, e: [i64; 3]) -> Rgb {
         let s = self.direction;
-        if e[0] * s[0] + e[1] * s[1] + e[2] * s[2] <= 0 {
-            return color;
-        }
         let cross = [
             (e[1] * s[2] - e[2] * s[1]) >> DIR_BITS,
             (e[2] * s[0] - e[0] * s[2]) >> DIR_BITS,
