@@ -84,6 +84,8 @@ pub(crate) struct LineCaster<'s, 'v, T: Surface + ?Sized + 's> {
 /// One line's walk through the grids.
 struct LineWalk {
     plane: Plane,
+    /// `plane.delta0`, in [0, 2^16).
+    delta0: i32,
     /// The line's samples inside the map: `first..=last` (a map side is
     /// below 2^15 samples: the walk's positions are 32-bit, the word of
     /// the cores it runs on).
@@ -100,6 +102,29 @@ struct LineWalk {
     /// level, forward or back), and the minor coordinate's (Q16).
     step: [isize; LEVELS],
     minor_step: [i32; LEVELS],
+}
+
+/// What a ray's hit needs of the ray beyond its walk.
+#[derive(Clone, Copy)]
+struct HitRay {
+    /// Height change a sample, Q16 (within `MAX_RAY_SLOPE` samples, below
+    /// 2^29).
+    dz: i32,
+    /// Major-axis distance (Q16) where its colors leave level 0.
+    color_reach: i64,
+    /// Its colors' sideways drift (see [`Plane::drift`]; within 2^14).
+    drift: i32,
+}
+
+/// What a far hit's color needs of the hit (see [`LineCaster::far_color`]).
+struct Far {
+    span: i32,
+    above: Option<(i32, i32)>,
+    below: i32,
+    back: i32,
+    distance: i32,
+    drift: i32,
+    color_reach: i64,
 }
 
 /// Where a line's walk is: a sample, its level and its blended height, and
@@ -156,6 +181,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // |dminor| <= 2^16 and levels go to 14: within 2^30.
         let minor_step = core::array::from_fn(|l| (plane.dminor << l) as i32);
         LineWalk {
+            delta0: plane.delta0 as i32,
             plane,
             first,
             last,
@@ -171,25 +197,26 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// component is `run`: level `l` begins at the first sample
     /// of its grid at or past `2^(l−1)` times the reach of `run`, and at
     /// or past level `l − 1`'s beginning (an even step of that level).
+    #[inline(never)]
     fn schedule(&self, walk: &mut LineWalk, run: i64) {
         let plane = &walk.plane;
         // (The plan's top is the surface's, at most `MAX_WALK_LEVEL`.)
         let top = usize::from(self.plan.top);
         let reach = self.plan.height_reach(run);
-        for level in 1..=LEVELS {
-            walk.begins[level] = i32::MAX;
-            if level > top || walk.begins[level - 1] > walk.last {
-                continue;
-            }
+        let mut level = 1;
+        // Levels begin in order, each at or past the one below: the first
+        // that begins past the line's last sample ends the schedule.
+        while level <= top {
             let threshold = ((reach << (level - 1)) - plane.delta0 + ONE - 1) >> COORD_FRAC_BITS;
             let from = threshold.max(i64::from(walk.begins[level - 1]));
             let k = align_up(plane, from, level as u32);
-            walk.begins[level] = if k > i64::from(walk.last) {
-                i32::MAX
-            } else {
-                k as i32
-            };
+            if k > i64::from(walk.last) {
+                break;
+            }
+            walk.begins[level] = k as i32;
+            level += 1;
         }
+        walk.begins[level..].fill(i32::MAX);
     }
 
     /// Renders image line `index` into `sink`.
@@ -205,6 +232,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// eye out, holds what the stretch reads. A line's first ray walks
     /// from the eye, through the height bounds; a stretch's first ray
     /// starts where the stretch before left off; the others resume.
+    #[inline(never)]
     pub fn line<S: Sink, P: Probe>(&self, index: u32, sink: &mut S, probe: &mut P) {
         let view = self.view;
         let Some(line) = view.line(index) else {
@@ -220,7 +248,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // least, which they are scheduled by, to a third more.
         let (mut stretch_run, mut stretch_most) = (0, -1);
         let mut pixels = line.pixels(view.height());
-        let mut previous_dz = i64::MIN;
+        let mut previous_dz = i32::MIN;
         // The direction's components a ray's set-up needs.
         let axes = [if walk.plane.key.x_major { 0 } else { 1 }, 2];
         if walk.first <= walk.last {
@@ -228,6 +256,8 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 probe.ray();
                 let [d_major, d_up] = line.direction_component(pixel.along, axes);
                 let (dz, run) = View::slope_of(d_major, d_up, &walk.plane);
+                // Within `MAX_RAY_SLOPE` samples a sample, below 2^29.
+                let dz = dz as i32;
                 // A ray lower than the one before (directions are linear
                 // along the line, so only next to the vanishing point,
                 // where a ray's horizontal part rounds to nothing) cannot
@@ -245,6 +275,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                     at = None;
                 }
                 previous_dz = dz;
+                let dz = i64::from(dz);
                 let z0 = view.eye[2].to_bits() + ((walk.plane.delta0 * dz) >> COORD_FRAC_BITS);
                 if at.is_none() {
                     if levels {
@@ -266,8 +297,13 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 }
                 let hit = at.as_mut().and_then(|at| {
                     let z = self.climb(&walk, at, z0, dz, probe)?;
-                    let drift = walk.plane.drift_of(d_major, pixel.offset);
-                    Some(self.hit(&walk, at, z, dz, run, drift, probe))
+                    let ray = HitRay {
+                        dz: dz as i32,
+                        color_reach: self.plan.color_reach(run),
+                        // Within 2^14 (`Plane::drift_of`).
+                        drift: walk.plane.drift_of(d_major, pixel.offset) as i32,
+                    };
+                    Some(self.hit(&walk, at, z, &ray, probe))
                 });
                 match hit {
                     Some(sample) => sink.put(pixel.x, pixel.y, sample),
@@ -291,6 +327,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// outside the slab a tile footprint loads. `None`
     /// when the ray never comes down to the terrain or the map has no
     /// height there.
+    #[inline(never)]
     fn start<P: Probe>(
         &self,
         walk: &LineWalk,
@@ -334,6 +371,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// height bounds (the line's first sample without them); `None` when
     /// it cannot hit at all. Its bounds cover every level, so the skip
     /// holds whatever levels the walk steps on.
+    #[inline(never)]
     fn clear_until<P: Probe>(&self, walk: &LineWalk, d: &[i64; 3], probe: &mut P) -> Option<i32> {
         if !self.first_hit {
             return Some(walk.first);
@@ -460,24 +498,26 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         }
     }
 
-    /// The sample of a ray at height `z` (Q16) at `at`, below the surface
-    /// there and above it at the sample before (when there is one); `run`
-    /// is its direction's major-axis component and `drift` its colors'
-    /// sideways drift (see [`Plane::drift`]).
-    #[allow(clippy::too_many_arguments)]
+    /// The sample of `ray` at height `z` (Q16) at `at`, below the surface
+    /// there and above it at the sample before (when there is one).
+    ///
+    /// In 32-bit words where the values allow: a hit's distance is below
+    /// 2^31 (inside the map), a clearance saturates.
     #[inline(always)]
     fn hit<P: Probe>(
         &self,
         walk: &LineWalk,
         at: &At,
         z: i64,
-        dz: i64,
-        run: i64,
-        drift: i64,
+        ray: &HitRay,
         probe: &mut P,
     ) -> Sample {
         probe.hit(at.level);
-        let plane = &walk.plane;
+        let HitRay {
+            dz,
+            color_reach,
+            drift,
+        } = *ray;
         let span = at.k - at.before_k;
         // The crossing, `t`/256 of the way from the sample before to the
         // hit, and the clearances either side.
@@ -485,68 +525,99 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // map far below the terrain (an eye far off the map) hits at its
         // first sample thousands of voxels down.
         let below = saturate(z - i64::from(at.height));
-        let (t, above) = match at.before {
-            Some(before) if span > 0 => {
-                let above = saturate(z - dz * i64::from(span) - i64::from(before));
-                (crossing_fraction(above, below), Some(above))
-            }
-            _ => (256, None),
+        let above = match at.before {
+            Some(before) if span > 0 => Some(saturate(
+                z - i64::from(dz) * i64::from(span) - i64::from(before),
+            )),
+            _ => None,
         };
+        let t = above.map_or(256, |above| crossing_fraction(above, below));
         // How far back from the hit the crossing is, in 1/256 of a sample.
         let back = (256 - t) as i32 * span;
-        let hit_distance = plane.delta0 + (i64::from(at.k) << COORD_FRAC_BITS);
+        // Inside the map: below 2^31 (`delta0` < 1, `k` < 2^15).
+        let hit_distance = walk.delta0 + (at.k << COORD_FRAC_BITS);
         // A crossing behind the eye (a ray that starts inside the terrain)
         // is the eye itself: distance 0, and the ray's height there.
-        let distance = (hit_distance - (i64::from(back) << 8)).max(0);
+        let distance = (hit_distance - (back << 8)).max(0);
         let sample = |color| Sample {
             color,
-            distance: distance.min(i64::from(Sample::SKY - 1)) as u32,
-            elevation: saturate(z - (((hit_distance - distance) * dz) >> COORD_FRAC_BITS)),
+            distance: distance as u32,
+            elevation: saturate(
+                z - ((i64::from(hit_distance - distance) * i64::from(dz)) >> COORD_FRAC_BITS),
+            ),
         };
-        let color_reach = self.plan.color_reach(run);
-        if distance >= color_reach || at.level > 0 {
+        if i64::from(distance) >= color_reach || at.level > 0 {
             let above = above.map(|above| (at.before_k, above));
-            let width = narrower_side(distance, span, above, below);
-            let levels = match color_level(width, color_reach, self.plan.top) {
-                Some((level, t)) if level >= at.level => Some((level, t)),
-                _ if at.level > 0 => Some((at.level, 0)),
-                _ => None,
+            let far = Far {
+                span,
+                above,
+                below,
+                back,
+                distance,
+                drift,
+                color_reach,
             };
-            if let Some((level, t)) = levels {
-                // The crossing, in 1/256 of a sample.
-                let crossing = (i64::from(at.k) << 8) - i64::from(back);
-                if let Some(color) =
-                    self.footprint(walk, crossing, distance, drift, level, t, probe)
-                {
-                    return sample(color);
-                }
+            if let Some(color) = self.far_color(walk, at, &far, probe) {
+                return sample(color);
             }
         }
         // Level 0's grid lines at the hit and the sample before, blended
         // at the crossing, looked up `drift` aside: the drift times the
         // distance, which is one sample less at the sample before.
-        let aside = ((drift * hit_distance) >> COORD_FRAC_BITS) as i32;
+        let aside = ((i64::from(drift) * i64::from(hit_distance)) >> COORD_FRAC_BITS) as i32;
         let on_hit = self.line_color(walk, at.level, at.index, at.minor, aside, probe);
         if at.level > 0 {
             // A coarse hit whose footprint found no color (at the map's
             // edge): its own level's grid line.
             return sample(on_hit);
         }
-        let color = match at.before {
-            Some(_) if span > 0 && t < 256 => {
-                let before = self.line_color(
-                    walk,
-                    0,
-                    at.index - walk.step[0],
-                    at.minor - walk.minor_step[0],
-                    aside - drift as i32,
-                    probe,
-                );
-                lerp(before, on_hit, t)
-            }
-            _ => on_hit,
+        let color = if above.is_some() && t < 256 {
+            let before = self.line_color(
+                walk,
+                0,
+                at.index - walk.step[0],
+                at.minor - walk.minor_step[0],
+                aside - drift,
+                probe,
+            );
+            lerp(before, on_hit, t)
+        } else {
+            on_hit
         };
         sample(color)
+    }
+
+    /// The color of a hit past its color reach or on a coarse level: from
+    /// the two levels its footprint brackets, blended by depth
+    /// ([`mod@super::footprint_color`]'s levels, the soft transition), or
+    /// its own coarse level's; `None` where it takes level 0's grid lines.
+    /// Out of line: most hits are near and fine.
+    #[inline(never)]
+    fn far_color<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        at: &At,
+        far: &Far,
+        probe: &mut P,
+    ) -> Option<Rgb> {
+        let distance = i64::from(far.distance);
+        let width = narrower_side(distance, far.span, far.above, far.below);
+        let (level, t) = match color_level(width, far.color_reach, self.plan.top) {
+            Some((level, t)) if level >= at.level => (level, t),
+            _ if at.level > 0 => (at.level, 0),
+            _ => return None,
+        };
+        // The crossing, in 1/256 of a sample.
+        let crossing = (i64::from(at.k) << 8) - i64::from(far.back);
+        self.footprint(
+            walk,
+            crossing,
+            distance,
+            i64::from(far.drift),
+            level,
+            t,
+            probe,
+        )
     }
 
     /// The color of `level` where the sample on its major grid line
@@ -581,6 +652,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// `Ray::color_point` places it), from levels `level − 1` and `level`
     /// blended by `t`/256; `None` where neither has a color.
     #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
     fn footprint<P: Probe>(
         &self,
         walk: &LineWalk,
