@@ -47,7 +47,7 @@ use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_W
 use crate::divide::div_ceil;
 use crate::probe::Probe;
 use crate::surface::{Extent, Grid, Surface};
-use crate::view::lines::Line;
+use crate::view::lines::{Line, OwnedPixels, WindowWord};
 use crate::view::ray::{saturate, LodPlan, Plane};
 use crate::{Sample, Sink, View};
 
@@ -232,13 +232,29 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// eye out, holds what the stretch reads. A line's first ray walks
     /// from the eye, through the height bounds; a stretch's first ray
     /// starts where the stretch before left off; the others resume.
-    #[inline(never)]
     pub fn line<S: Sink, P: Probe>(&self, index: u32, sink: &mut S, probe: &mut P) {
-        let view = self.view;
-        let Some(line) = view.line(index) else {
+        let Some(line) = self.view.line(index) else {
             return;
         };
-        let mut walk = self.line_walk(&line);
+        // The pixel window in 32-bit words where the line's values fit.
+        match OwnedPixels::narrow(&line, self.view.height()) {
+            Some(pixels) => self.cast(&line, pixels, sink, probe),
+            None => self.cast(&line, line.pixels(self.view.height()), sink, probe),
+        }
+    }
+
+    /// Casts `line`'s rays through `pixels`, its pixels, into `sink`.
+    /// Out of line: the loop's state then has the registers to itself.
+    #[inline(never)]
+    fn cast<W: WindowWord, S: Sink, P: Probe>(
+        &self,
+        line: &Line,
+        mut pixels: OwnedPixels<W>,
+        sink: &mut S,
+        probe: &mut P,
+    ) {
+        let view = self.view;
+        let mut walk = self.line_walk(line);
         let levels = self.plan.top > 0;
         let [first_run, last_run] = line
             .end_directions()
@@ -247,7 +263,6 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // The major-axis components the stretch's levels hold: from its
         // least, which they are scheduled by, to a third more.
         let (mut stretch_run, mut stretch_most) = (0, -1);
-        let mut pixels = line.pixels(view.height());
         let mut previous_dz = i32::MIN;
         // The direction's components a ray's set-up needs.
         let axes = [if walk.plane.key.x_major { 0 } else { 1 }, 2];

@@ -646,7 +646,7 @@ impl Line {
 /// most rows give a line none: such a row costs a few adds and compares.
 /// The direction and the offset are worked out for the pixels owned only.
 #[derive(Debug, Clone)]
-pub(crate) struct OwnedPixels {
+pub(crate) struct OwnedPixels<W: WindowWord = i64> {
     along_rows: bool,
     /// The row next looked at, the row past the last, and the step.
     s: i32,
@@ -660,17 +660,17 @@ pub(crate) struct OwnedPixels {
     /// The window on row `s` starts at `(K − ½ − t_V)·a` and is `a` wide
     /// (Q16, `a` times one pixel): its start's change a row, its width
     /// and the width's change a row.
-    from_step: i64,
-    width: i64,
-    width_step: i64,
+    from_step: W,
+    width: W,
+    width_step: W,
     /// The window's start moves toward larger `t` from row to row (or
     /// stays), so the candidate only ever rises; else it only falls.
     rising: bool,
     /// The candidate pixel `t`, how far `(t − t_V)·b` is past the window's
     /// start on row `s` (Q16), and its change a pixel, `b`.
     t: i32,
-    gap: i64,
-    b_step: i64,
+    gap: W,
+    b_step: W,
     /// `t_V` (Q8) where a pixel may lie outside the sector's cone (only
     /// the lines at its edges); `None` where none can.
     cone: Option<i64>,
@@ -679,6 +679,75 @@ pub(crate) struct OwnedPixels {
     point: i64,
     point_step: i64,
     t_v_q16: i64,
+}
+
+/// The integer an [`OwnedPixels`] window steps in: `i64` always fits;
+/// `i32` fits most lines through a vanishing point within a few thousand
+/// pixels of the image, and halves the work of a row on 32-bit cores.
+pub(crate) trait WindowWord:
+    Copy
+    + Ord
+    + core::fmt::Debug
+    + core::ops::AddAssign
+    + core::ops::SubAssign
+    + core::ops::Shr<u32, Output = Self>
+{
+    const ZERO: Self;
+    fn widen(self) -> i64;
+}
+
+impl WindowWord for i64 {
+    const ZERO: Self = 0;
+    #[inline(always)]
+    fn widen(self) -> i64 {
+        self
+    }
+}
+
+impl WindowWord for i32 {
+    const ZERO: Self = 0;
+    #[inline(always)]
+    fn widen(self) -> i64 {
+        i64::from(self)
+    }
+}
+
+impl OwnedPixels<i32> {
+    /// `line`'s pixels (as [`Line::pixels`]) with the window in 32-bit
+    /// words, when its values fit them all the way along the line: the
+    /// candidate's distance past the window (within a pixel step and a
+    /// row's change of the window), the window's width at both ends.
+    pub(crate) fn narrow(line: &Line, height: u32) -> Option<Self> {
+        let wide = OwnedPixels::new(line, height);
+        line.sector.vanishing?;
+        const LIMIT: i64 = 1 << 30;
+        let rows = i64::from((wide.end - wide.s).abs());
+        let last_width = wide.width + wide.width_step * rows;
+        let fits = wide.b_step + wide.from_step.abs() < LIMIT
+            && wide.gap.abs() < LIMIT
+            && wide.width.abs().max(last_width.abs()) < LIMIT
+            && wide.width_step.abs() < LIMIT;
+        fits.then(|| OwnedPixels {
+            along_rows: wide.along_rows,
+            s: wide.s,
+            end: wide.end,
+            step: wide.step,
+            s_ref: wide.s_ref,
+            top_row: wide.top_row,
+            cross_len: wide.cross_len,
+            from_step: wide.from_step as i32,
+            width: wide.width as i32,
+            width_step: wide.width_step as i32,
+            rising: wide.rising,
+            t: wide.t,
+            gap: wide.gap as i32,
+            b_step: wide.b_step as i32,
+            cone: wide.cone,
+            point: wide.point,
+            point_step: wide.point_step,
+            t_v_q16: wide.t_v_q16,
+        })
+    }
 }
 
 impl OwnedPixels {
@@ -751,7 +820,9 @@ impl OwnedPixels {
         }
         pixels
     }
+}
 
+impl<W: WindowWord> OwnedPixels<W> {
     /// The next pixel's cross and axis coordinates, and the line's point
     /// on its row (see `point`).
     #[inline(always)]
@@ -763,7 +834,7 @@ impl OwnedPixels {
             self.point += self.point_step;
             // The smallest t at or past the window's start.
             if self.rising {
-                while self.gap < 0 {
+                while self.gap < W::ZERO {
                     self.t += 1;
                     self.gap += self.b_step;
                 }
@@ -781,7 +852,10 @@ impl OwnedPixels {
             // Inside the sector: |t − t_V| <= a (< a for the sectors left
             // and right of V), Q8.
             if let Some(t_v) = self.cone {
-                let (dt, a) = (((i64::from(t) << IMG_FRAC) - t_v).abs(), width >> IMG_FRAC);
+                let (dt, a) = (
+                    ((i64::from(t) << IMG_FRAC) - t_v).abs(),
+                    (width >> IMG_FRAC).widen(),
+                );
                 if dt > a || (dt == a && !self.along_rows) {
                     continue;
                 }
@@ -811,7 +885,7 @@ impl OwnedPixels {
     }
 }
 
-impl Iterator for OwnedPixels {
+impl<W: WindowWord> Iterator for OwnedPixels<W> {
     type Item = Owned;
 
     #[inline(always)]
