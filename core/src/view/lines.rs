@@ -727,7 +727,7 @@ impl OwnedPixels<i32> {
             && wide.gap.abs() < LIMIT
             && wide.width.abs().max(last_width.abs()) < LIMIT
             && wide.width_step.abs() < LIMIT;
-        fits.then(|| OwnedPixels {
+        fits.then_some(OwnedPixels {
             along_rows: wide.along_rows,
             s: wide.s,
             end: wide.end,
