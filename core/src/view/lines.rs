@@ -1029,6 +1029,38 @@ mod tests {
     }
 
     #[test]
+    fn the_narrow_window_steps_the_same_pixels_as_the_wide_one() {
+        // Every line of views at every kind of pitch, roll and size, up to
+        // one whose vanishing point is too far for a narrow window.
+        let mut narrow_lines = 0;
+        let mut wide_only = 0;
+        for (pitch, roll, size) in [
+            (12.0, 0.0, (320, 240)),
+            (2.0, 0.0, (320, 240)),
+            (0.5, 0.0, (1280, 720)),
+            (45.0, 0.0, (63, 47)),
+            (90.0, 0.0, (160, 120)),
+            (-45.0, 0.0, (40, 90)),
+            (20.0, 30.0, (64, 48)),
+            (0.0, 30.0, (40, 30)),
+        ] {
+            let view = rolled(pitch, roll, 25.0, size, 60.0);
+            for index in 0..view.lines() {
+                let line = view.line(index).unwrap();
+                let Some(narrow) = OwnedPixels::narrow(&line, size.1) else {
+                    wide_only += 1;
+                    continue;
+                };
+                narrow_lines += 1;
+                let wide: vec::Vec<Owned> = line.pixels(size.1).collect();
+                let stepped: vec::Vec<Owned> = narrow.collect();
+                assert_eq!(stepped, wide, "pitch {pitch} roll {roll} line {index}");
+            }
+        }
+        assert!(narrow_lines > 1000 && wide_only > 100, "{narrow_lines} {wide_only}");
+    }
+
+    #[test]
     fn the_stepped_pixels_are_the_exact_tests_pixels() {
         // Every row of every line: the pixel the iterator gives (if any)
         // is the one pixel of the row `Line::owns` accepts.
