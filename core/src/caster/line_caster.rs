@@ -86,6 +86,8 @@ struct LineWalk {
     plane: Plane,
     /// `plane.delta0`, in [0, 2^16).
     delta0: i32,
+    /// `plane.minor_max` (below 2^31).
+    minor_max: i32,
     /// The line's samples inside the map: `first..=last` (a map side is
     /// below 2^15 samples: the walk's positions are 32-bit, the word of
     /// the cores it runs on).
@@ -182,6 +184,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         let minor_step = core::array::from_fn(|l| (plane.dminor << l) as i32);
         LineWalk {
             delta0: plane.delta0 as i32,
+            minor_max: plane.minor_max as i32,
             plane,
             first,
             last,
@@ -580,12 +583,12 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // at the crossing, looked up `drift` aside: the drift times the
         // distance, which is one sample less at the sample before.
         let aside = ((i64::from(drift) * i64::from(hit_distance)) >> COORD_FRAC_BITS) as i32;
-        let on_hit = self.line_color(walk, at.level, at.index, at.minor, aside, probe);
         if at.level > 0 {
             // A coarse hit whose footprint found no color (at the map's
             // edge): its own level's grid line.
-            return sample(on_hit);
+            return sample(self.coarse_color(walk, at, aside, probe));
         }
+        let on_hit = self.line_color(walk, 0, at.index, at.minor, aside, probe);
         let color = if above.is_some() && t < 256 {
             let before = self.line_color(
                 walk,
@@ -652,14 +655,21 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     ) -> Rgb {
         if aside != 0 {
             // Minor coordinates stay inside the map (`Plane::minor_max`),
-            // below 2^31 in Q16; the sum may not.
-            minor = (i64::from(minor) + i64::from(aside)).clamp(0, walk.plane.minor_max) as i32;
+            // below 2^31 in Q16; the sum may not, and saturates.
+            minor = minor.saturating_add(aside).clamp(0, walk.minor_max);
         }
         let (l, across) = (usize::from(level), walk.across[usize::from(level)]);
         let color = line_color(&self.grids[l], index, across, minor, level);
         let cell = index + (minor >> (COORD_FRAC_BITS + u32::from(level))) as isize * across;
         probe.color(level, cell as usize);
         color.unwrap_or(self.sky.color)
+    }
+
+    /// [`LineCaster::line_color`] on a coarse hit's own level. Out of line:
+    /// rare (a coarse hit whose footprint found no color).
+    #[inline(never)]
+    fn coarse_color<P: Probe>(&self, walk: &LineWalk, at: &At, aside: i32, probe: &mut P) -> Rgb {
+        self.line_color(walk, at.level, at.index, at.minor, aside, probe)
     }
 
     /// The color at the crossing `crossing`/256 samples along the line,

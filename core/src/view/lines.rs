@@ -1057,7 +1057,10 @@ mod tests {
                 assert_eq!(stepped, wide, "pitch {pitch} roll {roll} line {index}");
             }
         }
-        assert!(narrow_lines > 1000 && wide_only > 100, "{narrow_lines} {wide_only}");
+        assert!(
+            narrow_lines > 1000 && wide_only > 100,
+            "{narrow_lines} {wide_only}"
+        );
     }
 
     #[test]
