@@ -48,7 +48,7 @@ use crate::divide::div_ceil;
 use crate::probe::Probe;
 use crate::surface::{Extent, Grid, Surface};
 use crate::view::lines::{Line, OwnedPixels, WindowWord};
-use crate::view::ray::{saturate, LodPlan, Plane};
+use crate::view::ray::{saturate, slope_quotient, LodPlan, Plane, DIRECTION_WORD_SHIFT};
 use crate::{Sample, Sink, View};
 
 /// Heights are U12.4; the walk compares them in Q16.
@@ -272,8 +272,18 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         if walk.first <= walk.last {
             for pixel in pixels.by_ref() {
                 probe.ray();
-                let [d_major, d_up] = line.direction_component(pixel.along, axes);
-                let (dz, run) = View::slope_of(d_major, d_up, &walk.plane);
+                // The direction's words: exactly its components shifted,
+                // so the slope, the run and the drift are `View::slope`'s
+                // and `Plane::drift`'s.
+                let [major, up] = line.direction_words(pixel.along, axes);
+                let run_word = if walk.plane.key.forward {
+                    major
+                } else {
+                    -major
+                }
+                .max(0);
+                let dz = i64::from(slope_quotient(up, run_word as u32));
+                let run = i64::from(run_word) << DIRECTION_WORD_SHIFT;
                 // Within `MAX_RAY_SLOPE` samples a sample, below 2^29.
                 let dz = dz as i32;
                 // A ray lower than the one before (directions are linear
@@ -319,7 +329,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                         dz: dz as i32,
                         color_reach: self.plan.color_reach(run),
                         // Within 2^14 (`Plane::drift_of`).
-                        drift: walk.plane.drift_of(d_major, pixel.offset) as i32,
+                        drift: walk.plane.drift_of_word(run_word, pixel.offset) as i32,
                     };
                     Some(self.hit(&walk, at, z, &ray, probe))
                 });

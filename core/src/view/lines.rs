@@ -33,12 +33,19 @@
 //! Rays go by rising elevation: away from `V` when it is the nadir, toward
 //! it when it is the zenith. At pitch 0 that is each column bottom to top.
 
+use super::ray::DIRECTION_WORD_SHIFT;
 use super::View;
 use crate::config::COORD_FRAC_BITS;
 use crate::divide::div_trunc;
 
 /// Fractional bits of image-plane positions in the ownership tests.
 const IMG_FRAC: u32 = 8;
+/// A direction component (I32F32 bits) rounded to the nearest multiple
+/// of its word's unit (see [`DIRECTION_WORD_SHIFT`]).
+fn to_word_multiple(v: i64) -> i64 {
+    let half = 1 << (DIRECTION_WORD_SHIFT - 1);
+    (v + half) & !((1 << DIRECTION_WORD_SHIFT) - 1)
+}
 const IMG_ONE: i64 = 1 << IMG_FRAC;
 
 /// Farthest the vanishing point may lie from the image before the lines
@@ -429,10 +436,16 @@ impl View {
         let (sector, k) = self.lines.get(index)?;
         let (t, s) = (i64::from(k), i64::from(sector.s_ref));
         let (u, v) = if sector.along_rows { (t, s) } else { (s, t) };
+        // Both the reference and the step along the line keep no bits
+        // below a word's (`DIRECTION_WORD_SHIFT`), rounded to the nearest:
+        // every ray's direction is then a word times 2^8, its words a
+        // 32-bit multiply-add.
         let reference = core::array::from_fn(|i| {
-            self.base[i].to_bits()
-                + self.per_column[i].to_bits() * u
-                + self.per_row[i].to_bits() * v
+            to_word_multiple(
+                self.base[i].to_bits()
+                    + self.per_column[i].to_bits() * u
+                    + self.per_row[i].to_bits() * v,
+            )
         });
         let slope = match sector.vanishing {
             None => sector.lean,
@@ -459,7 +472,7 @@ impl View {
         };
         let per_axis = core::array::from_fn(|i| {
             let cross = (i128::from(cross_step[i].to_bits()) * i128::from(slope)) >> 32;
-            axis_step[i].to_bits() + cross as i64
+            to_word_multiple(axis_step[i].to_bits() + cross as i64)
         });
         let (s_v, t_v) = sector.vanishing.unwrap_or((0, 0));
         let k_t = (i64::from(k) << IMG_FRAC) - t_v;
@@ -504,6 +517,24 @@ impl Line {
     #[inline]
     pub(crate) fn direction(&self, along: i32) -> [i64; 3] {
         self.direction_component(along, [0, 1, 2])
+    }
+
+    /// Components `which` of [`Line::direction`] as words (the direction
+    /// shifted right by [`DIRECTION_WORD_SHIFT`], exactly: the line's
+    /// directions have no lower bits), by 32-bit multiply-adds. Every
+    /// direction the view's limits allow fits a word.
+    #[inline(always)]
+    pub(crate) fn direction_words<const N: usize>(
+        &self,
+        along: i32,
+        which: [usize; N],
+    ) -> [i32; N] {
+        which.map(|i| {
+            let reference = (self.reference[i] >> DIRECTION_WORD_SHIFT) as i32;
+            let per_axis = (self.per_axis[i] >> DIRECTION_WORD_SHIFT) as i32;
+            // Wrapping: the sum fits a word, whatever its parts do.
+            reference.wrapping_add(per_axis.wrapping_mul(along))
+        })
     }
 
     /// Components `which` of [`Line::direction`], and only those.
@@ -1029,6 +1060,49 @@ mod tests {
     }
 
     #[test]
+    fn a_lines_direction_words_are_its_directions_shifted_and_give_the_same_slope_and_drift() {
+        use crate::view::ray::Plane;
+        for (pitch, roll, size) in [
+            (12.0, 0.0, (320, 240)),
+            (90.0, 0.0, (64, 48)),
+            (-45.0, 0.0, (40, 90)),
+            (20.0, 30.0, (64, 48)),
+            (0.0, 0.0, (33, 17)),
+        ] {
+            let view = rolled(pitch, roll, 25.0, size, 60.0);
+            let extent = crate::surface::Extent {
+                width: 512,
+                depth: 512,
+                max_height: 100,
+                real_edges: true,
+            };
+            for index in 0..view.lines() {
+                let line = view.line(index).unwrap();
+                let plane =
+                    Plane::new(&view, &extent, &line.reference).with_across(&view.across(&line));
+                let (major, up) = if plane.key.x_major { (0, 2) } else { (1, 2) };
+                for pixel in line.pixels(size.1) {
+                    let d = line.direction(pixel.along);
+                    let words = line.direction_words(pixel.along, [major, up]);
+                    assert_eq!(words.map(i64::from), [d[major] >> 8, d[up] >> 8]);
+                    assert_eq!(words.map(|w| i64::from(w) << 8), [d[major], d[up]]);
+                    let run = if plane.key.forward {
+                        words[0]
+                    } else {
+                        -words[0]
+                    }
+                    .max(0);
+                    assert_eq!(
+                        plane.drift_of_word(run, pixel.offset),
+                        plane.drift(&d, pixel.offset),
+                        "pitch {pitch} roll {roll} line {index}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn the_narrow_window_steps_the_same_pixels_as_the_wide_one() {
         // Every line of views at every kind of pitch, roll and size, up to
         // one whose vanishing point is too far for a narrow window.
@@ -1233,10 +1307,11 @@ mod tests {
                     }
                 }
             }
-            // A ray's direction is about 1 long, a slope Q16: 2^-21 (the
-            // point's own Q16 rounding is most of it) is 1/32 of a slope's
-            // last bit.
-            assert!(worst < 1.0 / 2097152.0, "pitch {pitch}: {worst}");
+            // A ray's direction is about 1 long. A line's step along it is
+            // rounded to 2^-25 (a word's unit, to the nearest), so 300 rows
+            // along it is within 2^-16: the relative precision of a slope
+            // (`slope_quotient`, 2^-15).
+            assert!(worst < 1.0 / 65536.0, "pitch {pitch}: {worst}");
         }
     }
 

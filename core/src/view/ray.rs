@@ -292,6 +292,31 @@ impl Plane {
         self.drift_of(if self.key.x_major { d[0] } else { d[1] }, offset)
     }
 
+    /// [`Plane::drift_of`] from the ray's run as a word (its major-axis
+    /// component toward the plane's direction, shifted right by
+    /// [`DIRECTION_WORD_SHIFT`]), for a direction with no bits below its
+    /// word (a line's): the same drift, in 32-bit words but the across
+    /// step's shift.
+    #[inline]
+    pub fn drift_of_word(&self, run: i32, offset: i64) -> i64 {
+        if run <= 0 || offset == 0 || self.across == 0 {
+            return 0;
+        }
+        // As `drift_of`: the run to 24 bits, the across step alike.
+        let shift = (32 - run.leading_zeros()).saturating_sub(24 - DIRECTION_WORD_SHIFT);
+        let run = if shift <= DIRECTION_WORD_SHIFT {
+            run << (DIRECTION_WORD_SHIFT - shift)
+        } else {
+            run >> (shift - DIRECTION_WORD_SHIFT)
+        };
+        let across = bound(self.across >> shift, 1 << 30) as i32;
+        let per_pixel = across / run.max(1);
+        bound(
+            (i64::from(per_pixel) * i64::from(offset as i32)) >> COORD_FRAC_BITS,
+            1 << 14,
+        )
+    }
+
     /// [`Plane::drift`] from the direction's major-axis component alone.
     #[inline]
     pub fn drift_of(&self, major: i64, offset: i64) -> i64 {
@@ -315,13 +340,15 @@ impl Plane {
 /// Direction components (I32F32 bits) are below 2^38 (the view's limits
 /// keep a pixel's direction under 2^6 in size): shifted right by this
 /// they fit a word with room, keeping over 20 bits of every direction a
-/// view has.
-const TO_WORD: u32 = 8;
+/// view has. A line's directions have no bits below it
+/// ([`super::lines::Line::direction_words`]).
+pub(crate) const DIRECTION_WORD_SHIFT: u32 = 8;
 
-/// A direction component (I32F32 bits) to a word (see [`TO_WORD`]).
+/// A direction component (I32F32 bits) to a word (see
+/// [`DIRECTION_WORD_SHIFT`]).
 #[inline(always)]
 fn to_word(v: i64) -> i32 {
-    saturate(v >> TO_WORD)
+    saturate(v >> DIRECTION_WORD_SHIFT)
 }
 
 /// `v` brought to its 16 leading bits: the right shift and the result.
