@@ -96,6 +96,9 @@ struct LineWalk {
     /// `begins[l]`: the first sample of level `l`; `i32::MAX` past the
     /// line's last level.
     begins: [i32; LEVELS + 1],
+    /// `ends[l]`: the last sample a step on level `l` may reach (before
+    /// the next level begins, and inside the map).
+    ends: [i32; LEVELS],
     /// Index change per major grid line and across a minor grid line, on
     /// each level.
     major_stride: [isize; LEVELS],
@@ -183,6 +186,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // |dminor| <= 2^16 and levels go to 14: within 2^30.
         let minor_step = core::array::from_fn(|l| (plane.dminor << l) as i32);
         LineWalk {
+            ends: [last; LEVELS],
             delta0: plane.delta0 as i32,
             minor_max: plane.minor_max as i32,
             plane,
@@ -220,6 +224,9 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             level += 1;
         }
         walk.begins[level..].fill(i32::MAX);
+        for (end, begins) in walk.ends.iter_mut().zip(&walk.begins[1..]) {
+            *end = (begins - 1).min(walk.last);
+        }
     }
 
     /// Renders image line `index` into `sink`.
@@ -472,22 +479,27 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         if z <= i64::from(at.height) {
             return Some(z);
         }
+        // A rising ray above the highest terrain never comes down to it.
+        let rising = dz >= 0;
+        if rising && z > self.highest {
+            return None;
+        }
         // The walk in locals, written back once.
         let mut here = *at;
         let mut z_step = dz << here.level;
         loop {
-            if here.k >= walk.last || (dz >= 0 && z > self.highest) {
-                return None;
-            }
             let l = usize::from(here.level);
             let mut next = here.k + (1 << here.level);
             let (index, minor);
-            if next < walk.begins[l + 1] && next <= walk.last {
+            if next <= walk.ends[l] {
                 // On along this level: its index and minor step.
                 index = here.index + walk.step[l];
                 minor = here.minor + walk.minor_step[l];
                 z += z_step;
             } else {
+                if here.k >= walk.last {
+                    return None;
+                }
                 let level = if next > walk.last {
                     // The map ends between this level's grid lines: its
                     // last sample is tested, on level 0 where the map's
@@ -522,6 +534,9 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             if z <= i64::from(height) {
                 *at = here;
                 return Some(z);
+            }
+            if rising && z > self.highest {
+                return None;
             }
         }
     }
