@@ -749,8 +749,9 @@ impl OwnedPixels<i32> {
     /// candidate's distance past the window (within a pixel step and a
     /// row's change of the window), the window's width at both ends.
     pub(crate) fn narrow(line: &Line, height: u32) -> Option<Self> {
-        let wide = OwnedPixels::new(line, height);
+        // Parallel lines' window is Q32: never narrow.
         line.sector.vanishing?;
+        let wide = OwnedPixels::new(line, height);
         const LIMIT: i64 = 1 << 30;
         let rows = i64::from((wide.end - wide.s).abs());
         let last_width = wide.width + wide.width_step * rows;
