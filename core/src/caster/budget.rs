@@ -38,7 +38,8 @@
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 
-use super::{line_with, Allowances, Frame, RenderOptions, Resolution};
+use super::ray_caster::{Allowances, RayCaster};
+use super::{RenderOptions, Resolution};
 use crate::probe::Probe;
 use crate::sink::Sink;
 use crate::surface::Surface;
@@ -115,9 +116,9 @@ impl Governor {
             ..*options
         };
         let (fine, coarse) = (at(bias), at(coarse_bias));
-        let (fine_frame, coarse_frame) = (
-            Frame::new(surface, view, &fine),
-            Frame::new(surface, view, &coarse),
+        let (fine_caster, coarse_caster) = (
+            RayCaster::new(surface, view, &fine),
+            RayCaster::new(surface, view, &coarse),
         );
         let rays_total = u64::from(view.width())
             * u64::from(view.height())
@@ -140,22 +141,13 @@ impl Governor {
                 || (rays >= rays_total / 4
                     && u128::from(steps) * u128::from(rays_total)
                         > u128::from(self.budget) * u128::from(rays));
-            let (options, frame) = if heading_over {
+            let caster = if heading_over {
                 coarse_lines += 1;
-                (&coarse, &coarse_frame)
+                &coarse_caster
             } else {
-                (&fine, &fine_frame)
+                &fine_caster
             };
-            line_with(
-                surface,
-                view,
-                options,
-                frame,
-                line,
-                sink,
-                &mut metered,
-                &mut allowances,
-            );
+            caster.line(line, sink, &mut metered, &mut allowances);
         }
         let cost = FrameCost {
             steps: meter.steps.get(),
@@ -341,20 +333,11 @@ mod tests {
             for yaw in [0.0, 37.0, 135.0, 290.0] {
                 let camera = Camera::looking(eye, yaw, pitch);
                 let view = View::new(&camera, 24, 18).unwrap();
-                let frame = Frame::new(&pyramid, &view, &options);
+                let caster = RayCaster::new(&pyramid, &view, &options);
                 for allowance in [1, 2, 3, 5, 8, 40] {
                     let mut probe = PerRay::default();
                     for line in 0..view.lines() {
-                        line_with(
-                            &pyramid,
-                            &view,
-                            &options,
-                            &frame,
-                            line,
-                            &mut Discard,
-                            &mut probe,
-                            &mut Fixed(allowance),
-                        );
+                        caster.line(line, &mut Discard, &mut probe, &mut Fixed(allowance));
                         probe.ray();
                     }
                     assert!(
@@ -383,23 +366,14 @@ mod tests {
         let options = RenderOptions::default();
         let camera = Camera::looking([3.0, 5.0, 50.0], 40.0, 4.0);
         let view = View::new(&camera, 32, 24).unwrap();
-        let frame = Frame::new(&pyramid, &view, &options);
+        let caster = RayCaster::new(&pyramid, &view, &options);
         // u32::MAX is what the plain render's allowances give: no limit.
         let render_with = |allowance: u32| {
             let mut pixels = [[0u8; 3]; 32 * 24];
             let mut sink = crate::Framebuffer::new(&mut pixels, 32, 24).unwrap();
             for line in 0..view.lines() {
                 let mut probe = crate::NoProbe;
-                line_with(
-                    &pyramid,
-                    &view,
-                    &options,
-                    &frame,
-                    line,
-                    &mut sink,
-                    &mut probe,
-                    &mut Fixed(allowance),
-                );
+                caster.line(line, &mut sink, &mut probe, &mut Fixed(allowance));
             }
             pixels
         };

@@ -48,7 +48,9 @@ use crate::divide::div_ceil;
 use crate::probe::Probe;
 use crate::surface::{Extent, Grid, Surface};
 use crate::view::lines::{Line, OwnedPixels, WindowWord};
-use crate::view::ray::{saturate, slope_quotient, LodPlan, Plane, DIRECTION_WORD_SHIFT};
+use crate::view::lod::LodPlan;
+use crate::view::plane::{slope_quotient, Plane, DIRECTION_WORD_SHIFT};
+use crate::view::words::saturate;
 use crate::{Sample, Sink, View};
 
 /// Heights are U12.4; the walk compares them in Q16.
@@ -652,15 +654,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         };
         // The crossing, in 1/256 of a sample.
         let crossing = (i64::from(at.k) << 8) - i64::from(far.back);
-        self.footprint(
-            walk,
-            crossing,
-            distance,
-            i64::from(far.drift),
-            level,
-            t,
-            probe,
-        )
+        self.footprint(walk, crossing, far, (level, t), probe)
     }
 
     /// The color of `level` where the sample on its major grid line
@@ -698,21 +692,19 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     }
 
     /// The color at the crossing `crossing`/256 samples along the line,
-    /// `distance` (Q16) from the eye, looked up `drift` aside (as
-    /// `Ray::color_point` places it), from levels `level − 1` and `level`
-    /// blended by `t`/256; `None` where neither has a color.
-    #[allow(clippy::too_many_arguments)]
+    /// the far hit's distance (Q16) from the eye, looked up its drift aside
+    /// (as `Ray::color_point` places it), from levels `level − 1` and
+    /// `level` blended by `t`/256; `None` where neither has a color.
     #[inline(never)]
     fn footprint<P: Probe>(
         &self,
         walk: &LineWalk,
         crossing: i64,
-        distance: i64,
-        drift: i64,
-        level: u8,
-        t: u32,
+        far: &Far,
+        (level, t): (u8, u32),
         probe: &mut P,
     ) -> Option<Rgb> {
+        let (distance, drift) = (i64::from(far.distance), i64::from(far.drift));
         let plane = &walk.plane;
         let along = crossing << (COORD_FRAC_BITS - 8);
         let major =

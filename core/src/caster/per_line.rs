@@ -29,7 +29,7 @@ use super::{crossing_fraction, sky, RenderOptions};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BITS};
 use crate::divide::div_trunc;
-use crate::view::ray::Plane;
+use crate::view::plane::Plane;
 use crate::{Sample, Sink, Terrain, View};
 use core::fmt;
 

@@ -407,7 +407,7 @@ mod tests {
     use super::*;
     use crate::pyramid::{pyramid_cells, pyramid_points, Pyramid};
     use crate::terrain::Terrain;
-    use crate::view::ray::LodPlan;
+    use crate::view::lod::LodPlan;
     use crate::view::{Camera, View};
     use std::vec;
 

@@ -33,7 +33,7 @@
 //! Rays go by rising elevation: away from `V` when it is the nadir, toward
 //! it when it is the zenith. At pitch 0 that is each column bottom to top.
 
-use super::ray::DIRECTION_WORD_SHIFT;
+use super::plane::DIRECTION_WORD_SHIFT;
 use super::View;
 use crate::config::COORD_FRAC_BITS;
 use crate::divide::div_trunc;
@@ -1062,7 +1062,7 @@ mod tests {
 
     #[test]
     fn a_lines_direction_words_are_its_directions_shifted_and_give_the_same_slope_and_drift() {
-        use crate::view::ray::Plane;
+        use crate::view::plane::Plane;
         for (pitch, roll, size) in [
             (12.0, 0.0, (320, 240)),
             (90.0, 0.0, (64, 48)),

@@ -6,7 +6,10 @@
 
 pub(crate) mod lines;
 pub use lines::max_lines;
+pub(crate) mod lod;
+pub(crate) mod plane;
 pub(crate) mod ray;
+pub(crate) mod words;
 
 use crate::config::{
     HFOV_RANGE_DEG, MAX_EYE_COORD, MAX_EYE_HEIGHT, MAX_IMAGE_SIDE, MAX_VERTICAL_TANGENT,

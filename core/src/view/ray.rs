@@ -22,13 +22,14 @@
 //! as given; see `caster::footprint_color`), blended between levels by
 //! depth, so they do not jump where the heights switch.
 
+use super::lod::{Lod, LodPlan};
+use super::plane::{slope_quotient, to_word, Plane};
+use super::words::{clamp_in_place, narrow, saturate};
 use super::View;
-use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, MAX_WALK_LEVEL};
-use crate::divide::{div_ceil, div_floor, div_trunc};
+use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_WALK_LEVEL};
+use crate::divide::{div_ceil, div_floor};
 use crate::surface::{Extent, Surface};
 use fixed::types::I16F16;
-
-const ONE: i64 = 1 << COORD_FRAC_BITS;
 
 /// Which family of grid lines a ray steps across. Two rays with the same key
 /// number their samples identically, so one can resume where the other hit.
@@ -36,73 +37,6 @@ const ONE: i64 = 1 << COORD_FRAC_BITS;
 pub(crate) struct RayKey {
     pub x_major: bool,
     pub forward: bool,
-}
-
-/// The frame's level-of-detail set-up.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct LodPlan {
-    /// Depth where level 1 begins, Q16 voxels.
-    level1_depth: i64,
-    /// Highest level the frame may use.
-    pub top: u8,
-    /// Depth where colors begin to come from level 1, Q16: the ratio as
-    /// given, not scaled by the terrain fit (colors have no height error
-    /// to keep small; see [`Ray::color_reach`]).
-    color_level1_depth: i64,
-}
-
-impl LodPlan {
-    /// Levels up to `top`, switching by `pixel_to_voxel` (U8.8; 0 counts as
-    /// 1/256) scaled by `fit` (Q16, at most 1; see
-    /// [`crate::roughness::terrain_fit`]; colors switch by the ratio
-    /// alone).
-    pub fn new(view: &View, pixel_to_voxel: u16, fit: u32, top: u8) -> Self {
-        let pixel_to_voxel = i64::from(pixel_to_voxel.max(1));
-        let ratio = pixel_to_voxel * i64::from(fit.clamp(1, 1 << 16));
-        Self {
-            level1_depth: (view.focal << 24) / ratio,
-            top: top.min(MAX_WALK_LEVEL as u8),
-            color_level1_depth: (view.focal << 8) / pixel_to_voxel,
-        }
-    }
-
-    /// The major-axis distance (Q16) where level 1's heights begin for a
-    /// ray whose direction's major-axis component is `run` (I32F32 bits):
-    /// the depth where they begin times `run`.
-    pub fn height_reach(&self, run: i64) -> i64 {
-        clamp_in_place(
-            (self.level1_depth.min(1 << 40) * (run >> 16)) >> 16,
-            1,
-            1 << 40,
-        )
-    }
-
-    /// The major-axis distance (Q16) where colors begin to come from level
-    /// 1 for a ray of major-axis component `run` (see [`Ray::color_reach`]).
-    pub fn color_reach(&self, run: i64) -> i64 {
-        match self.color_level1_depth {
-            i64::MAX => i64::MAX,
-            depth => clamp_in_place((depth.min(1 << 40) * (run >> 16)) >> 16, 1, 1 << 40),
-        }
-    }
-
-    /// One level only.
-    pub const SINGLE: Self = Self {
-        level1_depth: i64::MAX,
-        top: 0,
-        color_level1_depth: i64::MAX,
-    };
-}
-
-/// A ray's level schedule. Two rays with equal `Lod` (and key) visit the
-/// same samples at the same levels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Lod {
-    /// Major-axis distance where level 1 begins, Q16 (level `l` begins at
-    /// `reach << (l − 1)`).
-    reach: i64,
-    /// Highest level this ray uses.
-    pub top: u8,
 }
 
 /// One ray, ready to traverse.
@@ -172,228 +106,6 @@ pub(crate) struct Cursor {
     /// Minor coordinate (world voxels) and height, Q16.
     pub minor: i32,
     pub z: i32,
-}
-
-/// What every ray of an image line shares: its vertical plane. The
-/// horizontal direction (which grid lines the rays cross, their minor
-/// slope) and so where their samples lie and which of them are in the map.
-/// Sharing it bit for bit puts the rays of a line in one plane, sample for
-/// sample, and leaves a ray only its slope to set up.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Plane {
-    pub key: RayKey,
-    /// Minor-axis increment per major-axis step, Q16 (within ±1).
-    pub dminor: i64,
-    /// Major-axis grid coordinate of sample 0, the distance to it, and the
-    /// minor coordinate there (see [`Ray`]).
-    pub major0: i64,
-    pub delta0: i64,
-    pub minor0: i64,
-    /// Samples inside the map: `first..=last` (`first` may be −1).
-    pub first: i64,
-    pub last: i64,
-    /// Largest minor coordinate whose neighbour across the grid line is in
-    /// the map, Q16.
-    pub minor_max: i64,
-    /// `across_minor − dminor·across_major` (see [`Plane::with_across`]);
-    /// 0 until set.
-    across: i64,
-}
-
-impl Plane {
-    /// The plane of direction `d` (I32F32 bits) from `view`'s eye over
-    /// a map of `extent`.
-    pub fn new(view: &View, extent: &Extent, d: &[i64; 3]) -> Self {
-        let x_major = d[0].abs() >= d[1].abs();
-        let (d_major, d_minor) = if x_major { (d[0], d[1]) } else { (d[1], d[0]) };
-        let forward = d_major >= 0;
-        let run = d_major.abs();
-        // Directions are I32F32 below 2^10 in magnitude (a line's far-edge
-        // point lies within a few image sizes), so `<< 16` cannot overflow;
-        // |d_minor| <= run keeps the minor slope within ±1.
-        let dminor = if run == 0 {
-            0
-        } else {
-            div_trunc(d_minor << COORD_FRAC_BITS, run)
-        };
-
-        let [ex, ey, _] = view.eye.map(|v| v.to_bits());
-        let (e_major, e_minor) = if x_major { (ex, ey) } else { (ey, ex) };
-        let (major0, delta0) = if forward {
-            let m = (e_major + ONE - 1) >> COORD_FRAC_BITS;
-            (m, (m << COORD_FRAC_BITS) - e_major)
-        } else {
-            let m = e_major >> COORD_FRAC_BITS;
-            (m, e_major - (m << COORD_FRAC_BITS))
-        };
-        let minor0 = e_minor + ((delta0 * dminor) >> COORD_FRAC_BITS);
-
-        let (major_len, minor_len) = if x_major {
-            (extent.width, extent.depth)
-        } else {
-            (extent.depth, extent.width)
-        };
-        // Samples inside the map: 0 <= major <= len-1 and 0 <= minor < len-1,
-        // so that the neighbour across the minor grid line exists too.
-        let (mut first, mut last) = (-1i64, i64::MAX);
-        let major_last = i64::from(major_len) - 1;
-        let (lo, hi) = if forward {
-            (-major0, major_last - major0)
-        } else {
-            (major0 - major_last, major0)
-        };
-        first = first.max(lo);
-        last = last.min(hi);
-        let minor_max = ((i64::from(minor_len) - 1) << COORD_FRAC_BITS) - 1;
-        match dminor.signum() {
-            1 => {
-                first = first.max(div_ceil(-minor0, dminor));
-                last = last.min(div_floor(minor_max - minor0, dminor));
-            }
-            -1 => {
-                first = first.max(div_ceil(minor_max - minor0, dminor));
-                last = last.min(div_floor(-minor0, dminor));
-            }
-            _ if (0..=minor_max).contains(&minor0) => {}
-            _ => last = first - 1,
-        }
-        Self {
-            key: RayKey { x_major, forward },
-            dminor,
-            major0,
-            delta0,
-            minor0,
-            first,
-            last,
-            minor_max,
-            across: 0,
-        }
-    }
-
-    /// Sets how the plane's rays drift sideways when their direction moves
-    /// by `across` (I32F32 bits, the step to the next pixel across the
-    /// line): see [`Plane::drift`].
-    pub fn with_across(mut self, across: &[i64; 3]) -> Self {
-        let (major, minor) = if self.key.x_major { (0, 1) } else { (1, 0) };
-        let sign = if self.key.forward { 1 } else { -1 };
-        // |across| < 2^40 and |dminor| <= 2^16: no overflow.
-        self.across = (across[minor] << COORD_FRAC_BITS) - self.dminor * across[major] * sign;
-        self
-    }
-
-    /// How much faster (Q16 per major step) the minor coordinate of a ray
-    /// along `d` would grow if `d` moved by `offset` (Q16) steps across the
-    /// line: `(across_minor − dminor·across_major) / run`. A pixel's ray goes
-    /// through its line, up to half a pixel beside the pixel's center; this
-    /// is how far the center's own ray would drift from it, which the color
-    /// lookup makes up for.
-    #[inline]
-    pub fn drift(&self, d: &[i64; 3], offset: i64) -> i64 {
-        self.drift_of(if self.key.x_major { d[0] } else { d[1] }, offset)
-    }
-
-    /// [`Plane::drift_of`] from the ray's run as a word (its major-axis
-    /// component toward the plane's direction, shifted right by
-    /// [`DIRECTION_WORD_SHIFT`]), for a direction with no bits below its
-    /// word (a line's): the same drift, in 32-bit words but the across
-    /// step's shift.
-    #[inline]
-    pub fn drift_of_word(&self, run: i32, offset: i64) -> i64 {
-        if run <= 0 || offset == 0 || self.across == 0 {
-            return 0;
-        }
-        // As `drift_of`: the run to 24 bits, the across step alike.
-        let shift = (32 - run.leading_zeros()).saturating_sub(24 - DIRECTION_WORD_SHIFT);
-        let run = if shift <= DIRECTION_WORD_SHIFT {
-            run << (DIRECTION_WORD_SHIFT - shift)
-        } else {
-            run >> (shift - DIRECTION_WORD_SHIFT)
-        };
-        let across = bound(self.across >> shift, 1 << 30) as i32;
-        let per_pixel = across / run.max(1);
-        bound(
-            (i64::from(per_pixel) * i64::from(offset as i32)) >> COORD_FRAC_BITS,
-            1 << 14,
-        )
-    }
-
-    /// [`Plane::drift`] from the direction's major-axis component alone.
-    #[inline]
-    pub fn drift_of(&self, major: i64, offset: i64) -> i64 {
-        let run = if self.key.forward { major } else { -major };
-        if run <= 0 || offset == 0 || self.across == 0 {
-            return 0;
-        }
-        // A color lookup needs no more than 24 bits of this: drop the low
-        // bits of both until they fit the core's 32-bit divide (and the
-        // product its 32 × 32-bit multiply: |offset| <= 2^15).
-        let shift = (64 - run.leading_zeros()).saturating_sub(24);
-        let across = bound(self.across >> shift, 1 << 30) as i32;
-        let per_pixel = across / ((run >> shift) as i32).max(1);
-        bound(
-            (i64::from(per_pixel) * i64::from(offset as i32)) >> COORD_FRAC_BITS,
-            1 << 14,
-        )
-    }
-}
-
-/// Direction components (I32F32 bits) are below 2^38 (the view's limits
-/// keep a pixel's direction under 2^6 in size): shifted right by this
-/// they fit a word with room, keeping over 20 bits of every direction a
-/// view has. A line's directions have no bits below it
-/// ([`super::lines::Line::direction_words`]).
-pub(crate) const DIRECTION_WORD_SHIFT: u32 = 8;
-
-/// A direction component (I32F32 bits) to a word (see
-/// [`DIRECTION_WORD_SHIFT`]).
-#[inline(always)]
-fn to_word(v: i64) -> i32 {
-    saturate(v >> DIRECTION_WORD_SHIFT)
-}
-
-/// `v` brought to its 16 leading bits: the right shift and the result.
-#[inline(always)]
-fn leading_16(v: u32) -> (u32, u32) {
-    let shift = (32 - v.leading_zeros()).saturating_sub(16);
-    (shift, v >> shift)
-}
-
-/// A ray's slope, `up / run` in Q16 for direction components `up` and
-/// `run` ≥ 0 in words (see [`to_word`]), within `MAX_RAY_SLOPE`: from the
-/// run's 16 leading bits and one 32-bit divide. That is a relative
-/// precision of 2^−15, which moves a ray by under a fiftieth of a voxel at
-/// a depth of a thousand samples, in a few instructions on 32-bit cores,
-/// where a 64-bit quotient calls a library routine. A vertical ray (a run
-/// of 0) takes the steepest slope.
-#[inline(always)]
-pub(crate) fn slope_quotient(up: i32, run: u32) -> i32 {
-    const MAX: u32 = (MAX_RAY_SLOPE as u32) << COORD_FRAC_BITS;
-    let magnitude = if run == 0 {
-        MAX
-    } else {
-        let (run_shift, run) = leading_16(run);
-        // The numerator keeps as many of the 16 fraction bits as fit.
-        let up = up.unsigned_abs();
-        let fraction = up.leading_zeros().min(COORD_FRAC_BITS);
-        let quotient = (up << fraction) / run;
-        // up·2^16 / run = quotient · 2^(16 − fraction − run_shift).
-        let right = fraction + run_shift;
-        if right >= COORD_FRAC_BITS {
-            (quotient >> (right - COORD_FRAC_BITS)).min(MAX)
-        } else {
-            let left = COORD_FRAC_BITS - right;
-            if quotient > MAX >> left {
-                MAX
-            } else {
-                quotient << left
-            }
-        }
-    };
-    if up < 0 {
-        -(magnitude as i32)
-    } else {
-        magnitude as i32
-    }
 }
 
 impl View {
@@ -502,59 +214,6 @@ impl View {
     }
 }
 
-/// A sample number as a ray keeps it: far outside any map, but in range of
-/// every sum the caster forms with it.
-#[inline]
-fn narrow(v: i64) -> i32 {
-    bound(v, 1 << 20) as i32
-}
-
-/// `v` clamped to `low..=high` (`low ≤ high`, `high − low` within
-/// `i64`). `i64::clamp` is a call on the board (its bounds check stops it
-/// inlining). Values within the range are the rule: one unsigned compare
-/// of `v − low` finds them, as in [`bound`], where `max` and `min` compare
-/// against both ends.
-#[inline(always)]
-fn clamp_in_place(v: i64, low: i64, high: i64) -> i64 {
-    if (v.wrapping_sub(low) as u64) <= (high.wrapping_sub(low)) as u64 {
-        v
-    } else if v < low {
-        low
-    } else {
-        high
-    }
-}
-
-/// `v` clamped to `-limit..=limit` (`0 ≤ limit < 2^62`), in place. Values
-/// within the limit are the rule: one unsigned compare of `v + limit`
-/// finds them, where a clamp compares against both ends (on 32-bit cores
-/// each a 64-bit compare).
-#[inline(always)]
-fn bound(v: i64, limit: i64) -> i64 {
-    if (v.wrapping_add(limit) as u64) <= (2 * limit) as u64 {
-        v
-    } else if v < 0 {
-        -limit
-    } else {
-        limit
-    }
-}
-
-/// `v` saturated into `i32`. Values that fit are the rule: on 32-bit cores
-/// testing for that compares one word, where a clamp compares two 64-bit
-/// bounds.
-#[inline]
-pub(crate) fn saturate(v: i64) -> i32 {
-    let low = v as i32;
-    if i64::from(low) == v {
-        low
-    } else if v < 0 {
-        i32::MIN
-    } else {
-        i32::MAX
-    }
-}
-
 /// A ray's slope and the samples where it can hit (see [`View::clip`]).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Clip {
@@ -571,44 +230,6 @@ pub(crate) struct Clip {
     /// hit at all when `start > end`.
     pub start: i32,
     pub end: i32,
-}
-
-impl Lod {
-    /// The schedule of a ray of major-axis component `run` and height
-    /// increment `dz` whose sample 0 is `delta0` from the eye and whose last
-    /// sample is `end`.
-    fn new(plan: &LodPlan, run: i64, dz: i64, delta0: i64, end: i64) -> Self {
-        const SINGLE: Lod = Lod {
-            reach: i64::MAX,
-            top: 0,
-        };
-        // Doubling must keep the height increment inside I16F16 with room
-        // for the height itself: |dz|·2^l <= 2^29.
-        let mut top = plan.top;
-        while top > 0 && (dz.abs() << top) > 1 << 29 {
-            top -= 1;
-        }
-        if top == 0 {
-            return SINGLE;
-        }
-        // reach = D1·|d_major|: Q16 times Q32 (taken as Q16), in range for
-        // every depth and direction View accepts.
-        let reach = plan.height_reach(run);
-        // A ray that ends before level 1 can begin steps on level 0 only:
-        // it needs no schedule. It samples exactly as with the levels it
-        // never reaches.
-        if first_sample_from(reach, delta0) > end {
-            return SINGLE;
-        }
-        Self { reach, top }
-    }
-}
-
-/// The first sample at or past major-axis distance `distance` (Q16) on a
-/// ray whose sample 0 is `delta0` (Q16) from the eye.
-#[inline]
-fn first_sample_from(distance: i64, delta0: i64) -> i64 {
-    (distance - delta0 + ONE - 1) >> COORD_FRAC_BITS
 }
 
 impl Ray {
@@ -655,11 +276,10 @@ impl Ray {
         to.min(i64::from(i32::MAX)) as i32
     }
 
-    /// The first sample at distance `reach << (level − 1)` or beyond.
+    /// The first sample at the distance where `level` begins, or beyond.
     #[inline]
     fn threshold(&self, level: u8) -> i32 {
-        let k = first_sample_from(self.lod.reach << (level - 1), self.delta0);
-        saturate(k)
+        saturate(self.lod.first_sample_of(level, self.delta0))
     }
 
     /// Where a ray at level `level − 1`, at sample `k` (on or past that
@@ -892,121 +512,6 @@ mod tests {
     use crate::caster::walk::Stage;
     use crate::view::Camera;
     use crate::{Pyramid, Terrain};
-
-    /// The exact slope, `up·2^16 / run` bounded by `MAX_RAY_SLOPE`.
-    fn exact_slope(up: i32, run: u32) -> f64 {
-        let max = f64::from(MAX_RAY_SLOPE) * 65536.0;
-        if run == 0 {
-            return max.copysign(f64::from(up));
-        }
-        (f64::from(up) * 65536.0 / f64::from(run)).clamp(-max, max)
-    }
-
-    #[test]
-    fn a_slope_is_within_its_precision_of_the_exact_quotient() {
-        use proptest::prelude::*;
-        let check = |up: i32, run: u32| {
-            let exact = exact_slope(up, run);
-            let got = f64::from(slope_quotient(up, run));
-            // 2^−15 of the quotient (the run's 16 leading bits, truncated)
-            // with room, and two units of its last place.
-            let tolerance = exact.abs() * 2f64.powi(-14) + 2.0;
-            assert!(
-                (got - exact).abs() <= tolerance,
-                "{up} / {run}: {got} against {exact}"
-            );
-        };
-        let edges = [
-            0,
-            1,
-            2,
-            255,
-            1 << 15,
-            (1 << 16) - 1,
-            1 << 16,
-            1 << 24,
-            i32::MAX as u32,
-        ];
-        for run in edges {
-            for up in [
-                0,
-                1,
-                -1,
-                1 << 20,
-                -(1 << 20),
-                i32::MAX,
-                i32::MIN + 1,
-                i32::MIN,
-            ] {
-                check(up, run);
-            }
-        }
-        proptest!(|(up in any::<i32>(), run in 0u32..=i32::MAX as u32)| check(up, run));
-        // Words of directions the views make (2^20 to 2^30 in size).
-        proptest!(|(up in -(1i32 << 30)..1 << 30, run in 1u32 << 20..1 << 30)| check(up, run));
-    }
-
-    #[test]
-    fn slopes_rise_with_up_and_fall_with_run() {
-        use proptest::prelude::*;
-        proptest!(|(up in -(1i32 << 28)..1 << 28, run in 1u32..1 << 30, more in 0i32..1 << 10)| {
-            prop_assert!(slope_quotient(up + more, run) >= slope_quotient(up, run));
-            if up >= 0 {
-                prop_assert!(slope_quotient(up, run + more as u32) <= slope_quotient(up, run));
-            }
-        });
-    }
-
-    #[test]
-    fn saturate_equals_a_clamp_to_i32() {
-        let edges = [
-            i64::from(i32::MAX),
-            i64::from(i32::MIN),
-            1 << 32,
-            -(1 << 32),
-        ];
-        for v in
-            edges
-                .into_iter()
-                .flat_map(|e| [e - 1, e, e + 1])
-                .chain([0, -1, i64::MIN, i64::MAX])
-        {
-            let clamped = v.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32;
-            assert_eq!(saturate(v), clamped, "{v}");
-        }
-    }
-
-    #[test]
-    fn bound_equals_a_clamp() {
-        for limit in [0, 1, 1 << 14, 1 << 20, 1 << 29, (1 << 62) - 1] {
-            let edges = [0, limit, -limit, 2 * limit, -2 * limit, i64::MIN, i64::MAX];
-            for v in edges
-                .into_iter()
-                .flat_map(|e| [e.saturating_sub(1), e, e.saturating_add(1)])
-            {
-                assert_eq!(bound(v, limit), v.clamp(-limit, limit), "{v} {limit}");
-            }
-        }
-    }
-
-    #[test]
-    fn clamp_in_place_equals_a_clamp() {
-        // The ranges the caster clamps to (a reach, a minor coordinate),
-        // an empty one and one across 0.
-        for (low, high) in [(1, 1 << 40), (0, 0), (0, i64::from(i32::MAX)), (-5, 5)] {
-            let edges = [0, low, high, i64::MIN, i64::MAX, -high];
-            for v in edges
-                .into_iter()
-                .flat_map(|e| [e.saturating_sub(1), e, e.saturating_add(1)])
-            {
-                assert_eq!(
-                    clamp_in_place(v, low, high),
-                    v.clamp(low, high),
-                    "{v} {low} {high}"
-                );
-            }
-        }
-    }
 
     fn flat(side: u32, height: u16) -> (std::vec::Vec<u16>, std::vec::Vec<[u8; 3]>) {
         let n = (side * side) as usize;
