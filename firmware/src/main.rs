@@ -39,8 +39,8 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
-    pyramid_cells, pyramid_points, render, Atmosphere, Coherence, Framebuffer, HeightFilter,
-    NoProbe, Pyramid, RenderOptions, Resolution, Rgb, View, U8F8,
+    pyramid_cells, pyramid_points, render, render_level_columns, Atmosphere, Camera, Coherence,
+    Framebuffer, HeightFilter, NoProbe, Pyramid, RenderOptions, Resolution, Rgb, View, U8F8,
 };
 use terracast_board::{scene::BoardScene, wire::frame_capture_bytes, CaptureBus, SpiDisplay};
 
@@ -291,6 +291,16 @@ fn run() -> Result<(), &'static str> {
         MAP_DEPTH,
         pyramid_ticks
     );
+    // scripts/board-bound: the per-pixel path against its bound, and
+    // nothing else.
+    if option_env!("TERRACAST_BOARD_BOUND").is_some() {
+        hprintln!(
+            "calibration instructions {} ticks {}",
+            CALIBRATION_INSTRUCTIONS,
+            calibration
+        );
+        return level_bound(&pyramid, scene.header.views(), frame);
+    }
     let mut led = FrameLed;
     for (index, camera) in scene.header.views().iter().enumerate() {
         let view = View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
@@ -384,4 +394,55 @@ fn run() -> Result<(), &'static str> {
         );
     }
     write_host_file("board-results.txt\0", results.as_bytes())
+}
+
+/// Each view turned level (pitch 0, no roll), rendered by the kernel's
+/// default, by the kernel at single resolution, and by the per-line design
+/// at its smallest (`render_level_columns`: level 0, one set-up a column,
+/// subvoxel shading): each render's ticks, over semihosting, for
+/// `scripts/board-bound`.
+fn level_bound(
+    pyramid: &Pyramid,
+    cameras: &[Camera],
+    frame: &mut [Rgb],
+) -> Result<(), &'static str> {
+    let default = RenderOptions::default();
+    let single = RenderOptions {
+        resolution: Resolution::Single,
+        ..default
+    };
+    for (index, camera) in cameras.iter().enumerate() {
+        let level = Camera {
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            ..*camera
+        };
+        let view = View::new(&level, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+        let mut ticks_of = |how: &dyn Fn(&mut Framebuffer) -> Result<(), &'static str>| {
+            let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+                .map_err(|_| "framebuffer too small")?;
+            let start = ticks();
+            how(&mut framebuffer)?;
+            Ok::<u64, &'static str>(ticks() - start)
+        };
+        let kernel = ticks_of(&|f| {
+            render(pyramid, &view, &default, f, &mut NoProbe);
+            Ok(())
+        })?;
+        let kernel_single = ticks_of(&|f| {
+            render(pyramid, &view, &single, f, &mut NoProbe);
+            Ok(())
+        })?;
+        let columns = ticks_of(&|f| {
+            render_level_columns(pyramid.base(), &view, &single, f).map_err(|_| "not a level view")
+        })?;
+        hprintln!(
+            "level view {} kernel {} single {} columns {}",
+            index,
+            kernel,
+            kernel_single,
+            columns
+        );
+    }
+    Ok(())
 }

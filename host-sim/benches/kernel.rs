@@ -63,14 +63,25 @@ fn atmospheres() -> [(&'static str, Option<PreparedAtmosphere>); 3] {
     ]
 }
 
+/// C7W/D7 from `TERRACAST_DATA` (a relative path is taken from the
+/// workspace's root, where `cargo bench` is typed; the bench itself runs
+/// in the package's folder), else the procedural scene, said on stderr
+/// before any figure.
 fn scene() -> (Scene, &'static str) {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let dir = std::env::var_os("TERRACAST_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"))
+        .map(|dir| root.join(dir))
+        .unwrap_or_else(|| root.join("../shared/data"))
         .join("comanche");
     match load_pair(&dir.join("D7.png"), Some(&dir.join("C7W.png")), 1.0, 0) {
-        Ok(scene) => (scene, "C7W/D7"),
-        Err(_) => (procedural(1024, 1), "procedural 1024"),
+        Ok(scene) => {
+            eprintln!("scene: C7W/D7 from {}", dir.display());
+            (scene, "C7W/D7")
+        }
+        Err(e) => {
+            eprintln!("scene: procedural 1024 (no C7W/D7: {e})");
+            (procedural(1024, 1), "procedural 1024")
+        }
     }
 }
 
