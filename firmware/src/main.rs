@@ -40,7 +40,8 @@ use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
     pyramid_cells, pyramid_points, render, render_level_columns, Atmosphere, Camera, Coherence,
-    Framebuffer, HeightFilter, NoProbe, Pyramid, RenderOptions, Resolution, Rgb, View, U8F8,
+    Framebuffer, HeightFilter, NoProbe, Pyramid, RenderOptions, Resolution, Rgb, Shading, View,
+    U8F8,
 };
 use terracast_board::{scene::BoardScene, wire::frame_capture_bytes, CaptureBus, SpiDisplay};
 
@@ -211,6 +212,23 @@ const fn resolution_named(name: &[u8]) -> Resolution {
     }
 }
 
+/// The shading the views are rendered with: subvoxel (the default), or
+/// for scripts/board-profile nearest when `TERRACAST_BOARD_SHADING` is
+/// `nearest` at build time. Any other value stops the build.
+const SHADING: Shading = match option_env!("TERRACAST_BOARD_SHADING") {
+    Some(name) => shading_named(name.as_bytes()),
+    None => Shading::Subvoxel,
+};
+
+/// See [`SHADING`]; empty is the default.
+const fn shading_named(name: &[u8]) -> Shading {
+    match name {
+        b"" | b"subvoxel" => Shading::Subvoxel,
+        b"nearest" => Shading::Nearest,
+        _ => panic!("TERRACAST_BOARD_SHADING: `subvoxel` or `nearest`"),
+    }
+}
+
 #[entry]
 fn main() -> ! {
     let code = match run() {
@@ -268,6 +286,7 @@ fn run() -> Result<(), &'static str> {
         .map_err(|_| "the kernel refused the pyramid")?;
     let options = RenderOptions {
         resolution: RESOLUTION,
+        shading: SHADING,
         ..RenderOptions::default()
     };
     let from_eye = RenderOptions {
