@@ -32,7 +32,7 @@
 //! - **Sky** above a line's last hit is written without rays.
 //!
 //! [`super::render`] takes this path for [`Coherence::AcrossLevels`] with
-//! one ray a pixel and subvoxel shading (the defaults); at single
+//! one ray a pixel (the defaults; either shading); at single
 //! resolution its image is the one [`Coherence::Exact`] gives, bit for bit.
 //!
 //! [`Coherence::AcrossLevels`]: super::Coherence::AcrossLevels
@@ -61,9 +61,7 @@ const LEVELS: usize = MAX_WALK_LEVEL as usize + 1;
 
 /// Whether [`super::render`] renders `options` with the line caster.
 pub(crate) fn takes(options: &RenderOptions) -> bool {
-    options.coherence == Coherence::AcrossLevels
-        && options.vertical_samples == VerticalSamples::One
-        && options.shading == Shading::Subvoxel
+    options.coherence == Coherence::AcrossLevels && options.vertical_samples == VerticalSamples::One
 }
 
 /// What every line of a frame shares.
@@ -80,6 +78,8 @@ pub(crate) struct LineCaster<'s, 'v, T: Surface + ?Sized + 's> {
     plan: LodPlan,
     /// A line's first ray skips through the pyramid's height bounds.
     first_hit: bool,
+    /// Each hit takes its nearest voxel's color ([`Shading::Nearest`]).
+    nearest: bool,
     sky: Sample,
 }
 
@@ -166,6 +166,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             highest: i64::from(extent.max_height) << HEIGHT_TO_Q16,
             plan: frame.lod,
             first_hit: frame.first_hit,
+            nearest: options.shading == Shading::Nearest,
             sky: sky(options),
         }
     }
@@ -250,15 +251,23 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         };
         // The pixel window in 32-bit words where the line's values fit.
         match OwnedPixels::narrow(&line, self.view.height()) {
-            Some(pixels) => self.cast(&line, pixels, sink, probe),
-            None => self.cast(&line, line.pixels(self.view.height()), sink, probe),
+            Some(pixels) if self.nearest => self.cast::<_, _, _, true>(&line, pixels, sink, probe),
+            Some(pixels) => self.cast::<_, _, _, false>(&line, pixels, sink, probe),
+            None => {
+                let pixels = line.pixels(self.view.height());
+                if self.nearest {
+                    self.cast::<_, _, _, true>(&line, pixels, sink, probe)
+                } else {
+                    self.cast::<_, _, _, false>(&line, pixels, sink, probe)
+                }
+            }
         }
     }
 
     /// Casts `line`'s rays through `pixels`, its pixels, into `sink`.
     /// Out of line: the loop's state then has the registers to itself.
     #[inline(never)]
-    fn cast<W: WindowWord, S: Sink, P: Probe>(
+    fn cast<W: WindowWord, S: Sink, P: Probe, const NEAREST: bool>(
         &self,
         line: &Line,
         mut pixels: OwnedPixels<W>,
@@ -340,7 +349,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                         // Within 2^14 (`Plane::drift_of`).
                         drift: walk.plane.drift_of_word(run_word, pixel.offset) as i32,
                     };
-                    Some(self.hit(&walk, at, z, &ray, probe))
+                    Some(self.hit::<P, NEAREST>(&walk, at, z, &ray, probe))
                 });
                 match hit {
                     Some(sample) => sink.put(pixel.x, pixel.y, sample),
@@ -549,7 +558,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// In 32-bit words where the values allow: a hit's distance is below
     /// 2^31 (inside the map), a clearance saturates.
     #[inline(always)]
-    fn hit<P: Probe>(
+    fn hit<P: Probe, const NEAREST: bool>(
         &self,
         walk: &LineWalk,
         at: &At,
@@ -591,6 +600,13 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 z - ((i64::from(hit_distance - distance) * i64::from(dz)) >> COORD_FRAC_BITS),
             ),
         };
+        if NEAREST {
+            let aside = ((i64::from(drift) * i64::from(hit_distance)) >> COORD_FRAC_BITS) as i32;
+            return match self.nearest_color(walk, at, aside, probe) {
+                Some(color) => sample(color),
+                None => self.sky,
+            };
+        }
         if i64::from(distance) >= color_reach || at.level > 0 {
             let above = above.map(|above| (at.before_k, above));
             let far = Far {
@@ -682,6 +698,35 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         let cell = index + (minor >> (COORD_FRAC_BITS + u32::from(level))) as isize * across;
         probe.color(level, cell as usize);
         color.unwrap_or(self.sky.color)
+    }
+
+    /// The color of the voxel of the hit's level nearest to where the hit
+    /// sample crosses its minor grid line, looked up `aside` (Q16) across
+    /// the line (as `Stage::nearest_color` finds it); `None` where the map
+    /// has none. Out of line: the default shading never takes it.
+    #[inline(never)]
+    fn nearest_color<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        at: &At,
+        aside: i32,
+        probe: &mut P,
+    ) -> Option<Rgb> {
+        let mut minor = at.minor;
+        if aside != 0 {
+            minor = minor.saturating_add(aside).clamp(0, walk.minor_max);
+        }
+        let (l, shift) = (usize::from(at.level), u32::from(at.level));
+        let across = walk.across[l];
+        let cell = at.index + (minor >> (COORD_FRAC_BITS + shift)) as isize * across;
+        let half = 1 << (COORD_FRAC_BITS - 1 + shift);
+        let nearest = if minor & ((half << 1) - 1) < half {
+            cell
+        } else {
+            cell + across
+        };
+        probe.color(at.level, cell as usize);
+        self.grids[l].color(nearest)
     }
 
     /// [`LineCaster::line_color`] on a coarse hit's own level. Out of line:

@@ -367,6 +367,49 @@ mod tests {
         assert!(near > 0 && blended > 0 && far > 0, "{near} {blended} {far}");
     }
 
+    /// Nearest shading goes the line caster's way too: at single
+    /// resolution its image is the one every ray set up in full gives,
+    /// bit for bit, rolled or not.
+    #[test]
+    fn the_line_caster_shades_nearest_as_the_per_ray_path_does() {
+        use crate::{Camera, Terrain};
+        let heights: [u16; 1024] =
+            core::array::from_fn(|i| ((i % 32 * 7 + i / 32 * 3) % 20) as u16 * 16);
+        let colors: [Rgb; 1024] = core::array::from_fn(|i| [(i % 256) as u8, (i / 4) as u8, 90]);
+        let terrain = Terrain::new(32, 32, &heights, &colors).unwrap();
+        let pyramid = Pyramid::flat(terrain);
+        for (eye, yaw, pitch, roll) in [
+            ([-6.0, 16.0, 22.0], 0.0, 3.0, 0.0),
+            ([2.0, 3.0, 25.0], 45.0, 20.0, 30.0),
+            ([40.0, 30.0, 24.0], 200.0, 0.0, -15.0),
+            ([16.0, 16.0, 30.0], 300.0, 60.0, 135.0),
+        ] {
+            let camera = Camera {
+                roll_deg: roll,
+                ..Camera::looking(eye, yaw, pitch)
+            };
+            let view = View::new(&camera, 24, 18).unwrap();
+            let image = |coherence| {
+                let options = RenderOptions {
+                    coherence,
+                    shading: Shading::Nearest,
+                    ..RenderOptions::default()
+                };
+                small_image(&pyramid, &view, options)
+            };
+            let lines = image(Coherence::AcrossLevels);
+            assert!(lines.iter().any(|p| *p != DEFAULT_SKY), "{eye:?}: only sky");
+            assert!(lines == image(Coherence::Exact), "{eye:?}");
+            // Nearest: every terrain pixel is one voxel's color.
+            assert!(
+                lines
+                    .iter()
+                    .all(|p| *p == DEFAULT_SKY || colors.contains(p)),
+                "{eye:?}"
+            );
+        }
+    }
+
     #[test]
     fn rays_above_a_line_that_left_the_terrain_see_the_same_sky_without_their_set_up() {
         use crate::{Camera, Terrain};

@@ -17,13 +17,13 @@ pub enum Coherence {
     /// from the eye.
     Exact,
     /// The line caster's (`caster/line_caster.rs`), with one ray a pixel
-    /// and subvoxel shading: the rays of a stretch of a line share one
+    /// (either shading): the rays of a stretch of a line share one
     /// level schedule, its least ray's, so every ray resumes where the ray
     /// before it hit; a ray switches levels up to a quarter nearer than
     /// its own depth says, and a new stretch starts where the stretch
     /// before left off, whose surface may differ from this one's by a
     /// level (the bound measured in the coherence tests). With more rays
-    /// a pixel or nearest shading: as [`Coherence::Exact`], and across
+    /// a pixel: as [`Coherence::Exact`], and across
     /// different level schedules too. At single resolution, the image of
     /// [`Coherence::Exact`] bit for bit.
     AcrossLevels,
