@@ -2,11 +2,11 @@
 //! one ray after another by rising elevation (see [`crate::View::lines`]).
 //!
 //! - `options.rs`: what a render may be asked to do ([`RenderOptions`]).
-//! - `line_caster.rs`: the default settings' path. A line is set up once
-//!   and a ray is its slope; it resumes where the ray before it hit.
+//! - `line_caster.rs`: the default coherence's path with one ray a pixel,
+//!   in either shading. A line is set up once and a ray is its slope; it
+//!   resumes where the ray before it hit.
 //! - `ray_caster.rs`: every other setting's path ([`Coherence::Off`],
-//!   [`Coherence::Exact`], several rays a pixel, nearest shading, a step
-//!   budget). Every ray is set up in full, and may start where the ray
+//!   [`Coherence::Exact`], several rays a pixel, a step budget). Every ray is set up in full, and may start where the ray
 //!   before it hit. [`Coherence::Exact`] casts a ray whose levels differ
 //!   from the ray before's from the eye, so the image equals the image with
 //!   every ray cast from the eye, bit for bit (tested).

@@ -1,6 +1,6 @@
 //! The per-ray path: the settings the line caster does not take
-//! ([`Coherence::Off`] and [`Coherence::Exact`], several rays a pixel,
-//! nearest shading, a step budget) set every ray up in full: its
+//! ([`Coherence::Off`] and [`Coherence::Exact`], several rays a pixel, a
+//! step budget) set every ray up in full: its
 //! direction, its clip against the map and its level schedule. The rays of
 //! a line lie in one vertical plane and share their horizontal direction
 //! bit for bit, so each ray can start at the sample where the ray before it
