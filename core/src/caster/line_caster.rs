@@ -250,17 +250,11 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             return;
         };
         // The pixel window in 32-bit words where the line's values fit.
-        match OwnedPixels::narrow(&line, self.view.height()) {
-            Some(pixels) if self.nearest => self.cast::<_, _, _, true>(&line, pixels, sink, probe),
-            Some(pixels) => self.cast::<_, _, _, false>(&line, pixels, sink, probe),
-            None => {
-                let pixels = line.pixels(self.view.height());
-                if self.nearest {
-                    self.cast::<_, _, _, true>(&line, pixels, sink, probe)
-                } else {
-                    self.cast::<_, _, _, false>(&line, pixels, sink, probe)
-                }
-            }
+        match (line.pixels(self.view.height()).narrowed(), self.nearest) {
+            (Ok(pixels), true) => self.cast::<_, _, _, true>(&line, pixels, sink, probe),
+            (Ok(pixels), false) => self.cast::<_, _, _, false>(&line, pixels, sink, probe),
+            (Err(pixels), true) => self.cast::<_, _, _, true>(&line, pixels, sink, probe),
+            (Err(pixels), false) => self.cast::<_, _, _, false>(&line, pixels, sink, probe),
         }
     }
 

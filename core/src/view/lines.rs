@@ -743,15 +743,14 @@ impl WindowWord for i32 {
     }
 }
 
-impl OwnedPixels<i32> {
-    /// `line`'s pixels (as [`Line::pixels`]) with the window in 32-bit
-    /// words, when its values fit them all the way along the line: the
-    /// candidate's distance past the window (within a pixel step and a
-    /// row's change of the window), the window's width at both ends.
-    pub(crate) fn narrow(line: &Line, height: u32) -> Option<Self> {
-        // Parallel lines' window is Q32: never narrow.
-        line.sector.vanishing?;
-        let wide = OwnedPixels::new(line, height);
+impl OwnedPixels {
+    /// These pixels with the window in 32-bit words, when its values fit
+    /// them all the way along the line (the candidate's distance past the
+    /// window, within a pixel step and a row's change of the window; the
+    /// window's width at both ends); else `Err` with these pixels back.
+    pub(crate) fn narrowed(self) -> Result<OwnedPixels<i32>, Self> {
+        let wide = self;
+        // (Parallel lines' window is a pixel in Q32: never narrow.)
         const LIMIT: i64 = 1 << 30;
         let rows = i64::from((wide.end - wide.s).abs());
         let last_width = wide.width + wide.width_step * rows;
@@ -759,7 +758,10 @@ impl OwnedPixels<i32> {
             && wide.gap.abs() < LIMIT
             && wide.width.abs().max(last_width.abs()) < LIMIT
             && wide.width_step.abs() < LIMIT;
-        fits.then_some(OwnedPixels {
+        if !fits {
+            return Err(wide);
+        }
+        Ok(OwnedPixels {
             along_rows: wide.along_rows,
             s: wide.s,
             end: wide.end,
@@ -1122,7 +1124,7 @@ mod tests {
             let view = rolled(pitch, roll, 25.0, size, 60.0);
             for index in 0..view.lines() {
                 let line = view.line(index).unwrap();
-                let Some(narrow) = OwnedPixels::narrow(&line, size.1) else {
+                let Ok(narrow) = line.pixels(size.1).narrowed() else {
                     wide_only += 1;
                     continue;
                 };
