@@ -10,7 +10,7 @@ use std::time::Duration;
 use terracast::tiles::{cut_tile, Tile, TileError, TileKey, TileSource, World};
 use terracast::{Camera, HeightFilter, RenderOptions};
 use terracast_sim::kernel::{render_kernel, PixelRays};
-use terracast_sim::scene::{load_pair, procedural};
+use terracast_sim::scene::{load_scene_files, procedural};
 use terracast_sim::tiles::{
     pack, page_flight, render_tiled, PackInput, PageOptions, ProceduralSource, TilesFile, TILE,
 };
@@ -75,7 +75,8 @@ fn packed_equals_maps(
     let out = temp(name);
     let input = pack_input(height, color, scale, filter);
     let summary = pack(&input, &out, &mut |_, _| {}).unwrap();
-    let scene = load_pair(height, color, scale, 1).unwrap();
+    let colors: Vec<PathBuf> = color.into_iter().map(Path::to_path_buf).collect();
+    let scene = load_scene_files(height, &colors, scale, 1).unwrap();
     let kernel = scene.to_kernel_with(filter).unwrap();
     let pyramid = kernel.pyramid().unwrap();
     let mut file = TilesFile::open(&out).unwrap();
@@ -148,6 +149,88 @@ fn packed_files_render_as_their_maps_bit_for_bit() {
             "srtm.tiles",
         );
     }
+}
+
+/// The odd-sized maps' heights (1/16 voxel a unit) as a square SRTM
+/// `.hgt` (big-endian i16) with a 9 × 7 void (−32768) in its middle.
+fn hgt_with_a_void() -> PathBuf {
+    let scene = procedural(256, 3);
+    let side = 97usize;
+    let bytes: Vec<u8> = (0..side * side)
+        .flat_map(|i| {
+            let (x, y) = (i % side, i / side);
+            let void = (40..49).contains(&x) && (45..52).contains(&y);
+            let h = if void {
+                i16::MIN
+            } else {
+                (scene.height(x, y) * 16.0).round() as i16
+            };
+            h.to_be_bytes()
+        })
+        .collect();
+    let path = temp("void.hgt");
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+#[test]
+fn an_hgt_with_voids_packs_as_render_loads_it() {
+    // The void is filled as `render` fills it: no pit down to height 0.
+    let hgt = hgt_with_a_void();
+    packed_equals_maps(
+        &hgt,
+        None,
+        1.0 / 16.0,
+        HeightFilter::default(),
+        "void.tiles",
+    );
+    let scene = load_scene_files(&hgt, &[], 1.0 / 16.0, 1).unwrap();
+    let lowest = |points: &mut dyn Iterator<Item = (usize, usize)>| {
+        points
+            .map(|(x, y)| scene.height(x, y))
+            .fold(f32::MAX, f32::min)
+    };
+    let rim = lowest(
+        &mut (39..=49)
+            .flat_map(|x| (44..=52).map(move |y| (x, y)))
+            .filter(|&(x, y)| x == 39 || x == 49 || y == 44 || y == 52),
+    );
+    let filled = lowest(&mut (40..49).flat_map(|x| (45..52).map(move |y| (x, y))));
+    assert!(
+        filled >= rim && rim > 0.0,
+        "a pit: {filled} inside a rim at {rim}"
+    );
+}
+
+#[test]
+fn geotiff_heights_and_photo_pack_as_render_loads_them() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    // The odd-sized maps as a float32 TIFF of heights (no georeference:
+    // read with a note) and an RGB TIFF photo.
+    let scene = procedural(256, 3);
+    let (w, d) = (203u32, 150u32);
+    let heights: Vec<f32> = (0..w * d)
+        .map(|i| scene.height((i % w) as usize, (i / w) as usize))
+        .collect();
+    let colors: Vec<u8> = (0..w * d)
+        .flat_map(|i| scene.colors[((i / w) * 256 + i % w) as usize])
+        .collect();
+    let (height, photo) = (temp("odd-h.tif"), temp("odd-c.tif"));
+    let mut encoder = TiffEncoder::new(std::fs::File::create(&height).unwrap()).unwrap();
+    encoder
+        .write_image::<colortype::Gray32Float>(w, d, &heights)
+        .unwrap();
+    let mut encoder = TiffEncoder::new(std::fs::File::create(&photo).unwrap()).unwrap();
+    encoder
+        .write_image::<colortype::RGB8>(w, d, &colors)
+        .unwrap();
+    packed_equals_maps(
+        &height,
+        Some(&photo),
+        1.0,
+        HeightFilter::default(),
+        "odd-tif.tiles",
+    );
 }
 
 #[test]

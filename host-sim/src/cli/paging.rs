@@ -17,11 +17,12 @@ use terracast::{Camera, HeightFilter, View};
 #[derive(Debug, clap::Args)]
 pub(super) struct PackArgs {
     /// Height map: 8/16-bit grayscale PNG or SRTM .hgt.
-    #[arg(long, value_name = "H.png|H.hgt")]
+    #[arg(long, value_name = "H.png|H.hgt|H.tif")]
     height: PathBuf,
-    /// Color map of the same size (8-bit PNG) [default: colored by height
-    /// and slope, as `render` colors a height map alone].
-    #[arg(long, value_name = "C.png")]
+    /// Color map: an 8-bit PNG of the same size, or a photo as `render`
+    /// drapes it (GeoTIFF photos by their georeference) [default: colored
+    /// by height and slope, as `render` colors a height map alone].
+    #[arg(long, value_name = "C.png|C.tif")]
     color: Option<PathBuf>,
     /// World height of one height-map unit, in voxels [default: 1; for an
     /// SRTM .hgt, one meter in voxels of its grid spacing].

@@ -7,16 +7,26 @@
 //! as soon as the coarse row after it has, and a strip of tiles is written
 //! as soon as its rows and bounds are complete. Memory is a few strips of
 //! [`TILE`] rows a level, whatever the map's size.
+//!
+//! PNG maps stream row by row. An SRTM `.hgt` or a GeoTIFF (heights or
+//! photo) is loaded whole, as `render` loads it ([`load_scene_files`]: its
+//! voids filled from their neighbours, which takes the rows around them;
+//! GeoTIFF photos placed by their georeference), and its rows are packed
+//! from memory: an `.hgt` tile is at most 3601 × 3601 samples.
 
 use super::file::{Header, TilesWriter};
 use super::TILE;
 use crate::error::{Error, Result};
 use crate::outputs::Outputs;
-use crate::scene::{not_a_height_map, terrain_color, value_noise, HeightBands};
+use crate::scene::geotiff::is_tiff;
+use crate::scene::{
+    load_scene_files, not_a_height_map, terrain_color, value_noise, HeightBands, Scene,
+};
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use terracast::roughness::RoughnessSum;
 use terracast::tiles::{Tile, TileKey, World};
 use terracast::wavelet_row;
@@ -25,9 +35,12 @@ use terracast::{HeightFilter, Rgb, Terrain};
 /// What to pack.
 #[derive(Debug, Clone)]
 pub struct PackInput {
-    /// Height map: 8/16-bit grayscale PNG or SRTM `.hgt`.
+    /// Height map: 8/16-bit grayscale PNG, SRTM `.hgt` or GeoTIFF.
     pub height: PathBuf,
-    /// Color map of the same size (8-bit RGB, RGBA, gray or palette PNG);
+    /// Color map: a PNG of the same size (8-bit RGB, RGBA, gray or
+    /// palette), or a photo as `render` drapes it (a GeoTIFF over a
+    /// GeoTIFF height map by their georeference, else stretched over the
+    /// map) when either file is read whole (see the module's notes);
     /// without it, heights are colored by height and slope as `render`
     /// colors them.
     pub color: Option<PathBuf>,
@@ -82,18 +95,39 @@ pub fn pack(
         outputs.input("--color", color);
     }
     let out_id = outputs.output("--out", out)?;
-    let mut heights = HeightRows::open(&input.height, input.height_scale)?;
+    let read_whole = |path: &Path| {
+        is_tiff(path)
+            || path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("hgt"))
+    };
+    let loaded = if read_whole(&input.height) || input.color.as_deref().is_some_and(read_whole) {
+        let colors: Vec<PathBuf> = input.color.iter().cloned().collect();
+        let scene = load_scene_files(&input.height, &colors, input.height_scale, input.seed)?;
+        Some(std::sync::Arc::new(scene))
+    } else {
+        None
+    };
+    let mut heights = match &loaded {
+        Some(scene) => HeightRows::Loaded {
+            scene: scene.clone(),
+            y: 0,
+        },
+        None => HeightRows::open(&input.height, input.height_scale)?,
+    };
     let (width, depth) = heights.size();
     // The whole range first: a height the kernel cannot hold is reported
     // before any tile is written, and colors by height need the range too.
-    let bands = height_range(&input.height, input.height_scale, depth)?;
+    let bands = height_range(&input.height, &mut heights, depth)?;
+    heights.rewind()?;
     let world = World::new(width, depth, 0).ok_or_else(|| {
         Error::new(format!(
             "height map is {width}x{depth}: it needs at least 2x2 points"
         ))
     })?;
-    let mut colors = match &input.color {
-        Some(path) => {
+    let mut colors = match (&loaded, &input.color) {
+        (Some(scene), _) => Colors::Loaded(scene.clone()),
+        (None, Some(path)) => {
             let rows = ColorRows::open(path)?;
             if rows.size() != (width, depth) {
                 return Err(Error::new(format!(
@@ -105,7 +139,7 @@ pub fn pack(
             }
             Colors::Map(Box::new(rows))
         }
-        None => Colors::ByHeight {
+        (None, None) => Colors::ByHeight {
             range: bands,
             window: Vec::new(),
             seed: input.seed,
@@ -170,9 +204,8 @@ pub fn pack(
 
 /// The lowest and highest height of the map, refusing the first one outside
 /// the kernel's range (with its grid point).
-fn height_range(path: &Path, scale: f32, depth: u32) -> Result<HeightBands> {
+fn height_range(path: &Path, rows: &mut HeightRows, depth: u32) -> Result<HeightBands> {
     let mut bands = HeightBands::default();
-    let mut rows = HeightRows::open(path, scale)?;
     for y in 0..depth {
         for (x, &h) in rows.next()?.iter().enumerate() {
             if Terrain::quantize_height(h).is_none() {
@@ -188,7 +221,8 @@ fn height_range(path: &Path, scale: f32, depth: u32) -> Result<HeightBands> {
     Ok(bands)
 }
 
-/// Height rows from a PNG or an `.hgt`, scaled, top row first.
+/// Height rows, scaled, top row first: streamed from a PNG, or from a
+/// scene loaded whole.
 enum HeightRows {
     Png {
         reader: Box<png::Reader<BufReader<File>>>,
@@ -199,13 +233,10 @@ enum HeightRows {
         row: Vec<f32>,
         scale: f32,
     },
-    Hgt {
-        file: BufReader<File>,
-        path: PathBuf,
-        side: u32,
-        bytes: Vec<u8>,
-        row: Vec<f32>,
-        scale: f32,
+    Loaded {
+        scene: Arc<Scene>,
+        /// The next row.
+        y: usize,
     },
 }
 
@@ -215,28 +246,6 @@ impl HeightRows {
             Error::new(format!("cannot read height map {}: {e}", path.display()))
         };
         let file = File::open(path).map_err(|e| fail(&e))?;
-        let is_hgt = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("hgt"));
-        if is_hgt {
-            let length = file.metadata().map_err(|e| fail(&e))?.len();
-            let samples = length / 2;
-            let side = (samples as f64).sqrt() as u64;
-            if length % 2 != 0 || side * side != samples || side < 2 {
-                return Err(Error::new(format!(
-                    "{} is not an SRTM .hgt tile: {length} bytes is not a square grid of 16-bit samples",
-                    path.display()
-                )));
-            }
-            return Ok(Self::Hgt {
-                file: BufReader::new(file),
-                path: path.to_owned(),
-                side: side as u32,
-                bytes: vec![0; side as usize * 2],
-                row: vec![0.0; side as usize],
-                scale,
-            });
-        }
         let file = require_png(file, path, "height map")?;
         let mut decoder = png::Decoder::new(BufReader::new(file));
         decoder.set_transformations(png::Transformations::IDENTITY);
@@ -267,8 +276,17 @@ impl HeightRows {
     fn size(&self) -> (u32, u32) {
         match self {
             Self::Png { size, .. } => *size,
-            Self::Hgt { side, .. } => (*side, *side),
+            Self::Loaded { scene, .. } => (scene.width, scene.depth),
         }
+    }
+
+    /// Back to the first row.
+    fn rewind(&mut self) -> Result<()> {
+        match self {
+            Self::Png { path, scale, .. } => *self = Self::open(&path.clone(), *scale)?,
+            Self::Loaded { y, .. } => *y = 0,
+        }
+        Ok(())
     }
 
     fn next(&mut self) -> Result<&[f32]> {
@@ -300,23 +318,13 @@ impl HeightRows {
                 }
                 Ok(row)
             }
-            Self::Hgt {
-                file,
-                path,
-                bytes,
-                row,
-                scale,
-                ..
-            } => {
-                file.read_exact(bytes).map_err(|e| {
-                    Error::new(format!("height map {} ends early: {e}", path.display()))
-                })?;
-                for (v, b) in row.iter_mut().zip(bytes.chunks_exact(2)) {
-                    *v = match i16::from_be_bytes([b[0], b[1]]) {
-                        i16::MIN => 0.0,
-                        h => f32::from(h) * *scale,
-                    };
-                }
+            Self::Loaded { scene, y } => {
+                let width = scene.width as usize;
+                let row = scene
+                    .heights
+                    .get(*y * width..(*y + 1) * width)
+                    .ok_or_else(|| Error::new("height rows read past the map's last"))?;
+                *y += 1;
                 Ok(row)
             }
         }
@@ -336,13 +344,12 @@ fn require_png(mut file: File, path: &Path, what: &str) -> Result<File> {
     }
     let is_tiff = magic.starts_with(b"II*\0") || magic.starts_with(b"MM\0*");
     Err(Error::new(format!(
-        "{what} {} is {}, not a PNG: pack reads PNG{}",
+        "{what} {} is {}: pack reads PNG, SRTM .hgt (heights) and GeoTIFF (.tif) maps",
         path.display(),
-        if is_tiff { "a TIFF" } else { "not a PNG file" },
-        if what == "height map" {
-            " and SRTM .hgt height maps"
+        if is_tiff {
+            "a TIFF without a .tif name"
         } else {
-            " color maps"
+            "not a PNG file"
         }
     )))
 }
@@ -409,6 +416,8 @@ impl ColorRows {
 /// Where each row's colors come from.
 enum Colors {
     Map(Box<ColorRows>),
+    /// The colors of a scene loaded whole.
+    Loaded(Arc<Scene>),
     /// Colored by height and slope, as `render` colors a height map alone:
     /// a row is colored when the row after it has arrived.
     ByHeight {
@@ -425,6 +434,15 @@ impl Colors {
     fn row(&mut self, y: u32, heights: &[f32]) -> Result<Option<Vec<Rgb>>> {
         match self {
             Self::Map(rows) => rows.next().map(Some),
+            Self::Loaded(scene) => {
+                let width = scene.width as usize;
+                let at = y as usize * width;
+                let row = scene
+                    .colors
+                    .get(at..at + width)
+                    .ok_or_else(|| Error::new("color rows read past the map's last"))?;
+                Ok(Some(row.to_vec()))
+            }
             Self::ByHeight {
                 window,
                 range,
@@ -449,7 +467,7 @@ impl Colors {
     /// The last row's colors (by height), once every row has arrived.
     fn finish(&mut self, depth: u32) -> Option<Vec<Rgb>> {
         match self {
-            Self::Map(_) => None,
+            Self::Map(_) | Self::Loaded(_) => None,
             Self::ByHeight {
                 window,
                 range,
