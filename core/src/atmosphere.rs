@@ -25,8 +25,15 @@
 //! [`Sink`]: each finished pixel's direction comes from the [`View`], its
 //! hit's distance and height from its [`Sample`]. What depends on the eye
 //! is tabled once a frame (the fogged sky by sine, the mean density from
-//! the eye to each height); a pixel then takes multiplies, table lookups
-//! and one blend: no float, no division, no 64-bit square root.
+//! the eye to each height), and so is what a pixel needs of its direction:
+//! the sine of its elevation and how much longer its ray is than the
+//! distance a [`Sample`] holds, at the corners of a grid of 64 cells a
+//! side or fewer ([`PixelGrid`]), blended between them for the pixels
+//! inside: both are near enough linear across a cell to stay within a
+//! part in 512. The cells where they are not (the sun's glow, and where
+//! the ray's largest component changes axis) take each pixel's direction
+//! instead. A pixel then takes multiplies, table lookups and one blend: no
+//! float, no division, no square root.
 //!
 //! ```
 //! use terracast::{Atmosphere, Camera, Framebuffer, NoProbe, Pyramid, RenderOptions, Terrain, View, render};
@@ -65,6 +72,11 @@ const EXP2_STEPS: usize = 256;
 /// Fixed-point formats: directions Q20, heights and lengths Q8.
 const DIR_BITS: u32 = 20;
 const Q8: u32 = 8;
+/// A frame's [`PixelGrid`]: corners a side at most. A cell then spans at
+/// most a 64th of the field of view (under 2.5°), over which a pixel's
+/// sine and reciprocal are near enough linear.
+const GRID_CORNERS: usize = 65;
+const GRID_CELLS: usize = GRID_CORNERS - 1;
 
 /// A sun in the sky.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -339,6 +351,7 @@ impl Atmosphere {
                 libm::cos(f64::from(sun.glow_deg).to_radians()),
                 2 * DIR_BITS,
             ) - (1 << 26),
+            glow_radians: f64::from(sun.glow_deg).to_radians(),
             color: sun.color,
         });
         let fog = self.fog.map(|fog| FogTable {
@@ -390,7 +403,7 @@ pub struct PreparedAtmosphere {
     exp2: [u32; EXP2_STEPS + 1],
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 struct SunTable {
     /// Unit vector, Q20; the disc's and the glow's sin² of their radius,
     /// Q40.
@@ -400,6 +413,8 @@ struct SunTable {
     /// The cosine of the glow's radius, Q40, less a margin for the unit
     /// vector's rounding.
     glow_cosine: i64,
+    /// The glow's radius.
+    glow_radians: f64,
     color: Rgb,
 }
 
@@ -417,7 +432,7 @@ struct FogTable {
 /// What a frame's pixels share: the view's directions in Q20 and the eye.
 /// A pixel's direction is below 2^7 in size (the widest field of view
 /// and the tallest image), so its components and their steps fit 32 bits.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct AtmosphereFrame {
     base: [i32; 3],
     per_column: [i32; 3],
@@ -434,6 +449,160 @@ pub struct AtmosphereFrame {
     /// The mean density (Q16) from the eye to each height of the fog's
     /// tables.
     mean: [u32; HEIGHT_STEPS + 1],
+    grid: PixelGrid,
+}
+
+/// What a pixel needs of its direction, at the corners of square cells of
+/// `2^bits` pixels (corner `(i, j)` at column `i·2^bits`, row `j·2^bits`
+/// from the bottom), blended between the corners for the pixels inside.
+#[derive(Debug, Clone)]
+struct PixelGrid {
+    bits: u32,
+    /// The sine of the elevation, Q20 (below the horizon negative).
+    sine: [[i32; GRID_CORNERS]; GRID_CORNERS],
+    /// The reciprocal (Q16) of the unit direction's larger of its vertical
+    /// component and its larger horizontal one: a ray's length over its
+    /// height drop, or over its distance along its major axis.
+    reciprocal: [[i32; GRID_CORNERS]; GRID_CORNERS],
+    /// Per cell, [`CELL_VERTICAL`], [`CELL_MIXED`] and [`CELL_SUN`].
+    cells: [[u8; GRID_CELLS]; GRID_CELLS],
+}
+
+/// The cell's rays are steeper than 45°: their length is over the height
+/// drop.
+const CELL_VERTICAL: u8 = 1;
+/// The corners disagree on the ray's largest component (vertical or which
+/// horizontal axis), where the reciprocal has a kink: the pixels take
+/// their own direction.
+const CELL_MIXED: u8 = 2;
+/// The cell may reach into the sun's glow: its sky pixels take their own
+/// direction.
+const CELL_SUN: u8 = 4;
+
+impl PixelGrid {
+    /// The grid of a `width` × `height` image whose pixel `(column, row)`
+    /// looks along `direction(column, row)` (Q20), the sun (if any) along
+    /// `sun`.
+    fn new(
+        width: u32,
+        height: u32,
+        direction: impl Fn(i32, i32) -> [i32; 3],
+        sun: Option<&SunTable>,
+    ) -> Self {
+        // The smallest cells (a power of two pixels) that cover the image
+        // in 64 a side: 8 pixels at 320 × 240, 1 at 64 × 48 (as many
+        // corners as pixels: each pixel's own direction, in effect).
+        let mut bits = 0;
+        while ((width.max(height) - 1) >> bits) as usize >= GRID_CELLS {
+            bits += 1;
+        }
+        let mut grid = Self {
+            bits,
+            sine: [[0; GRID_CORNERS]; GRID_CORNERS],
+            reciprocal: [[0; GRID_CORNERS]; GRID_CORNERS],
+            cells: [[0; GRID_CELLS]; GRID_CELLS],
+        };
+        let corners = |side: u32| ((side - 1) >> bits) as usize + 2;
+        let (columns, rows) = (corners(width), corners(height));
+        // Which component is largest at each corner (0 vertical, 1 x, 2
+        // y), and the sun's cosine there (Q40).
+        let mut largest = [[0u8; GRID_CORNERS]; GRID_CORNERS];
+        let mut sun_cosine = [[i64::MIN; GRID_CORNERS]; GRID_CORNERS];
+        for j in 0..rows {
+            for i in 0..columns {
+                let d = direction((i << bits) as i32, (j << bits) as i32);
+                let unit = Unit::new(d);
+                grid.sine[j][i] = unit.of(d[2]) as i32;
+                let [x, y, z] = d.map(i32::unsigned_abs);
+                let (axis, component) = if z > x.max(y) {
+                    (0, z)
+                } else if x >= y {
+                    (1, x)
+                } else {
+                    (2, y)
+                };
+                largest[j][i] = axis;
+                grid.reciprocal[j][i] = reciprocal_q16(unit.of_size(component)) as i32;
+                if let Some(sun) = sun {
+                    let e = [unit.of(d[0]), unit.of(d[1]), unit.of(d[2])];
+                    let s = sun.direction;
+                    sun_cosine[j][i] = e[0] * s[0] + e[1] * s[1] + e[2] * s[2];
+                }
+            }
+        }
+        // A pixel's direction lies between its cell's corners', so within
+        // a cell's diagonal of the nearest corner; the cell at the image's
+        // center subtends the most. Half as much again, for the rounding.
+        let near_sun = sun.map(|sun| {
+            let center = |offset: usize| {
+                let c = ((width / 2) >> bits) as usize + offset;
+                let r = ((height / 2) >> bits) as usize + offset;
+                direction((c << bits) as i32, (r << bits) as i32).map(f64::from)
+            };
+            let (a, b) = (center(0), center(1));
+            let dot: f64 = (0..3).map(|k| a[k] * b[k]).sum();
+            let length = |v: [f64; 3]| libm::sqrt(v.iter().map(|c| c * c).sum::<f64>());
+            let diagonal = libm::acos((dot / (length(a) * length(b))).clamp(-1.0, 1.0));
+            let reach = (sun.glow_radians + 1.5 * diagonal).min(core::f64::consts::PI);
+            to_fixed(libm::cos(reach), 2 * DIR_BITS) - (1 << 26)
+        });
+        for j in 0..rows - 1 {
+            for i in 0..columns - 1 {
+                let four = [(j, i), (j, i + 1), (j + 1, i), (j + 1, i + 1)];
+                let axis = largest[j][i];
+                let mut cell = if axis == 0 { CELL_VERTICAL } else { 0 };
+                if four.iter().any(|&(r, c)| largest[r][c] != axis) {
+                    cell |= CELL_MIXED;
+                }
+                if near_sun.is_some_and(|near| four.iter().any(|&(r, c)| sun_cosine[r][c] > near)) {
+                    cell |= CELL_SUN;
+                }
+                grid.cells[j][i] = cell;
+            }
+        }
+        grid
+    }
+
+    /// The cell of pixel `(column, row)` (row from the bottom): its flags,
+    /// and where the pixel lies in it.
+    #[inline(always)]
+    fn cell(&self, column: i32, row: i32) -> (u8, Corner) {
+        let (i, j) = ((column >> self.bits) as usize, (row >> self.bits) as usize);
+        let mask = (1 << self.bits) - 1;
+        let flags = match self.cells.get(j).and_then(|cells| cells.get(i)) {
+            Some(&flags) => flags,
+            // (Every pixel of the image has a cell.)
+            None => CELL_MIXED | CELL_SUN,
+        };
+        let corner = Corner {
+            i,
+            j,
+            x: column & mask,
+            y: row & mask,
+        };
+        (flags, corner)
+    }
+
+    /// `table` at `corner`'s pixel, blended between the cell's corners.
+    #[inline(always)]
+    fn blend(&self, table: &[[i32; GRID_CORNERS]; GRID_CORNERS], at: &Corner) -> i32 {
+        let (low, high) = (&table[at.j], &table[at.j + 1]);
+        let across = |row: &[i32; GRID_CORNERS]| {
+            row[at.i] + (((row[at.i + 1] - row[at.i]) * at.x) >> self.bits)
+        };
+        let (bottom, top) = (across(low), across(high));
+        bottom + (((top - bottom) * at.y) >> self.bits)
+    }
+}
+
+/// A pixel's place in its [`PixelGrid`] cell: the cell's lower-left
+/// corner, and the pixel's offset from it.
+#[derive(Debug, Clone, Copy)]
+struct Corner {
+    i: usize,
+    j: usize,
+    x: i32,
+    y: i32,
 }
 
 impl PreparedAtmosphere {
@@ -486,15 +655,23 @@ impl PreparedAtmosphere {
                 }
             }
         });
+        let (base, per_column, per_row) = (q20(view.base), q20(view.per_column), q20(view.per_row));
+        let grid = PixelGrid::new(
+            view.width(),
+            view.height(),
+            |column, row| direction(&base, &per_column, &per_row, column, row),
+            self.sun.as_ref(),
+        );
         AtmosphereFrame {
             sky,
             sky_weights,
             mean,
-            base: q20(view.base),
-            per_column: q20(view.per_column),
-            per_row: q20(view.per_row),
+            base,
+            per_column,
+            per_row,
             top_row: view.height() as i32 - 1,
             eye_q16,
+            grid,
         }
     }
 
@@ -517,32 +694,44 @@ impl PreparedAtmosphere {
             return sample.color;
         }
         let (column, row) = (x as i32, frame.top_row - y as i32);
-        // Each product is one 32 × 32-bit multiply; the sum fits 32 bits.
-        let d: [i32; 3] = core::array::from_fn(|i| {
-            (i64::from(frame.base[i])
-                + i64::from(column) * i64::from(frame.per_column[i])
-                + i64::from(row) * i64::from(frame.per_row[i])) as i32
-        });
-        let unit = Unit::new(d);
+        let pixel_direction = || {
+            let d = direction(&frame.base, &frame.per_column, &frame.per_row, column, row);
+            (d, Unit::new(d))
+        };
+        let grid = &frame.grid;
+        let (cell, at) = grid.cell(column, row);
         let Some(table) = fog.filter(|_| !sample.is_sky()) else {
-            return self.sky_color(frame, d, &unit);
+            if cell & CELL_SUN != 0 {
+                let (d, unit) = pixel_direction();
+                return self.sky_color(frame, d, &unit);
+            }
+            return fogged_sky(frame, i64::from(grid.blend(&grid.sine, &at)));
         };
         // The hit's distance from the eye: its major-axis distance or its
         // height below the eye, whichever the direction conditions better,
         // over that component of the unit direction (at least 1/√3: the
         // larger of the two is the largest of the three).
-        let (major, vertical) = (
-            d[0].unsigned_abs().max(d[1].unsigned_abs()),
-            d[2].unsigned_abs(),
-        );
-        let (along, component) = if major >= vertical {
-            (sample.distance, major)
+        let (vertical, reciprocal) = if cell & CELL_MIXED == 0 {
+            (
+                cell & CELL_VERTICAL != 0,
+                grid.blend(&grid.reciprocal, &at) as u32,
+            )
         } else {
-            let drop = (frame.eye_q16 - i64::from(sample.elevation)).unsigned_abs();
-            (drop.min(u64::from(u32::MAX)) as u32, vertical)
+            let (d, unit) = pixel_direction();
+            let (major, vertical) = (
+                d[0].unsigned_abs().max(d[1].unsigned_abs()),
+                d[2].unsigned_abs(),
+            );
+            let component = major.max(vertical);
+            (vertical > major, reciprocal_q16(unit.of_size(component)))
         };
-        let distance_q8 = (u64::from(along) * u64::from(reciprocal_q16(unit.of_size(component))))
-            >> (16 + 16 - Q8);
+        let along = if vertical {
+            let drop = (frame.eye_q16 - i64::from(sample.elevation)).unsigned_abs();
+            drop.min(u64::from(u32::MAX)) as u32
+        } else {
+            sample.distance
+        };
+        let distance_q8 = (u64::from(along) * u64::from(reciprocal)) >> (16 + 16 - Q8);
         // The density integrated along the path (Q8 voxels at ground
         // density): the distance times the mean density from the eye to
         // the hit's height.
@@ -558,21 +747,16 @@ impl PreparedAtmosphere {
     /// glow over the gradient, then the fog.
     fn sky_color(&self, frame: &AtmosphereFrame, d: [i32; 3], unit: &Unit) -> Rgb {
         let up = unit.of(d[2]);
-        let sine = up.clamp(0, 1 << DIR_BITS);
-        let at = (sine >> (DIR_BITS - 8)) as usize;
-        let fraction = ((sine >> (DIR_BITS - 16)) & 0xFF) as u32;
-        let between = |table: &[Rgb; SKY_STEPS + 1]| match table.get(at + 1) {
-            Some(&next) => lerp(table[at.min(SKY_STEPS)], next, fraction),
-            None => table[SKY_STEPS],
-        };
         let Some(sun) = &self.sun else {
-            return between(&frame.sky);
+            return fogged_sky(frame, up);
         };
         let e = [unit.of(d[0]), unit.of(d[1]), up];
         if !sun.near(e) {
-            return between(&frame.sky);
+            return fogged_sky(frame, up);
         }
-        let color = sun.over(between(&self.sky), e);
+        let sine = up.clamp(0, 1 << DIR_BITS);
+        let (at, fraction) = sky_entry(sine);
+        let color = sun.over(sky_between(&self.sky, at, fraction), e);
         let Some(table) = &self.fog else {
             return color;
         };
@@ -603,6 +787,49 @@ impl PreparedAtmosphere {
         let (low, high) = (self.exp2[at], self.exp2[(at + 1).min(EXP2_STEPS)]);
         (low - (((low - high) * within) >> 8)) >> whole
     }
+}
+
+/// Pixel `(column, row)`'s direction (row from the bottom; Q20) from the
+/// frame's first pixel's and its steps: each product is one 32 × 32-bit
+/// multiply, and the sum fits 32 bits.
+#[inline(always)]
+fn direction(
+    base: &[i32; 3],
+    per_column: &[i32; 3],
+    per_row: &[i32; 3],
+    column: i32,
+    row: i32,
+) -> [i32; 3] {
+    core::array::from_fn(|i| {
+        (i64::from(base[i])
+            + i64::from(column) * i64::from(per_column[i])
+            + i64::from(row) * i64::from(per_row[i])) as i32
+    })
+}
+
+/// Where the sky's tables by sine hold elevation sine `sine` (Q20, in
+/// [0, 1]): the entry below it and the fraction (in 1/256) to the next.
+#[inline(always)]
+fn sky_entry(sine: i64) -> (usize, u32) {
+    let at = (sine >> (DIR_BITS - 8)) as usize;
+    (at, ((sine >> (DIR_BITS - 16)) & 0xFF) as u32)
+}
+
+/// `table` at entry `at` blended `fraction`/256 toward the next.
+#[inline(always)]
+fn sky_between(table: &[Rgb; SKY_STEPS + 1], at: usize, fraction: u32) -> Rgb {
+    match table.get(at + 1) {
+        Some(&next) => lerp(table[at.min(SKY_STEPS)], next, fraction),
+        None => table[SKY_STEPS],
+    }
+}
+
+/// The frame's fogged sky gradient at elevation sine `up` (Q20; below
+/// the horizon, the horizon's).
+#[inline(always)]
+fn fogged_sky(frame: &AtmosphereFrame, up: i64) -> Rgb {
+    let (at, fraction) = sky_entry(up.clamp(0, 1 << DIR_BITS));
+    sky_between(&frame.sky, at, fraction)
 }
 
 /// Scales a direction (Q20, at least 1 and below 2^7 long) to unit
@@ -842,6 +1069,90 @@ mod tests {
             );
             assert!(worst <= 2.0, "worst channel difference {worst}");
         }
+    }
+
+    #[test]
+    fn the_grid_gives_each_pixel_its_own_directions_sine_and_length() {
+        // Level, steep, straight down, rolled, wide and narrow, small and
+        // large images: wherever a cell is blended (not marked for each
+        // pixel's own direction), the blend is within a part in 1024 of
+        // the pixel's own sine (a quarter of a step of the sky's table by
+        // sine) and a part in 512 of its reciprocal (which moves the fog's
+        // weight by under a fifth of a color level: `e^−1` of 255 times
+        // the relative error, at most).
+        let cameras = [
+            (
+                Camera::looking([100.0, 50.0, 80.0], 30.0, 0.0),
+                60.0,
+                (320, 240),
+            ),
+            (
+                Camera::looking([100.0, 50.0, 80.0], 200.0, 12.0),
+                90.0,
+                (96, 64),
+            ),
+            (
+                Camera::looking([10.0, 50.0, 800.0], 45.0, 60.0),
+                120.0,
+                (1024, 768),
+            ),
+            (
+                Camera::looking([10.0, 50.0, 800.0], 0.0, 90.0),
+                60.0,
+                (333, 211),
+            ),
+            (
+                Camera::looking([10.0, 50.0, 80.0], 0.0, -30.0),
+                30.0,
+                (640, 360),
+            ),
+            (
+                Camera {
+                    roll_deg: 35.0,
+                    ..Camera::looking([10.0, 50.0, 80.0], 70.0, 20.0)
+                },
+                60.0,
+                (320, 240),
+            ),
+        ];
+        let air = Atmosphere::FLIGHT.prepare().unwrap();
+        let (mut blended, mut own) = (0, 0);
+        for (camera, hfov_deg, (width, height)) in cameras {
+            let view = View::new(&Camera { hfov_deg, ..camera }, width, height).unwrap();
+            let frame = air.frame(&view);
+            let grid = &frame.grid;
+            for row in 0..height as i32 {
+                for column in 0..width as i32 {
+                    let (cell, at) = grid.cell(column, row);
+                    if cell & CELL_MIXED != 0 {
+                        own += 1;
+                        continue;
+                    }
+                    blended += 1;
+                    let d = direction(&frame.base, &frame.per_column, &frame.per_row, column, row);
+                    let unit = Unit::new(d);
+                    let sine = unit.of(d[2]) as i32;
+                    let got = grid.blend(&grid.sine, &at);
+                    assert!(
+                        (got - sine).abs() <= 1 << (DIR_BITS - 10),
+                        "{camera:?} ({column}, {row}): sine {got} against {sine}"
+                    );
+                    let [x, y, z] = d.map(i32::unsigned_abs);
+                    assert_eq!(cell & CELL_VERTICAL != 0, z > x.max(y));
+                    let reciprocal = reciprocal_q16(unit.of_size(x.max(y).max(z))) as i32;
+                    let got = grid.blend(&grid.reciprocal, &at);
+                    assert!(
+                        (got - reciprocal).abs() <= reciprocal >> 9,
+                        "{camera:?} ({column}, {row}): reciprocal {got} against {reciprocal}"
+                    );
+                }
+            }
+        }
+        // Nearly every pixel is blended.
+        assert!(
+            own * 20 < blended,
+            "{own} pixels take their own direction, {blended} blended"
+        );
     }
 
     #[test]
