@@ -22,10 +22,11 @@
 //! * `atmosphere`: the default kernel at pitch 2°, 15° and 45° from the
 //!   same eye without an atmosphere, with fog (the flight's, no sun) and
 //!   with the flight's sky, sun and fog (`Atmosphere::FLIGHT`), each
-//!   frame's time against the one without. Its table is timed apart from
-//!   criterion: the three renders of a pitch take turns, 25 rounds, and
-//!   each keeps its best, so that a change in the shared machine's load
-//!   falls on all three alike.
+//!   frame's time against the one without.
+//!
+//! The `roll` and `atmosphere` tables are timed apart from criterion: the
+//! renders a table compares take turns, 25 rounds, and each keeps its
+//! best, so that a change in the shared machine's load falls on all alike.
 //!
 //!     cargo bench -p terracast-sim --bench kernel
 //!
@@ -446,31 +447,50 @@ fn main() {
 
     println!("\n| roll (pitch 10) | steps/pixel | ns/pixel | time against roll 0 |");
     println!("|---|---|---|---|");
-    let level = mean_ns("roll", "0");
-    for roll in ROLLS {
+    let default = RenderOptions::default();
+    let levels = levels_for(&default);
+    let views = ROLLS.map(|roll| View::new(&rolled(roll), SIZE.0, SIZE.1).expect("view"));
+    let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+    let best = best_in_turns(ROLLS.len(), |i| {
+        render(&levels, &views[i], &default, &mut buffer, &mut NoProbe)
+    });
+    for (roll, ns) in ROLLS.into_iter().zip(&best) {
         let case = Case {
             group: "roll",
             label: roll.to_string(),
             camera: rolled(roll),
-            options: RenderOptions::default(),
+            options: default,
         };
-        let spp = steps_per_pixel(&case);
-        match (mean_ns("roll", &case.label), level) {
-            (Some(ns), Some(level)) => println!(
-                "| {roll} | {spp:.2} | {:.1} | {:.2}x |",
-                ns / pixels as f64,
-                ns / level
-            ),
-            _ => println!("| {roll} | {spp:.2} | (not measured in this run) | |"),
-        }
+        println!(
+            "| {roll} | {:.2} | {:.1} | {:.2}x |",
+            steps_per_pixel(&case),
+            ns / pixels as f64,
+            ns / best[0]
+        );
     }
 }
 
-/// The `atmosphere` group as a table: ns a pixel, and the time against
-/// the same frame without an atmosphere, each the best of 25 rounds in
-/// which the three renders take turns.
-fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
+/// The best time (ns) of each of `count` renders over 25 rounds in which
+/// they take turns (`render(i)` renders the `i`th), so that a change in
+/// the shared machine's load falls on all of them alike: a table's ratios
+/// come from these, not from criterion's estimates of groups run one
+/// after another.
+fn best_in_turns(count: usize, mut render: impl FnMut(usize)) -> Vec<f64> {
     const ROUNDS: usize = 25;
+    let mut best = vec![f64::MAX; count];
+    for _ in 0..ROUNDS {
+        for (i, best) in best.iter_mut().enumerate() {
+            let started = std::time::Instant::now();
+            render(i);
+            *best = best.min(started.elapsed().as_secs_f64() * 1e9);
+        }
+    }
+    best
+}
+
+/// The `atmosphere` group as a table: ns a pixel, and the time against
+/// the same frame without an atmosphere ([`best_in_turns`]).
+fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
     let default = RenderOptions::default();
     let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
     let airs = atmospheres();
@@ -478,24 +498,17 @@ fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
     println!("|---|---|---|---|---|---|");
     for pitch in ATMOSPHERE_PITCHES {
         let view = View::new(&camera(pitch), SIZE.0, SIZE.1).expect("view");
-        let mut best = [f64::MAX; 3];
-        for _ in 0..ROUNDS {
-            for ((_, air), best) in airs.iter().zip(&mut best) {
-                let started = std::time::Instant::now();
-                match air {
-                    Some(air) => render(
-                        levels,
-                        &view,
-                        &default,
-                        &mut air.sink(&view, &mut buffer),
-                        &mut NoProbe,
-                    ),
-                    None => render(levels, &view, &default, &mut buffer, &mut NoProbe),
-                }
-                *best = best.min(started.elapsed().as_secs_f64() * 1e9);
-            }
-        }
-        let [off, fog, flight] = best;
+        let best = best_in_turns(airs.len(), |i| match &airs[i].1 {
+            Some(air) => render(
+                levels,
+                &view,
+                &default,
+                &mut air.sink(&view, &mut buffer),
+                &mut NoProbe,
+            ),
+            None => render(levels, &view, &default, &mut buffer, &mut NoProbe),
+        });
+        let [off, fog, flight] = [best[0], best[1], best[2]];
         println!(
             "| {pitch} | {:.1} | {:.1} | {:.2}x | {:.1} | {:.2}x |",
             off / pixels as f64,
