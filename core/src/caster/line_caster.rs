@@ -246,11 +246,20 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// from the eye, through the height bounds; a stretch's first ray
     /// starts where the stretch before left off; the others resume.
     pub fn line<S: Sink, P: Probe>(&self, index: u32, sink: &mut S, probe: &mut P) {
+        // Most lines of a rolled or steep view's outer sectors miss the
+        // image: neither the line, its plane nor its rays are set up.
+        if self.view.line_misses_image(index) {
+            return;
+        }
         let Some(line) = self.view.line(index) else {
             return;
         };
+        let pixels = line.pixels(self.view.height());
+        if pixels.no_rows_left() {
+            return;
+        }
         // The pixel window in 32-bit words where the line's values fit.
-        match (line.pixels(self.view.height()).narrowed(), self.nearest) {
+        match (pixels.narrowed(), self.nearest) {
             (Ok(pixels), true) => self.cast::<_, _, _, true>(&line, pixels, sink, probe),
             (Ok(pixels), false) => self.cast::<_, _, _, false>(&line, pixels, sink, probe),
             (Err(pixels), true) => self.cast::<_, _, _, true>(&line, pixels, sink, probe),

@@ -488,6 +488,53 @@ impl View {
         })
     }
 
+    /// Whether line `index` certainly owns no pixel, told without setting
+    /// the line up (no division): its point stays on one side outside the
+    /// image over its sector's rows and two more each way, so
+    /// [`Line::pixels`] would find no row within half a pixel of the
+    /// image. A line this does not rule out may still own none.
+    pub(crate) fn line_misses_image(&self, index: u32) -> bool {
+        let Some((sector, k)) = self.lines.get(index) else {
+            return true;
+        };
+        // The line's cross coordinate t at axis coordinate s (Q8 both):
+        // (t − t_A)·den = num·(s − s_A), through its anchor A.
+        let (s_a, t_a, num, den) = match sector.vanishing {
+            None => (
+                i128::from(sector.s_ref) << IMG_FRAC,
+                i128::from(k) << IMG_FRAC,
+                i128::from(sector.lean),
+                1i128 << 32,
+            ),
+            Some((s_v, t_v)) => (
+                i128::from(s_v),
+                i128::from(t_v),
+                (i128::from(k) << IMG_FRAC) - i128::from(t_v),
+                (i128::from(sector.s_ref) << IMG_FRAC) - i128::from(s_v),
+            ),
+        };
+        let (num, den) = if den < 0 { (-num, -den) } else { (num, den) };
+        if den == 0 {
+            return false;
+        }
+        let low = i128::from(-IMG_ONE / 2);
+        let high = (i128::from(sector.cross_len) << IMG_FRAC) - i128::from(IMG_ONE / 2);
+        // −1 below the image, 1 above it, 0 within, at axis coordinate s.
+        let side = |s: i32| {
+            let across = num * ((i128::from(s) << IMG_FRAC) - s_a);
+            if across < (low - t_a) * den {
+                -1
+            } else if across > (high - t_a) * den {
+                1
+            } else {
+                0
+            }
+        };
+        let (from, to) = (sector.first.min(sector.last), sector.first.max(sector.last));
+        let ends = side(from - 2);
+        ends != 0 && ends == side(to + 2)
+    }
+
     /// The direction `offset16` sixteenths of a pixel along `line` from
     /// `pixel`'s (a sub-ray's; I32F32 bits).
     #[inline]
@@ -857,6 +904,14 @@ impl OwnedPixels {
 }
 
 impl<W: WindowWord> OwnedPixels<W> {
+    /// Whether no row is left to look at: then no pixel is either (a line
+    /// whose point never comes within half a pixel of the image has none
+    /// to begin with).
+    #[inline]
+    pub(crate) fn no_rows_left(&self) -> bool {
+        self.s == self.end
+    }
+
     /// The next pixel's cross and axis coordinates, and the line's point
     /// on its row (see `point`).
     #[inline(always)]
@@ -1199,6 +1254,34 @@ mod tests {
             let expected: vec::Vec<(u32, u32)> = (0..8).rev().map(|y| (column, y)).collect();
             assert_eq!(pixels, expected);
         }
+    }
+
+    #[test]
+    fn a_line_ruled_out_of_the_image_owns_no_pixel() {
+        // Rolled, steep and level views: every line `line_misses_image`
+        // rules out owns no pixel, and it rules out four in five of the
+        // lines that own none (the rest cross the image outside their
+        // sector).
+        let (mut ruled_out, mut empty) = (0, 0);
+        for roll in rolls() {
+            for pitch in [-45.0, 0.0, 20.0, 60.0, 90.0] {
+                for (size, hfov) in [((320, 240), 60.0), ((101, 67), 110.0)] {
+                    let view = rolled(pitch, roll, 30.0, size, hfov);
+                    for index in 0..view.lines() {
+                        let owns = view.line_pixels(index).count();
+                        if view.line_misses_image(index) {
+                            assert_eq!(owns, 0, "pitch {pitch} roll {roll} line {index}");
+                            ruled_out += 1;
+                        }
+                        empty += usize::from(owns == 0);
+                    }
+                }
+            }
+        }
+        assert!(
+            ruled_out * 5 >= empty * 4,
+            "{ruled_out} of {empty} empty lines ruled out"
+        );
     }
 
     #[test]
