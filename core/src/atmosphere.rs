@@ -513,20 +513,11 @@ impl PixelGrid {
                 let d = direction((i << bits) as i32, (j << bits) as i32);
                 let unit = Unit::new(d);
                 grid.sine[j][i] = unit.of(d[2]) as i32;
-                let [x, y, z] = d.map(i32::unsigned_abs);
-                let (axis, component) = if z > x.max(y) {
-                    (0, z)
-                } else if x >= y {
-                    (1, x)
-                } else {
-                    (2, y)
-                };
+                let (axis, component) = largest_component(d);
                 largest[j][i] = axis;
                 grid.reciprocal[j][i] = reciprocal_q16(unit.of_size(component)) as i32;
                 if let Some(sun) = sun {
-                    let e = [unit.of(d[0]), unit.of(d[1]), unit.of(d[2])];
-                    let s = sun.direction;
-                    sun_cosine[j][i] = e[0] * s[0] + e[1] * s[1] + e[2] * s[2];
+                    sun_cosine[j][i] = sun.cosine(d.map(|c| unit.of(c)));
                 }
             }
         }
@@ -718,12 +709,8 @@ impl PreparedAtmosphere {
             )
         } else {
             let (d, unit) = pixel_direction();
-            let (major, vertical) = (
-                d[0].unsigned_abs().max(d[1].unsigned_abs()),
-                d[2].unsigned_abs(),
-            );
-            let component = major.max(vertical);
-            (vertical > major, reciprocal_q16(unit.of_size(component)))
+            let (axis, component) = largest_component(d);
+            (axis == 0, reciprocal_q16(unit.of_size(component)))
         };
         let along = if vertical {
             let drop = (frame.eye_q16 - i64::from(sample.elevation)).unsigned_abs();
@@ -805,6 +792,21 @@ fn direction(
             + i64::from(column) * i64::from(per_column[i])
             + i64::from(row) * i64::from(per_row[i])) as i32
     })
+}
+
+/// Direction `d`'s largest component by size, vertical first (0, else 1
+/// for x, 2 for y, x on a tie between them; the horizontal one on a tie
+/// with the vertical), and that size.
+#[inline(always)]
+fn largest_component(d: [i32; 3]) -> (u8, u32) {
+    let [x, y, z] = d.map(i32::unsigned_abs);
+    if z > x.max(y) {
+        (0, z)
+    } else if x >= y {
+        (1, x)
+    } else {
+        (2, y)
+    }
 }
 
 /// Where the sky's tables by sine hold elevation sine `sine` (Q20, in
@@ -916,8 +918,14 @@ impl SunTable {
     /// dot product, so that most of the sky skips the rest. The glow is
     /// at most 90° wide, so that is in the sun's half of the sky too.
     fn near(&self, e: [i64; 3]) -> bool {
+        self.cosine(e) > self.glow_cosine.max(0)
+    }
+
+    /// The cosine (Q40) of the angle between unit direction `e` (Q20)
+    /// and the sun's.
+    fn cosine(&self, e: [i64; 3]) -> i64 {
         let s = self.direction;
-        e[0] * s[0] + e[1] * s[1] + e[2] * s[2] > self.glow_cosine.max(0)
+        e[0] * s[0] + e[1] * s[1] + e[2] * s[2]
     }
 
     /// The sky `color` along unit direction `e` (Q20, [`SunTable::near`]
