@@ -5,8 +5,9 @@
 //!
 //! A rolled camera's image lines are still the images of vertical planes:
 //! lines through the vertical's vanishing point, or, with the camera level,
-//! parallel lines slanted by the roll. A pixel's ray goes through its line
-//! up to half a pixel beside the pixel's center, as under pitch: a level
+//! parallel lines slanted by the roll. A pixel's ray takes its center's
+//! elevation but its line's horizontal direction, up to half a pixel
+//! beside the center, as under pitch: a level
 //! view rolled by 15° or 30° loses up to 2.8 dB against the same view
 //! unrolled (whose lines are the columns, through every pixel center) and
 //! lands where a view pitched by half a degree does; at 45°, 90° and 180°

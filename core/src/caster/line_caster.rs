@@ -288,15 +288,17 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // least, which they are scheduled by, to a third more.
         let (mut stretch_run, mut stretch_most) = (0, -1);
         let mut previous_dz = i32::MIN;
-        // The direction's components a ray's set-up needs.
-        let axes = [if walk.plane.key.x_major { 0 } else { 1 }, 2];
+        // The direction's major-axis component, which a ray's set-up needs
+        // with its center's vertical one.
+        let axis = [if walk.plane.key.x_major { 0 } else { 1 }];
         if walk.first <= walk.last {
             for pixel in pixels.by_ref() {
                 probe.ray();
-                // The direction's words: exactly its components shifted,
-                // so the slope, the run and the drift are `View::slope`'s
-                // and `Plane::drift`'s.
-                let [major, up] = line.direction_words(pixel.along, axes);
+                // The direction's words: exactly `Line::pixel_direction`'s
+                // components shifted, so the slope, the run and the drift
+                // are `View::slope`'s and `Plane::drift`'s.
+                let [major] = line.direction_words(pixel.along, axis);
+                let up = line.up_word(&pixel);
                 let run_word = if walk.plane.key.forward {
                     major
                 } else {
@@ -341,7 +343,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                         self.schedule(&mut walk, stretch_run);
                     }
                     at = resume_from
-                        .or_else(|| self.clear_until(&walk, &line.direction(pixel.along), probe))
+                        .or_else(|| self.clear_until(&walk, &line.pixel_direction(&pixel), probe))
                         .and_then(|from| self.start(&walk, from, z0, dz, probe));
                 }
                 let hit = at.as_mut().and_then(|at| {

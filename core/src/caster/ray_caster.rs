@@ -131,7 +131,7 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
                 }
                 probe.ray();
                 let d = if offset == 0 {
-                    line.direction(pixel.along)
+                    line.pixel_direction(&pixel)
                 } else {
                     View::direction_beside(&line, &pixel, offset)
                 };

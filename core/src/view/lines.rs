@@ -23,11 +23,12 @@
 //! integer comparisons in Q8 pixel coordinates, so every pixel of the image
 //! belongs to exactly one line of one sector (tested).
 //!
-//! A pixel's ray goes through the point of its line at the pixel's row (or
-//! column), at most half a pixel from the pixel's center, and all rays of a
-//! line share one horizontal direction, bit for bit: each ray of a line can
-//! resume where the ray before it hit, with no sideways drift. At pitch 0
-//! every ray goes through its pixel's center, as before.
+//! A pixel's ray takes the horizontal direction of its line's point at the
+//! pixel's row (or column), at most half a pixel from the pixel's center,
+//! and all rays of a line share it, bit for bit: each ray of a line can
+//! resume where the ray before it hit, with no sideways drift. Its vertical
+//! component is the center's own ([`Line::up_word`]). At pitch 0 every ray
+//! goes through its pixel's center, as before.
 //!
 //! # Order along a line
 //! Rays go by rising elevation: away from `V` when it is the nadir, toward
@@ -388,6 +389,10 @@ pub(crate) struct Line {
     /// The direction's change a unit of axis coordinate along the line
     /// (I32F32): a pixel's ray steps to the next row's by one add.
     per_axis: [i64; 3],
+    /// The vertical component of the direction's step to the next pixel
+    /// across the line (I32F32): a pixel's ray takes its center's
+    /// elevation from it ([`Line::up_word`]).
+    across_up: i64,
     /// Cross coordinate per unit of axis, Q32 (`(K − t_V) / (s_ref − s_V)`).
     slope: i64,
     /// The ownership test's per-line terms (see `Line::owns`), Q8:
@@ -482,6 +487,7 @@ impl View {
             k,
             reference,
             per_axis,
+            across_up: cross_step[2].to_bits(),
             slope,
             far,
             nearest_from: k_t - IMG_ONE / 2,
@@ -536,10 +542,10 @@ impl View {
     }
 
     /// The direction `offset16` sixteenths of a pixel along `line` from
-    /// `pixel`'s (a sub-ray's; I32F32 bits).
+    /// `pixel`'s ([`Line::pixel_direction`]; a sub-ray's; I32F32 bits).
     #[inline]
     pub(crate) fn direction_beside(line: &Line, pixel: &Owned, offset16: i64) -> [i64; 3] {
-        let direction = line.direction(pixel.along);
+        let direction = line.pixel_direction(pixel);
         core::array::from_fn(|i| direction[i] + ((line.per_axis[i] * offset16) >> 4))
     }
 }
@@ -582,6 +588,35 @@ impl Line {
             // Wrapping: the sum fits a word, whatever its parts do.
             reference.wrapping_add(per_axis.wrapping_mul(along))
         })
+    }
+
+    /// The ray of `pixel`: its line's horizontal direction at the pixel
+    /// (the line's vertical plane), with the vertical component of the
+    /// direction through the pixel's center ([`Line::up_word`]); I32F32
+    /// bits, none below a word's.
+    #[inline]
+    pub(crate) fn pixel_direction(&self, pixel: &Owned) -> [i64; 3] {
+        let mut direction = self.direction(pixel.along);
+        direction[2] = i64::from(self.up_word(pixel)) << DIRECTION_WORD_SHIFT;
+        direction
+    }
+
+    /// The vertical component of the direction through `pixel`'s center,
+    /// as a word: the line's at the pixel plus the step across the line
+    /// times the pixel's offset from it. A pixel lies up to half a pixel
+    /// beside its line; where the line is slanted in the image (a rolled
+    /// view) that is up to half a pixel too high or too low, which at a
+    /// grazing angle moves the hit far. The ray keeps its line's plane
+    /// (its horizontal direction is the line's, and its color lookup makes
+    /// up the sideways part, see [`super::plane::Plane::drift`]) and takes
+    /// its pixel center's elevation.
+    #[inline(always)]
+    pub(crate) fn up_word(&self, pixel: &Owned) -> i32 {
+        let [up] = self.direction_words(pixel.along, [2]);
+        // |across_up| < 2^40 and |offset| <= 2^15: the product fits; the
+        // change is under a pixel's step, a fraction of a word.
+        let beside = (self.across_up * pixel.offset) >> (COORD_FRAC_BITS + DIRECTION_WORD_SHIFT);
+        up.wrapping_add(beside as i32)
     }
 
     /// Components `which` of [`Line::direction`], and only those.
@@ -1361,6 +1396,46 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_pixels_ray_rises_as_its_centers_direction_does() {
+        // Rolled, the lines are slanted and a pixel lies up to half a pixel
+        // beside its line, above or below it: its ray takes the vertical
+        // component of the direction through its center (to the word),
+        // where its line's point would be off by up to half the step
+        // across the line's.
+        let q32 = |v: i64| v as f64 / 4294967296.0;
+        for (pitch, roll) in [
+            (0.0, 15.0),
+            (0.0, 30.0),
+            (10.0, 15.0),
+            (45.0, -30.0),
+            (20.0, 135.0),
+        ] {
+            let view = rolled(pitch, roll, 33.0, (200, 150), 70.0);
+            let (mut worst, mut line_worst) = (0.0f64, 0.0f64);
+            for index in 0..view.lines() {
+                let line = view.line(index).unwrap();
+                for p in line.pixels(150) {
+                    let (x, row) = (f64::from(p.x), f64::from(149 - p.y));
+                    let center = q32(view.base[2].to_bits())
+                        + q32(view.per_column[2].to_bits()) * x
+                        + q32(view.per_row[2].to_bits()) * row;
+                    let ray = line.pixel_direction(&p);
+                    worst = worst.max((q32(ray[2]) - center).abs());
+                    line_worst = line_worst.max((q32(line.direction(p.along)[2]) - center).abs());
+                    // The horizontal direction is the line's: its plane.
+                    assert_eq!(ray[..2], line.direction(p.along)[..2]);
+                }
+            }
+            // A word is 2^−24; the line's own steps add a few of them.
+            assert!(worst < 1e-5, "pitch {pitch} roll {roll}: {worst}");
+            assert!(
+                line_worst > 20.0 * worst,
+                "pitch {pitch} roll {roll}: {line_worst} against {worst}"
+            );
         }
     }
 
