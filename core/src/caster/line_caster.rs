@@ -111,6 +111,25 @@ struct LineWalk {
     minor_step: [i32; LEVELS],
 }
 
+impl LineWalk {
+    /// Minor coordinate `minor` moved `aside` (Q16) across the line, kept
+    /// inside the map (`Plane::minor_max`): minor coordinates are below
+    /// 2^31 in Q16; their sum may not be, and saturates.
+    #[inline(always)]
+    fn aside(&self, minor: i32, aside: i32) -> i32 {
+        let moved = minor.saturating_add(aside);
+        // Inside is the rule: one unsigned compare finds it, where
+        // `i32::clamp` is a call on the board.
+        if moved as u32 <= self.minor_max as u32 {
+            moved
+        } else if moved < 0 {
+            0
+        } else {
+            self.minor_max
+        }
+    }
+}
+
 /// What a ray's hit needs of the ray beyond its walk.
 #[derive(Clone, Copy)]
 struct HitRay {
@@ -500,54 +519,72 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         if rising && z > self.highest {
             return None;
         }
-        // The walk in locals, written back once.
         let mut here = *at;
-        let mut z_step = dz << here.level;
         loop {
-            let l = usize::from(here.level);
-            let mut next = here.k + (1 << here.level);
-            let (index, minor);
-            if next <= walk.ends[l] {
-                // On along this level: its index and minor step.
-                index = here.index + walk.step[l];
-                minor = here.minor + walk.minor_step[l];
+            // Along this level while its grid lines last: the level's
+            // steps in locals.
+            let level = here.level;
+            let l = usize::from(level);
+            let (end, step, minor_step) = (walk.ends[l], walk.step[l], walk.minor_step[l]);
+            let (stride, z_step) = (1 << level, dz << level);
+            let (mut k, mut index, mut minor, mut height) =
+                (here.k, here.index, here.minor, here.height);
+            while k + stride <= end {
+                let before = height;
+                k += stride;
+                index += step;
+                minor += minor_step;
                 z += z_step;
-            } else {
-                if here.k >= walk.last {
+                height = self.height(walk, index, minor, level, probe)?;
+                if z <= i64::from(height) {
+                    *at = At {
+                        k,
+                        level,
+                        index,
+                        minor,
+                        height,
+                        before_k: k - stride,
+                        before: Some(before),
+                    };
+                    return Some(z);
+                }
+                if rising && z > self.highest {
                     return None;
                 }
-                let level = if next > walk.last {
-                    // The map ends between this level's grid lines: its
-                    // last sample is tested, on level 0 where the map's
-                    // edge is the terrain's (the edge keeps its
-                    // silhouette), else against this level's grid line
-                    // at or before it (a window of a larger world holds
-                    // level 0 no farther than its schedule needs).
-                    if self.extent.real_edges {
-                        0
-                    } else {
-                        here.level
-                    }
-                } else {
-                    here.level + 1
-                };
-                next = next.min(walk.last);
-                (index, minor) = self.position(walk, next, level);
-                here.level = level;
-                z = z0 + i64::from(next) * dz;
-                z_step = dz << level;
             }
-            let height = self.height(walk, index, minor, here.level, probe)?;
+            if k >= walk.last {
+                return None;
+            }
+            // The next level's first grid line, or the map's last sample.
+            let next = k + stride;
+            let level = if next > walk.last {
+                // The map ends between this level's grid lines: its last
+                // sample is tested, on level 0 where the map's edge is the
+                // terrain's (the edge keeps its silhouette), else against
+                // this level's grid line at or before it (a window of a
+                // larger world holds level 0 no farther than its schedule
+                // needs).
+                if self.extent.real_edges {
+                    0
+                } else {
+                    level
+                }
+            } else {
+                level + 1
+            };
+            let next = next.min(walk.last);
+            let (index, minor) = self.position(walk, next, level);
+            z = z0 + i64::from(next) * dz;
             here = At {
                 k: next,
-                level: here.level,
+                level,
                 index,
                 minor,
-                height,
-                before_k: here.k,
-                before: Some(here.height),
+                height: self.height(walk, index, minor, level, probe)?,
+                before_k: k,
+                before: Some(height),
             };
-            if z <= i64::from(height) {
+            if z <= i64::from(here.height) {
                 *at = here;
                 return Some(z);
             }
@@ -694,9 +731,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         probe: &mut P,
     ) -> Rgb {
         if aside != 0 {
-            // Minor coordinates stay inside the map (`Plane::minor_max`),
-            // below 2^31 in Q16; the sum may not, and saturates.
-            minor = minor.saturating_add(aside).clamp(0, walk.minor_max);
+            minor = walk.aside(minor, aside);
         }
         let (l, across) = (usize::from(level), walk.across[usize::from(level)]);
         let color = line_color(&self.grids[l], index, across, minor, level);
@@ -717,10 +752,11 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         aside: i32,
         probe: &mut P,
     ) -> Option<Rgb> {
-        let mut minor = at.minor;
-        if aside != 0 {
-            minor = minor.saturating_add(aside).clamp(0, walk.minor_max);
-        }
+        let minor = if aside == 0 {
+            at.minor
+        } else {
+            walk.aside(at.minor, aside)
+        };
         let (l, shift) = (usize::from(at.level), u32::from(at.level));
         let across = walk.across[l];
         let cell = at.index + (minor >> (COORD_FRAC_BITS + shift)) as isize * across;
