@@ -253,7 +253,7 @@ fn tiled_terrain_files() {
     let tiles = dir.join("terrain.tiles");
     let input = PackInput {
         height: height.clone(),
-        color: None,
+        colors: Vec::new(),
         height_scale: 1.0 / 16.0,
         filter: Default::default(),
         seed: 1,

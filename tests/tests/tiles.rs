@@ -21,10 +21,10 @@ fn temp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-fn pack_input(height: &Path, color: Option<&Path>, scale: f32, filter: HeightFilter) -> PackInput {
+fn pack_input(height: &Path, colors: &[&Path], scale: f32, filter: HeightFilter) -> PackInput {
     PackInput {
         height: height.to_path_buf(),
-        color: color.map(Path::to_path_buf),
+        colors: colors.iter().map(|c| c.to_path_buf()).collect(),
         height_scale: scale,
         filter,
         seed: 1,
@@ -67,16 +67,15 @@ fn views(w: f32, d: f32, top: f32) -> Vec<Camera> {
 /// in memory and every view against the render from the maps.
 fn packed_equals_maps(
     height: &Path,
-    color: Option<&Path>,
+    colors: &[&Path],
     scale: f32,
     filter: HeightFilter,
     name: &str,
 ) {
     let out = temp(name);
-    let input = pack_input(height, color, scale, filter);
+    let input = pack_input(height, colors, scale, filter);
     let summary = pack(&input, &out, &mut |_, _| {}).unwrap();
-    let colors: Vec<PathBuf> = color.into_iter().map(Path::to_path_buf).collect();
-    let scene = load_scene_files(height, &colors, scale, 1).unwrap();
+    let scene = load_scene_files(height, &input.colors, scale, 1).unwrap();
     let kernel = scene.to_kernel_with(filter).unwrap();
     let pyramid = kernel.pyramid().unwrap();
     let mut file = TilesFile::open(&out).unwrap();
@@ -127,23 +126,23 @@ fn packed_files_render_as_their_maps_bit_for_bit() {
     let (height, color) = odd_sized_maps();
     // Every height filter: the pack streams each with its own code.
     for filter in HeightFilter::ALL {
-        packed_equals_maps(&height, Some(&color), 1.0 / 16.0, filter, "odd.tiles");
+        packed_equals_maps(&height, &[&color], 1.0 / 16.0, filter, "odd.tiles");
     }
     // Without a color map, colored by height and slope as `render` does.
     let default = HeightFilter::default();
-    packed_equals_maps(&height, None, 1.0 / 16.0, default, "odd-gray.tiles");
+    packed_equals_maps(&height, &[], 1.0 / 16.0, default, "odd-gray.tiles");
     if let Some(data) = terracast_tests::data_dir("the Comanche and SRTM packs") {
         let comanche = data.join("comanche");
         packed_equals_maps(
             &comanche.join("D7.png"),
-            Some(&comanche.join("C7W.png")),
+            &[&comanche.join("C7W.png")],
             1.0,
             default,
             "c7w.tiles",
         );
         packed_equals_maps(
             &data.join("srtm/N44W072_3arcsec.hgt"),
-            None,
+            &[],
             1.0 / 8.0,
             default,
             "srtm.tiles",
@@ -177,13 +176,7 @@ fn hgt_with_a_void() -> PathBuf {
 fn an_hgt_with_voids_packs_as_render_loads_it() {
     // The void is filled as `render` fills it: no pit down to height 0.
     let hgt = hgt_with_a_void();
-    packed_equals_maps(
-        &hgt,
-        None,
-        1.0 / 16.0,
-        HeightFilter::default(),
-        "void.tiles",
-    );
+    packed_equals_maps(&hgt, &[], 1.0 / 16.0, HeightFilter::default(), "void.tiles");
     let scene = load_scene_files(&hgt, &[], 1.0 / 16.0, 1).unwrap();
     let lowest = |points: &mut dyn Iterator<Item = (usize, usize)>| {
         points
@@ -226,11 +219,91 @@ fn geotiff_heights_and_photo_pack_as_render_loads_them() {
         .unwrap();
     packed_equals_maps(
         &height,
-        Some(&photo),
+        &[&photo],
         1.0,
         HeightFilter::default(),
         "odd-tif.tiles",
     );
+}
+
+/// A georeferenced GeoTIFF (geographic, `pixel` degrees a pixel, its
+/// top-left corner at `origin`) of `samples`, `w` wide.
+fn geotiff<C: tiff::encoder::colortype::ColorType>(
+    name: &str,
+    (w, d): (u32, u32),
+    samples: &[C::Inner],
+    origin: [f64; 2],
+    pixel: f64,
+) -> PathBuf
+where
+    [C::Inner]: tiff::encoder::TiffValue,
+{
+    use tiff::encoder::TiffEncoder;
+    use tiff::tags::Tag;
+    let path = temp(name);
+    let mut encoder = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
+    let mut image = encoder.new_image::<C>(w, d).unwrap();
+    let scale: &[f64] = &[pixel, pixel, 0.0];
+    let tiepoint: &[f64] = &[0.0, 0.0, 0.0, origin[0], origin[1], 0.0];
+    let geographic: &[u16] = &[1, 1, 0, 1, 1024, 0, 1, 2];
+    image
+        .encoder()
+        .write_tag(Tag::ModelPixelScaleTag, scale)
+        .unwrap();
+    image
+        .encoder()
+        .write_tag(Tag::ModelTiepointTag, tiepoint)
+        .unwrap();
+    image
+        .encoder()
+        .write_tag(Tag::GeoKeyDirectoryTag, geographic)
+        .unwrap();
+    image.write_data(samples).unwrap();
+    path
+}
+
+#[test]
+fn several_photos_pack_as_render_drapes_them() {
+    use tiff::encoder::colortype;
+    // The odd-sized heights over 0.001° a sample from (20°, −34°), and two
+    // photos at twice that resolution: one over the west half, one over a
+    // band across the middle, which lies over the first where they meet.
+    let scene = procedural(256, 3);
+    let (w, d) = (203u32, 150u32);
+    let heights: Vec<f32> = (0..w * d)
+        .map(|i| scene.height((i % w) as usize, (i / w) as usize))
+        .collect();
+    let grid =
+        geotiff::<colortype::Gray32Float>("geo-h.tif", (w, d), &heights, [20.0, -34.0], 0.001);
+    let photo = |name: &str, (pw, pd): (u32, u32), origin: [f64; 2], tint: u8| {
+        let pixels: Vec<u8> = (0..pw * pd)
+            .flat_map(|i| {
+                let c = scene.colors[(((i / pw) / 2) * 256 + (i % pw) / 2) as usize];
+                [c[0] / 2 + tint, c[1], c[2]]
+            })
+            .collect();
+        geotiff::<colortype::RGB8>(name, (pw, pd), &pixels, origin, 0.0005)
+    };
+    let west = photo("geo-west.tif", (200, 300), [20.0, -34.0], 0);
+    let band = photo("geo-band.tif", (300, 80), [20.05, -34.05], 120);
+    packed_equals_maps(
+        &grid,
+        &[&west, &band],
+        1.0,
+        HeightFilter::default(),
+        "two-photos.tiles",
+    );
+    // Both photos are on the packed terrain, the band over the west one
+    // where they overlap, and the terrain neither covers is colored by
+    // height.
+    let draped = load_scene_files(&grid, &[west.clone(), band.clone()], 1.0, 1).unwrap();
+    let alone = load_scene_files(&grid, &[west], 1.0, 1).unwrap();
+    let by_height = load_scene_files(&grid, &[], 1.0, 1).unwrap();
+    let at = |x: usize, y: usize| y * w as usize + x;
+    assert_eq!(draped.colors[at(10, 10)], alone.colors[at(10, 10)]);
+    assert_ne!(draped.colors[at(10, 10)], by_height.colors[at(10, 10)]);
+    assert_ne!(draped.colors[at(60, 60)], alone.colors[at(60, 60)]);
+    assert_eq!(draped.colors[at(190, 10)], by_height.colors[at(190, 10)]);
 }
 
 #[test]
@@ -246,7 +319,7 @@ fn pack_holds_a_few_strips_of_rows_however_tall_the_map() {
         heights.save(&path).unwrap();
         let out = temp(&format!("tall-{depth}.tiles"));
         pack(
-            &pack_input(&path, None, 1.0 / 16.0, HeightFilter::default()),
+            &pack_input(&path, &[], 1.0 / 16.0, HeightFilter::default()),
             &out,
             &mut |_, _| {},
         )
@@ -265,7 +338,7 @@ fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
     let (height, color) = odd_sized_maps();
     let out = temp("damaged.tiles");
     pack(
-        &pack_input(&height, Some(&color), 1.0 / 16.0, HeightFilter::default()),
+        &pack_input(&height, &[&color], 1.0 / 16.0, HeightFilter::default()),
         &out,
         &mut |_, _| {},
     )

@@ -55,8 +55,9 @@ enum Command {
     /// Speed against accuracy: every method and setting on a fixed suite
     /// of views, against the reference; writes a CSV and a chart.
     Bench(bench::BenchArgs),
-    /// Convert a height map (PNG or SRTM .hgt) and a color map into a tiled
-    /// terrain file, streaming: inputs larger than memory can be packed.
+    /// Convert a height map (PNG, SRTM .hgt or GeoTIFF) and its color map or
+    /// photos into a tiled terrain file; PNG maps stream, so inputs larger
+    /// than memory can be packed.
     Pack(paging::PackArgs),
     /// Fly over a tiled terrain (a .tiles file, or procedural:SIZE) through
     /// a fixed tile cache, paging tiles as Cohen-Or's master did; reports

@@ -16,14 +16,16 @@ use terracast::{Camera, HeightFilter, View};
 
 #[derive(Debug, clap::Args)]
 pub(super) struct PackArgs {
-    /// Height map: 8/16-bit grayscale PNG or SRTM .hgt.
+    /// Height map: 8/16-bit grayscale PNG, SRTM .hgt or GeoTIFF.
     #[arg(long, value_name = "H.png|H.hgt|H.tif")]
     height: PathBuf,
-    /// Color map: an 8-bit PNG of the same size, or a photo as `render`
-    /// drapes it (GeoTIFF photos by their georeference) [default: colored
-    /// by height and slope, as `render` colors a height map alone].
+    /// Color map: an 8-bit PNG of the same size, or photos as `render`
+    /// drapes them (GeoTIFF photos over a GeoTIFF height map by their
+    /// georeference: give --color once for each, later over earlier)
+    /// [default: colored by height and slope, as `render` colors a height
+    /// map alone].
     #[arg(long, value_name = "C.png|C.tif")]
-    color: Option<PathBuf>,
+    color: Vec<PathBuf>,
     /// World height of one height-map unit, in voxels [default: 1; for an
     /// SRTM .hgt, one meter in voxels of its grid spacing].
     #[arg(long, value_name = "S", value_parser = positive(0.0f32, 1e6), allow_hyphen_values = true)]
@@ -43,7 +45,7 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
     let height_scale = super::height_scale(&args.height, args.height_scale)?;
     let input = PackInput {
         height: args.height,
-        color: args.color,
+        colors: args.color,
         height_scale,
         filter: args.height_filter.into(),
         seed: args.seed,

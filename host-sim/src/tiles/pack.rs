@@ -37,13 +37,13 @@ use terracast::{HeightFilter, Rgb, Terrain};
 pub struct PackInput {
     /// Height map: 8/16-bit grayscale PNG, SRTM `.hgt` or GeoTIFF.
     pub height: PathBuf,
-    /// Color map: a PNG of the same size (8-bit RGB, RGBA, gray or
-    /// palette), or a photo as `render` drapes it (a GeoTIFF over a
-    /// GeoTIFF height map by their georeference, else stretched over the
-    /// map) when either file is read whole (see the module's notes);
-    /// without it, heights are colored by height and slope as `render`
-    /// colors them.
-    pub color: Option<PathBuf>,
+    /// Color maps, as `render` drapes them: none (heights colored by
+    /// height and slope, as `render` colors them), one PNG of the same size
+    /// (8-bit RGB, RGBA, gray or palette; streamed with a PNG height map),
+    /// or photos: GeoTIFFs over a GeoTIFF height map placed by their
+    /// georeference, each over the ones before (read whole, see the
+    /// module's notes), or one photo stretched over the map.
+    pub colors: Vec<PathBuf>,
     /// World height of one height-map unit, in voxels.
     pub height_scale: f32,
     /// How coarse heights are made.
@@ -91,7 +91,7 @@ pub fn pack(
     }
     let mut outputs = Outputs::new();
     outputs.input("--height", &input.height);
-    if let Some(color) = &input.color {
+    for color in &input.colors {
         outputs.input("--color", color);
     }
     let out_id = outputs.output("--out", out)?;
@@ -101,12 +101,20 @@ pub fn pack(
                 .extension()
                 .is_some_and(|e| e.eq_ignore_ascii_case("hgt"))
     };
-    let loaded = if read_whole(&input.height) || input.color.as_deref().is_some_and(read_whole) {
-        let colors: Vec<PathBuf> = input.color.iter().cloned().collect();
-        let scene = load_scene_files(&input.height, &colors, input.height_scale, input.seed)?;
-        Some(std::sync::Arc::new(scene))
-    } else {
-        None
+    // A PNG height map with at most one PNG color map streams; anything
+    // else is draped as `render` drapes it, whole.
+    let stream_color = match input.colors.as_slice() {
+        [] => Ok(None),
+        [one] if !read_whole(one) => Ok(Some(one)),
+        _ => Err(()),
+    };
+    let loaded = match stream_color {
+        Ok(_) if !read_whole(&input.height) => None,
+        _ => {
+            let scene =
+                load_scene_files(&input.height, &input.colors, input.height_scale, input.seed)?;
+            Some(Arc::new(scene))
+        }
     };
     let mut heights = match &loaded {
         Some(scene) => HeightRows::Loaded {
@@ -125,9 +133,9 @@ pub fn pack(
             "height map is {width}x{depth}: it needs at least 2x2 points"
         ))
     })?;
-    let mut colors = match (&loaded, &input.color) {
+    let mut colors = match (&loaded, stream_color) {
         (Some(scene), _) => Colors::Loaded(scene.clone()),
-        (None, Some(path)) => {
+        (None, Ok(Some(path))) => {
             let rows = ColorRows::open(path)?;
             if rows.size() != (width, depth) {
                 return Err(Error::new(format!(
@@ -139,7 +147,7 @@ pub fn pack(
             }
             Colors::Map(Box::new(rows))
         }
-        (None, None) => Colors::ByHeight {
+        (None, _) => Colors::ByHeight {
             range: bands,
             window: Vec::new(),
             seed: input.seed,
