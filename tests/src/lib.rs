@@ -1,5 +1,6 @@
 //! Shared helpers of the terracast integration tests: where the real data
-//! lives, loading a Comanche pair, and rendering kernel and reference views.
+//! lives, loading a Comanche pair, rendering kernel and reference views,
+//! and writing georeferenced GeoTIFFs.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -74,4 +75,49 @@ pub fn reference_view(reference: &Reference<'_>, cam: &Camera, size: (u32, u32))
     reference
         .render(cam, size.0, size.1, &ReferenceOptions::default())
         .0
+}
+
+/// Where a [`georeferenced_tiff`] lies: its top-left corner (ModelTiepoint)
+/// and its pixel size (ModelPixelScale), in degrees when `geographic` (a
+/// GeoKeyDirectory says so), else in meters.
+#[derive(Debug, Clone, Copy)]
+pub struct Georeference {
+    pub origin: [f64; 2],
+    pub pixel: f64,
+    pub geographic: bool,
+}
+
+/// A GeoTIFF of `samples` (`w` × `d` of color type `C`), georeferenced by
+/// `at`, with GDAL_NODATA `nodata` when given: what GDAL writes for an
+/// elevation model or a photo, in memory.
+pub fn georeferenced_tiff<C: tiff::encoder::colortype::ColorType>(
+    (w, d): (u32, u32),
+    samples: &[C::Inner],
+    at: Georeference,
+    nodata: Option<&str>,
+) -> Vec<u8>
+where
+    [C::Inner]: tiff::encoder::TiffValue,
+{
+    use tiff::tags::Tag;
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    {
+        let mut encoder = tiff::encoder::TiffEncoder::new(&mut bytes).unwrap();
+        let mut image = encoder.new_image::<C>(w, d).unwrap();
+        let scale: &[f64] = &[at.pixel, at.pixel, 0.0];
+        let tiepoint: &[f64] = &[0.0, 0.0, 0.0, at.origin[0], at.origin[1], 0.0];
+        let encoder = image.encoder();
+        encoder.write_tag(Tag::ModelPixelScaleTag, scale).unwrap();
+        encoder.write_tag(Tag::ModelTiepointTag, tiepoint).unwrap();
+        if at.geographic {
+            // One key: GTModelTypeGeoKey (1024) = 2, geographic.
+            let keys: &[u16] = &[1, 1, 0, 1, 1024, 0, 1, 2];
+            encoder.write_tag(Tag::GeoKeyDirectoryTag, keys).unwrap();
+        }
+        if let Some(nodata) = nodata {
+            encoder.write_tag(Tag::GdalNodata, nodata).unwrap();
+        }
+        image.write_data(samples).unwrap();
+    }
+    bytes.into_inner()
 }

@@ -310,37 +310,25 @@ fn srtm_height_files() {
 
 #[test]
 fn geotiff_height_and_photo_files() {
-    use tiff::encoder::{colortype, TiffEncoder};
-    use tiff::tags::Tag;
+    use terracast_tests::{georeferenced_tiff, Georeference};
+    use tiff::encoder::colortype;
     // A 64 × 64 int16 GeoTIFF with its georeference, a no-data value and a
     // void, as an SRTM export comes.
-    let mut valid = std::io::Cursor::new(Vec::new());
-    {
-        let mut encoder = TiffEncoder::new(&mut valid).unwrap();
-        let mut image = encoder.new_image::<colortype::GrayI16>(64, 64).unwrap();
-        let scale: &[f64] = &[0.001, 0.001, 0.0];
-        let tiepoint: &[f64] = &[0.0, 0.0, 0.0, 20.0, -34.0, 0.0];
-        image
-            .encoder()
-            .write_tag(Tag::ModelPixelScaleTag, scale)
-            .unwrap();
-        image
-            .encoder()
-            .write_tag(Tag::ModelTiepointTag, tiepoint)
-            .unwrap();
-        image.encoder().write_tag(Tag::GdalNodata, "-9999").unwrap();
-        let heights: Vec<i16> = (0..64 * 64)
-            .map(|i| {
-                if i % 613 == 0 {
-                    -9999
-                } else {
-                    (i % 900) as i16
-                }
-            })
-            .collect();
-        image.write_data(&heights).unwrap();
-    }
-    let valid = valid.into_inner();
+    let heights: Vec<i16> = (0..64 * 64)
+        .map(|i| {
+            if i % 613 == 0 {
+                -9999
+            } else {
+                (i % 900) as i16
+            }
+        })
+        .collect();
+    let at = Georeference {
+        origin: [20.0, -34.0],
+        pixel: 0.001,
+        geographic: false,
+    };
+    let valid = georeferenced_tiff::<colortype::GrayI16>((64, 64), &heights, at, Some("-9999"));
     mutate("GeoTIFF", "h.tif", (&valid, 512), 400, |_, path| {
         let heights = load_heights(path, 1.0).is_ok();
         let photo = terracast_sim::scene::load_colors(path, 8, 8).is_ok();

@@ -10,10 +10,11 @@ use std::time::Duration;
 use terracast::tiles::{cut_tile, Tile, TileError, TileKey, TileSource, World};
 use terracast::{Camera, HeightFilter, RenderOptions};
 use terracast_sim::kernel::{render_kernel, PixelRays};
-use terracast_sim::scene::{load_scene_files, procedural};
+use terracast_sim::scene::{load_scene_files, procedural, Scene};
 use terracast_sim::tiles::{
     pack, page_flight, render_tiled, PackInput, PageOptions, ProceduralSource, TilesFile, TILE,
 };
+use terracast_tests::{georeferenced_tiff, Georeference};
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("terracast-tiles-{}", std::process::id()));
@@ -195,16 +196,23 @@ fn an_hgt_with_voids_packs_as_render_loads_it() {
     );
 }
 
+/// The odd-sized maps' size, and their heights as floats (voxels).
+const ODD_SIZE: (u32, u32) = (203, 150);
+
+fn odd_sized_float_heights(scene: &Scene) -> Vec<f32> {
+    let (w, d) = ODD_SIZE;
+    (0..w * d)
+        .map(|i| scene.height((i % w) as usize, (i / w) as usize))
+        .collect()
+}
+
 #[test]
 fn geotiff_heights_and_photo_pack_as_render_loads_them() {
     use tiff::encoder::{colortype, TiffEncoder};
     // The odd-sized maps as a float32 TIFF of heights (no georeference:
     // read with a note) and an RGB TIFF photo.
-    let scene = procedural(256, 3);
-    let (w, d) = (203u32, 150u32);
-    let heights: Vec<f32> = (0..w * d)
-        .map(|i| scene.height((i % w) as usize, (i / w) as usize))
-        .collect();
+    let (scene, (w, d)) = (procedural(256, 3), ODD_SIZE);
+    let heights = odd_sized_float_heights(&scene);
     let colors: Vec<u8> = (0..w * d)
         .flat_map(|i| scene.colors[((i / w) * 256 + i % w) as usize])
         .collect();
@@ -227,10 +235,10 @@ fn geotiff_heights_and_photo_pack_as_render_loads_them() {
 }
 
 /// A georeferenced GeoTIFF (geographic, `pixel` degrees a pixel, its
-/// top-left corner at `origin`) of `samples`, `w` wide.
+/// top-left corner at `origin`) of `samples`, written to `name`.
 fn geotiff<C: tiff::encoder::colortype::ColorType>(
     name: &str,
-    (w, d): (u32, u32),
+    size: (u32, u32),
     samples: &[C::Inner],
     origin: [f64; 2],
     pixel: f64,
@@ -238,27 +246,13 @@ fn geotiff<C: tiff::encoder::colortype::ColorType>(
 where
     [C::Inner]: tiff::encoder::TiffValue,
 {
-    use tiff::encoder::TiffEncoder;
-    use tiff::tags::Tag;
+    let at = Georeference {
+        origin,
+        pixel,
+        geographic: true,
+    };
     let path = temp(name);
-    let mut encoder = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
-    let mut image = encoder.new_image::<C>(w, d).unwrap();
-    let scale: &[f64] = &[pixel, pixel, 0.0];
-    let tiepoint: &[f64] = &[0.0, 0.0, 0.0, origin[0], origin[1], 0.0];
-    let geographic: &[u16] = &[1, 1, 0, 1, 1024, 0, 1, 2];
-    image
-        .encoder()
-        .write_tag(Tag::ModelPixelScaleTag, scale)
-        .unwrap();
-    image
-        .encoder()
-        .write_tag(Tag::ModelTiepointTag, tiepoint)
-        .unwrap();
-    image
-        .encoder()
-        .write_tag(Tag::GeoKeyDirectoryTag, geographic)
-        .unwrap();
-    image.write_data(samples).unwrap();
+    std::fs::write(&path, georeferenced_tiff::<C>(size, samples, at, None)).unwrap();
     path
 }
 
@@ -268,11 +262,8 @@ fn several_photos_pack_as_render_drapes_them() {
     // The odd-sized heights over 0.001° a sample from (20°, −34°), and two
     // photos at twice that resolution: one over the west half, one over a
     // band across the middle, which lies over the first where they meet.
-    let scene = procedural(256, 3);
-    let (w, d) = (203u32, 150u32);
-    let heights: Vec<f32> = (0..w * d)
-        .map(|i| scene.height((i % w) as usize, (i / w) as usize))
-        .collect();
+    let (scene, (w, d)) = (procedural(256, 3), ODD_SIZE);
+    let heights = odd_sized_float_heights(&scene);
     let grid =
         geotiff::<colortype::Gray32Float>("geo-h.tif", (w, d), &heights, [20.0, -34.0], 0.001);
     let photo = |name: &str, (pw, pd): (u32, u32), origin: [f64; 2], tint: u8| {
