@@ -39,9 +39,9 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
-    pyramid_cells, pyramid_points, render, render_level_columns, Atmosphere, Camera, Coherence,
-    Framebuffer, HeightFilter, NoProbe, Pyramid, RenderOptions, Resolution, Rgb, Shading, View,
-    U8F8,
+    pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines, Atmosphere,
+    Camera, Coherence, Framebuffer, HeightFilter, NoProbe, Pyramid, RenderOptions, Resolution, Rgb,
+    Shading, View, U8F8,
 };
 use terracast_board::{scene::BoardScene, wire::frame_capture_bytes, CaptureBus, SpiDisplay};
 
@@ -418,7 +418,9 @@ fn run() -> Result<(), &'static str> {
 /// Each view turned level (pitch 0, no roll), rendered by the kernel's
 /// default, by the kernel at single resolution, and by the per-line design
 /// at its smallest (`render_level_columns`: level 0, one set-up a column,
-/// subvoxel shading): each render's ticks, over semihosting, for
+/// subvoxel shading); then each view as it is, by the kernel's default, at
+/// single resolution, and by the same design under pitch and roll
+/// (`render_pixel_lines`): each render's ticks, over semihosting, for
 /// `scripts/board-bound`.
 fn level_bound(
     pyramid: &Pyramid,
@@ -437,6 +439,8 @@ fn level_bound(
             ..*camera
         };
         let view = View::new(&level, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+        let posed =
+            View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
         let mut ticks_of = |how: &dyn Fn(&mut Framebuffer) -> Result<(), &'static str>| {
             let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
                 .map_err(|_| "framebuffer too small")?;
@@ -461,6 +465,25 @@ fn level_bound(
             kernel,
             kernel_single,
             columns
+        );
+        let kernel = ticks_of(&|f| {
+            render(pyramid, &posed, &default, f, &mut NoProbe);
+            Ok(())
+        })?;
+        let kernel_single = ticks_of(&|f| {
+            render(pyramid, &posed, &single, f, &mut NoProbe);
+            Ok(())
+        })?;
+        let lines = ticks_of(&|f| {
+            render_pixel_lines(pyramid.base(), &posed, &single, f);
+            Ok(())
+        })?;
+        hprintln!(
+            "posed view {} kernel {} single {} lines {}",
+            index,
+            kernel,
+            kernel_single,
+            lines
         );
     }
     Ok(())

@@ -33,7 +33,7 @@ pub(crate) mod walk;
 
 pub use budget::{FrameCost, Governor};
 pub use options::{Coherence, RenderOptions, Resolution, Shading, VerticalSamples};
-pub use per_line::{render_level_columns, ColumnsError};
+pub use per_line::{render_level_columns, render_pixel_lines, ColumnsError};
 
 use crate::probe::Probe;
 use crate::sink::{Sample, Sink};

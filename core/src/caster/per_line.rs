@@ -23,13 +23,22 @@
 //! is beside its pixel's center, so there is no color drift), so a pixel
 //! costs what the algorithm costs. Under pitch a ray's slope is a ratio,
 //! one division a ray: the line caster's.
+//!
+//! [`render_pixel_lines`] is the same design under any pitch and roll:
+//! the kernel's image lines (through the vertical's vanishing point), a
+//! ray's slope one division (`slope_quotient`, from its pixel center's
+//! words), a ray lower than the one before starting again from the line's
+//! first sample, and the color looked up where the pixel center's own ray
+//! would cross (`Plane::drift`). What it leaves out of the kernel's line
+//! caster is the pyramid (levels, stretches, far colors) and the first
+//! hit: it is the bound for the kernel's pitched frames.
 
 use super::walk::lerp;
 use super::{crossing_fraction, sky, RenderOptions};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BITS};
 use crate::divide::div_trunc;
-use crate::view::plane::Plane;
+use crate::view::plane::{slope_quotient, Plane};
 use crate::{Sample, Sink, Terrain, View};
 use core::fmt;
 
@@ -68,6 +77,22 @@ pub fn render_level_columns<S: Sink>(
         columns.column(column, sink);
     }
     Ok(())
+}
+
+/// Renders `view` of `terrain` (level 0, subvoxel shading with the color
+/// drift, the sky of `options`) line by line, along the kernel's image
+/// lines, into `sink`: the per-line design at its smallest under pitch
+/// and roll (see the module's notes).
+pub fn render_pixel_lines<S: Sink>(
+    terrain: &Terrain<'_>,
+    view: &View,
+    options: &RenderOptions,
+    sink: &mut S,
+) {
+    let lines = FrameCaster::new(terrain, view, options);
+    for index in 0..view.lines() {
+        lines.line(index, sink);
+    }
 }
 
 /// What every column of a frame shares: the terrain, the view and the sky.
@@ -150,6 +175,21 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         i64::from((i32::from(h0) << HEIGHT_TO_Q16) + (i32::from(h1) - i32::from(h0)) * weight)
     }
 
+    /// The color at minor coordinate `minor` (Q16) of the grid line
+    /// starting at `index`, looked up `aside` (Q16) across the line and
+    /// kept inside the map.
+    #[inline(always)]
+    fn color_aside(
+        &self,
+        index: isize,
+        across: isize,
+        minor: i64,
+        aside: i64,
+        plane: &Plane,
+    ) -> Rgb {
+        self.color(index, across, (minor + aside).clamp(0, plane.minor_max))
+    }
+
     #[inline(always)]
     fn color(&self, index: isize, across: isize, minor: i64) -> Rgb {
         let i = (index + across * (minor >> COORD_FRAC_BITS) as isize) as usize;
@@ -189,8 +229,48 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
                 (row..height_px).for_each(|row| put(sink, row, self.sky));
                 return;
             };
-            put(sink, row, self.hit(&at, z, dz, &walk, &plane));
+            put(sink, row, self.hit(&at, z, dz, 0, &walk, &plane));
         }
+    }
+
+    fn line<S: Sink>(&self, index: u32, sink: &mut S) {
+        let view = self.view;
+        if view.line_misses_image(index) {
+            return;
+        }
+        let Some(line) = view.line(index) else {
+            return;
+        };
+        let mut pixels = line.pixels(view.height());
+        let plane =
+            Plane::new(view, &self.extent, &line.reference).with_across(&view.across(&line));
+        let walk = Walk::new(&plane, self.width);
+        if walk.first <= walk.last {
+            let axis = [if plane.key.x_major { 0 } else { 1 }];
+            let eye_z = view.eye[2].to_bits();
+            let (mut at, mut previous_dz) = (None, i64::MIN);
+            for pixel in pixels.by_ref() {
+                let [major] = line.direction_words(pixel.along, axis);
+                let run = if plane.key.forward { major } else { -major }.max(0);
+                let dz = i64::from(slope_quotient(line.up_word(&pixel), run as u32));
+                // Lower than the ray before (next to the vanishing point):
+                // from the line's first sample again.
+                if dz < previous_dz {
+                    at = None;
+                }
+                previous_dz = dz;
+                let at = at.get_or_insert_with(|| self.start(&plane, &walk));
+                let z = eye_z + ((plane.delta0 * dz) >> COORD_FRAC_BITS) + at.k * dz;
+                let Some(z) = self.climb(at, z, dz, &walk, &plane) else {
+                    sink.put(pixel.x, pixel.y, self.sky);
+                    break;
+                };
+                let drift = plane.drift_of_word(run, pixel.offset);
+                sink.put(pixel.x, pixel.y, self.hit(at, z, dz, drift, &walk, &plane));
+            }
+        }
+        // The sky above the line's last hit.
+        pixels.for_each_position(|x, y| sink.put(x, y, self.sky));
     }
 
     /// The walk's first sample inside the map, with nothing known before it.
@@ -231,12 +311,18 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
     }
 
     /// The sample of a ray at height `z` (Q16) at `at`, below the surface
-    /// there and above it at the sample before (when there is one).
+    /// there and above it at the sample before (when there is one), its
+    /// colors looked up `drift` (Q16 a unit of distance) aside.
     #[inline(always)]
-    fn hit(&self, at: &At, z: i64, dz: i64, walk: &Walk, plane: &Plane) -> Sample {
+    fn hit(&self, at: &At, z: i64, dz: i64, drift: i64, walk: &Walk, plane: &Plane) -> Sample {
         let (across, step) = (walk.across, walk.step);
         let distance = plane.delta0 + (at.k << COORD_FRAC_BITS);
-        let on_hit_line = self.color(at.index, across, at.minor);
+        let aside = (drift * distance) >> COORD_FRAC_BITS;
+        let on_hit_line = if drift == 0 {
+            self.color(at.index, across, at.minor)
+        } else {
+            self.color_aside(at.index, across, at.minor, aside, plane)
+        };
         if at.before == i64::MAX {
             return Sample {
                 color: on_hit_line,
@@ -247,7 +333,12 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         let above = (z - dz - at.before) as i32;
         let below = (z - at.height) as i32;
         let t = crossing_fraction(above, below);
-        let before = self.color(at.index - step, across, at.minor - plane.dminor);
+        let before_minor = at.minor - plane.dminor;
+        let before = if drift == 0 {
+            self.color(at.index - step, across, before_minor)
+        } else {
+            self.color_aside(at.index - step, across, before_minor, aside - drift, plane)
+        };
         let back = i64::from(256 - t);
         Sample {
             color: lerp(before, on_hit_line, t),
