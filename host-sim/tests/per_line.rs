@@ -7,7 +7,7 @@
 
 use terracast::{
     render_level_columns, render_pixel_lines, Camera, Coherence, ColumnsError, RenderOptions,
-    Resolution, Rgb, View,
+    Resolution, Rgb, Terrain, View,
 };
 use terracast_sim::kernel::{render_kernel_with, PixelRays, SampleBuffer};
 use terracast_sim::metrics::psnr;
@@ -75,72 +75,89 @@ fn compare(scene: &Scene, kernel_scene: &KernelScene, camera: &Camera, image: &[
     compared
 }
 
-#[test]
-fn level_views_match_the_kernel_at_single_resolution() {
+/// Each camera `cameras` places over the built-in scene (256², seed 3),
+/// rendered by `renderer` at single resolution into a sample buffer, and
+/// compared with the kernel's render.
+fn compare_each(
+    cameras: impl Fn(&Scene) -> Vec<Camera>,
+    renderer: impl Fn(&Terrain<'_>, &View, &RenderOptions, &mut SampleBuffer),
+) -> Vec<(Camera, Compared)> {
     let scene = procedural(256, 3);
     let kernel_scene = scene.to_kernel().unwrap();
     let terrain = kernel_scene.terrain().unwrap();
-    let single = single();
-    let top = scene.max_height();
+    cameras(&scene)
+        .into_iter()
+        .map(|camera| {
+            let view = View::new(&camera, SIZE.0, SIZE.1).unwrap();
+            let mut image = SampleBuffer::new(SIZE.0, SIZE.1);
+            renderer(&terrain, &view, &single(), &mut image);
+            let compared = compare(&scene, &kernel_scene, &camera, &colors(&image));
+            (camera, compared)
+        })
+        .collect()
+}
+
+#[test]
+fn level_views_match_the_kernel_at_single_resolution() {
     // Along each axis both ways, diagonals, from outside the map, near the
     // ground and high above it.
-    let cameras = [
-        Camera::looking([128.0, 5.0, top * 0.7], 90.0, 0.0),
-        Camera::looking([5.0, 128.0, top + 20.0], 0.0, 0.0),
-        Camera::looking([250.0, 128.0, top * 0.6], 180.0, 0.0),
-        Camera::looking([128.0, 250.0, top + 5.0], 270.0, 0.0),
-        Camera::looking([-40.0, -40.0, top * 0.8], 45.0, 0.0),
-        Camera::looking([200.0, 30.0, top * 0.5], 135.0, 0.0),
-    ];
-    for camera in cameras {
-        let view = View::new(&camera, SIZE.0, SIZE.1).unwrap();
-        let mut columns = SampleBuffer::new(SIZE.0, SIZE.1);
-        render_level_columns(&terrain, &view, &single, &mut columns).unwrap();
-        let compared = compare(&scene, &kernel_scene, &camera, &colors(&columns));
-        assert!(compared.against_kernel_db > 38.0);
-        assert!(compared.against_reference_db >= compared.kernel_against_reference_db - 0.3);
+    let cameras = |scene: &Scene| {
+        let top = scene.max_height();
+        vec![
+            Camera::looking([128.0, 5.0, top * 0.7], 90.0, 0.0),
+            Camera::looking([5.0, 128.0, top + 20.0], 0.0, 0.0),
+            Camera::looking([250.0, 128.0, top * 0.6], 180.0, 0.0),
+            Camera::looking([128.0, 250.0, top + 5.0], 270.0, 0.0),
+            Camera::looking([-40.0, -40.0, top * 0.8], 45.0, 0.0),
+            Camera::looking([200.0, 30.0, top * 0.5], 135.0, 0.0),
+        ]
+    };
+    let columns =
+        |terrain: &Terrain<'_>, view: &View, options: &RenderOptions, image: &mut SampleBuffer| {
+            render_level_columns(terrain, view, options, image).unwrap()
+        };
+    for (camera, compared) in compare_each(cameras, columns) {
+        assert!(compared.against_kernel_db > 38.0, "{camera:?}");
+        assert!(
+            compared.against_reference_db >= compared.kernel_against_reference_db - 0.3,
+            "{camera:?}"
+        );
     }
 }
 
 #[test]
 fn pixel_lines_match_the_kernel_at_single_resolution_at_any_pose() {
-    let scene = procedural(256, 3);
-    let kernel_scene = scene.to_kernel().unwrap();
-    let terrain = kernel_scene.terrain().unwrap();
-    let single = single();
-    let top = scene.max_height();
     // Level, grazing, steep, straight down, looking up, rolled (its lines
     // slanted, and through a vanishing point inside the image), from
     // outside the map.
-    let cameras = [
-        Camera::looking([128.0, 5.0, top * 0.7], 90.0, 0.0),
-        Camera::looking([5.0, 128.0, top * 0.8], 10.0, 2.0),
-        Camera::looking([30.0, 40.0, top + 40.0], 30.0, 30.0),
-        Camera::looking([200.0, 200.0, top + 60.0], 225.0, 60.0),
-        Camera::looking([128.0, 128.0, top + 80.0], 10.0, 90.0),
-        Camera::looking([128.0, 20.0, scene.height(128, 20) + 4.0], 95.0, -5.0),
-        Camera {
-            roll_deg: 30.0,
-            ..Camera::looking([40.0, 60.0, top + 30.0], 50.0, 20.0)
-        },
-        Camera {
-            roll_deg: -15.0,
-            ..Camera::looking([200.0, 30.0, top * 0.8], 135.0, 0.0)
-        },
-        Camera {
-            roll_deg: 120.0,
-            ..Camera::looking([128.0, 128.0, top + 60.0], 0.0, 75.0)
-        },
-        Camera::looking([-40.0, -40.0, top * 0.8], 45.0, 15.0),
-    ];
-    for camera in cameras {
-        let view = View::new(&camera, SIZE.0, SIZE.1).unwrap();
-        let mut lines = SampleBuffer::new(SIZE.0, SIZE.1);
-        render_pixel_lines(&terrain, &view, &single, &mut lines);
-        // The same lines, slopes, walk, crossing and color drift as the
-        // line caster at single resolution, which skips to where a ray can
-        // hit where this walks from the line's first sample: its image.
-        let compared = compare(&scene, &kernel_scene, &camera, &colors(&lines));
+    let cameras = |scene: &Scene| {
+        let top = scene.max_height();
+        vec![
+            Camera::looking([128.0, 5.0, top * 0.7], 90.0, 0.0),
+            Camera::looking([5.0, 128.0, top * 0.8], 10.0, 2.0),
+            Camera::looking([30.0, 40.0, top + 40.0], 30.0, 30.0),
+            Camera::looking([200.0, 200.0, top + 60.0], 225.0, 60.0),
+            Camera::looking([128.0, 128.0, top + 80.0], 10.0, 90.0),
+            Camera::looking([128.0, 20.0, scene.height(128, 20) + 4.0], 95.0, -5.0),
+            Camera {
+                roll_deg: 30.0,
+                ..Camera::looking([40.0, 60.0, top + 30.0], 50.0, 20.0)
+            },
+            Camera {
+                roll_deg: -15.0,
+                ..Camera::looking([200.0, 30.0, top * 0.8], 135.0, 0.0)
+            },
+            Camera {
+                roll_deg: 120.0,
+                ..Camera::looking([128.0, 128.0, top + 60.0], 0.0, 75.0)
+            },
+            Camera::looking([-40.0, -40.0, top * 0.8], 45.0, 15.0),
+        ]
+    };
+    // The same lines, slopes, walk, crossing and color drift as the line
+    // caster at single resolution, which skips to where a ray can hit
+    // where this walks from the line's first sample: its image.
+    for (camera, compared) in compare_each(cameras, render_pixel_lines) {
         assert!(compared.identical, "{camera:?}: not the kernel's image");
     }
 }
