@@ -95,7 +95,8 @@ pub fn render_pixel_lines<S: Sink>(
     }
 }
 
-/// What every column of a frame shares: the terrain, the view and the sky.
+/// What every column or line of a frame shares: the terrain, the view and
+/// the sky.
 struct FrameCaster<'t, 'v> {
     heights: &'t [u16],
     colors: &'t [Rgb],
@@ -233,6 +234,7 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         }
     }
 
+    /// Renders image line `index` (see [`render_pixel_lines`]).
     fn line<S: Sink>(&self, index: u32, sink: &mut S) {
         let view = self.view;
         if view.line_misses_image(index) {
