@@ -103,18 +103,14 @@ pub fn pack(
     };
     // A PNG height map with at most one PNG color map streams; anything
     // else is draped as `render` drapes it, whole.
-    let stream_color = match input.colors.as_slice() {
-        [] => Ok(None),
-        [one] if !read_whole(one) => Ok(Some(one)),
-        _ => Err(()),
-    };
-    let loaded = match stream_color {
-        Ok(_) if !read_whole(&input.height) => None,
-        _ => {
-            let scene =
-                load_scene_files(&input.height, &input.colors, input.height_scale, input.seed)?;
-            Some(Arc::new(scene))
-        }
+    let streams = !read_whole(&input.height)
+        && input.colors.len() <= 1
+        && !input.colors.iter().any(|c| read_whole(c));
+    let loaded = if streams {
+        None
+    } else {
+        let scene = load_scene_files(&input.height, &input.colors, input.height_scale, input.seed)?;
+        Some(Arc::new(scene))
     };
     let mut heights = match &loaded {
         Some(scene) => HeightRows::Loaded {
@@ -133,9 +129,10 @@ pub fn pack(
             "height map is {width}x{depth}: it needs at least 2x2 points"
         ))
     })?;
-    let mut colors = match (&loaded, stream_color) {
+    // (Streamed, there is at most one color map.)
+    let mut colors = match (&loaded, input.colors.first()) {
         (Some(scene), _) => Colors::Loaded(scene.clone()),
-        (None, Ok(Some(path))) => {
+        (None, Some(path)) => {
             let rows = ColorRows::open(path)?;
             if rows.size() != (width, depth) {
                 return Err(Error::new(format!(
@@ -147,7 +144,7 @@ pub fn pack(
             }
             Colors::Map(Box::new(rows))
         }
-        (None, _) => Colors::ByHeight {
+        (None, None) => Colors::ByHeight {
             range: bands,
             window: Vec::new(),
             seed: input.seed,
