@@ -50,9 +50,10 @@
 
 use crate::caster::walk::lerp;
 use crate::color::Rgb;
+use crate::config::MAX_RAY_SLOPE;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS};
 use crate::divide::div_trunc;
-use crate::sink::{Sample, Sink};
+use crate::sink::{LinePlane, Sample, Sink};
 use crate::view::View;
 use core::fmt;
 
@@ -672,6 +673,7 @@ impl PreparedAtmosphere {
         AtmosphereSink {
             air: self,
             frame: self.frame(view),
+            line: LineShade::default(),
             sink,
         }
     }
@@ -713,19 +715,69 @@ impl PreparedAtmosphere {
             (axis == 0, reciprocal_q16(unit.of_size(component)))
         };
         let along = if vertical {
-            let drop = (frame.eye_q16 - i64::from(sample.elevation)).unsigned_abs();
-            drop.min(u64::from(u32::MAX)) as u32
+            drop(frame, sample)
         } else {
             sample.distance
         };
         let distance_q8 = (u64::from(along) * u64::from(reciprocal)) >> (16 + 16 - Q8);
-        // The density integrated along the path (Q8 voxels at ground
-        // density): the distance times the mean density from the eye to
-        // the hit's height.
+        self.fogged(frame, table, sample, distance_q8)
+    }
+
+    /// `sample`'s color through `table`'s fog over the `distance_q8`
+    /// (Q8 voxels) from the eye to its hit: the distance times the mean
+    /// density from the eye to the hit's height is the density integrated
+    /// along the path (Q8 voxels at ground density).
+    #[inline(always)]
+    fn fogged(
+        &self,
+        frame: &AtmosphereFrame,
+        table: &FogTable,
+        sample: &Sample,
+        distance_q8: u64,
+    ) -> Rgb {
         let height_q8 = i64::from(sample.elevation) >> (COORD_FRAC_BITS - Q8);
         let mean_q16 = between(&frame.mean, height_q8.max(0)) as u64;
         let weight = self.transmitted(table, (distance_q8 * mean_q16) >> 16);
         lerp(table.fog.color, sample.color, weight)
+    }
+
+    /// The color of pixel `(x, y)` whose ray saw `sample`, as
+    /// [`PreparedAtmosphere::color`]; a hit's fog from the ray's slope in
+    /// its line's plane (see [`Sink::put_ray`]) instead of the pixel's
+    /// position: the ray's length a unit of major-axis distance is that
+    /// of `(m, slope)`, `m` the plane's horizontal length a unit of
+    /// major-axis distance, from a table by `slope/m`.
+    pub fn ray_color(
+        &self,
+        frame: &AtmosphereFrame,
+        line: &LineShade,
+        (x, y): (u32, u32),
+        sample: &Sample,
+        slope: i32,
+    ) -> Rgb {
+        let Some(table) = self.fog.as_ref() else {
+            return self.color(frame, x, y, sample);
+        };
+        if sample.is_sky() {
+            return self.color(frame, x, y, sample);
+        }
+        // A ray with no run (straight down) has no major-axis distance:
+        // its length is its height change.
+        let vertical = slope.unsigned_abs() >= MAX_SLOPE_Q16;
+        let distance_q8 = if vertical {
+            u64::from(drop(frame, sample)) >> (COORD_FRAC_BITS - Q8)
+        } else {
+            // The ray's length a unit of major-axis distance, Q16:
+            // `m·√(1 + u²)`, or for a steep ray `|slope|·√(1 + 1/u²)`.
+            let steepness = Steepness::of(line, slope);
+            let length = if steepness.steep {
+                (u64::from(slope.unsigned_abs()) * steepness.of_table(&STRETCH_HIGH)) >> 16
+            } else {
+                (u64::from(line.m) * steepness.of_table(&STRETCH_LOW)) >> 16
+            };
+            (u64::from(sample.distance) * length) >> (16 + 16 - Q8)
+        };
+        self.fogged(frame, table, sample, distance_q8)
     }
 
     /// The sky along `d` (Q20, `unit` its unit direction), through the
@@ -832,6 +884,96 @@ fn sky_between(table: &[Rgb; SKY_STEPS + 1], at: usize, fraction: u32) -> Rgb {
 fn fogged_sky(frame: &AtmosphereFrame, up: i64) -> Rgb {
     let (at, fraction) = sky_entry(up.clamp(0, 1 << DIR_BITS));
     sky_between(&frame.sky, at, fraction)
+}
+
+/// How far below (or above) the eye `sample`'s hit is, Q16, within a
+/// word.
+#[inline(always)]
+fn drop(frame: &AtmosphereFrame, sample: &Sample) -> u32 {
+    let drop = (frame.eye_q16 - i64::from(sample.elevation)).unsigned_abs();
+    drop.min(u64::from(u32::MAX)) as u32
+}
+
+/// A ray's slope at and past which it has no run along the major axis.
+const MAX_SLOPE_Q16: u32 = (MAX_RAY_SLOPE as u32) << COORD_FRAC_BITS;
+
+/// `√(1 + u²)` (Q16) for `u` = `i/256`, `i` in 0..=256: a ray's length
+/// over its horizontal length, `u` its slope over its line's `m`, where
+/// that is below 1.
+const STRETCH_LOW: [u32; 257] = {
+    let mut table = [0u32; 257];
+    let mut i = 0;
+    while i < 257 {
+        table[i] = ((65536 + (i * i) as u64) << 16).isqrt() as u32;
+        i += 1;
+    }
+    table
+};
+
+/// `√(1 + 1/u²)` (Q16) for `u = 2^e·(1 + k/32)`, at entry `32e + k`
+/// (`e` in 0..8, the last entry `u = 256`): a ray's length over its
+/// height change, where its slope is `u` times its line's `m`, 1 or more.
+/// Past 256 it is 1 within 2^−17.
+const STRETCH_HIGH: [u32; 257] = {
+    let mut table = [0u32; 257];
+    let mut i = 0;
+    while i < 257 {
+        let (e, k) = ((i / 32) as u32, (i % 32) as u64);
+        // 1/u² = 2^−2e · 32² / (32 + k)², in Q32.
+        let inverse_squared = (1u64 << (42 - 2 * e)) / ((32 + k) * (32 + k));
+        table[i] = ((1u64 << 32) + inverse_squared).isqrt() as u32;
+        i += 1;
+    }
+    table
+};
+
+/// Where a ray whose slope over its line's `m` is `u` lies in the tables
+/// by `u`: [`STRETCH_LOW`] below 1, else [`STRETCH_HIGH`].
+#[derive(Clone, Copy)]
+struct Steepness {
+    steep: bool,
+    at: usize,
+    fraction: i32,
+}
+
+impl Steepness {
+    /// The entry of a ray of `slope` (Q16, within `MAX_RAY_SLOPE`) in
+    /// `line`'s plane.
+    #[inline(always)]
+    fn of(line: &LineShade, slope: i32) -> Self {
+        // Q16, below 2^30.
+        let u = ((u64::from(slope.unsigned_abs()) * u64::from(line.inverse_m)) >> 20) as u32;
+        if u < 1 << 16 {
+            return Self {
+                steep: false,
+                at: (u >> 8) as usize,
+                fraction: (u & 0xFF) as i32,
+            };
+        }
+        let top = 31 - u.leading_zeros();
+        if top >= 16 + 8 {
+            // 256 or more: the last entry.
+            return Self {
+                steep: true,
+                at: 256,
+                fraction: 0,
+            };
+        }
+        Self {
+            steep: true,
+            at: ((top - 16) * 32 + ((u >> (top - 5)) & 31)) as usize,
+            fraction: ((u >> (top - 13)) & 0xFF) as i32,
+        }
+    }
+
+    /// `table` here, blended between its entries.
+    #[inline(always)]
+    fn of_table(&self, table: &[u32; 257]) -> u64 {
+        let low = table[self.at.min(256)] as i32;
+        let high = table[(self.at + 1).min(256)] as i32;
+        // Entries below 2^21, steps below 2^17: within a word.
+        (low + (((high - low) * self.fraction) >> 8)) as u64
+    }
 }
 
 /// Scales a direction (Q20, at least 1 and below 2^7 long) to unit
@@ -971,13 +1113,11 @@ impl FogTable {
 fn between<T: Copy + Into<i64>>(table: &[T; HEIGHT_STEPS + 1], h: i64) -> i64 {
     let step_q8 = HEIGHT_STEP_BITS + Q8;
     let at = (h >> step_q8) as usize;
-    match (table.get(at), table.get(at + 1)) {
-        (Some(&low), Some(&high)) => {
-            let (low, high): (i64, i64) = (low.into(), high.into());
-            low + (((high - low) * (h & ((1 << step_q8) - 1))) >> step_q8)
-        }
-        _ => table[HEIGHT_STEPS].into(),
+    if at >= HEIGHT_STEPS {
+        return table[HEIGHT_STEPS].into();
     }
+    let (low, high): (i64, i64) = (table[at].into(), table[at + 1].into());
+    low + (((high - low) * (h & ((1 << step_q8) - 1))) >> step_q8)
 }
 
 /// A [`Sink`] that gives each pixel its atmosphere (see
@@ -986,6 +1126,7 @@ fn between<T: Copy + Into<i64>>(table: &[T; HEIGHT_STEPS + 1], h: i64) -> i64 {
 pub struct AtmosphereSink<'a, S> {
     air: &'a PreparedAtmosphere,
     frame: AtmosphereFrame,
+    line: LineShade,
     sink: S,
 }
 
@@ -994,6 +1135,53 @@ impl<S: Sink> Sink for AtmosphereSink<'_, S> {
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
         let color = self.air.color(&self.frame, x, y, &sample);
         self.sink.put(x, y, Sample { color, ..sample });
+    }
+
+    #[inline]
+    fn line(&mut self, plane: &LinePlane) {
+        self.line = LineShade::new(plane);
+    }
+
+    #[inline]
+    fn put_ray(&mut self, x: u32, y: u32, sample: Sample, slope: i32) {
+        let color = self
+            .air
+            .ray_color(&self.frame, &self.line, (x, y), &sample, slope);
+        self.sink.put(x, y, Sample { color, ..sample });
+    }
+}
+
+/// What the atmosphere needs of a line's vertical plane (see
+/// [`Sink::line`]): the plane's horizontal length a unit of major-axis
+/// distance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LineShade {
+    /// `m = √(1 + dminor²)`, Q16 (from 1 to √2), and `1/m`, Q20.
+    m: u32,
+    inverse_m: u32,
+}
+
+impl LineShade {
+    /// The shade of `plane`'s rays.
+    pub fn new(plane: &LinePlane) -> Self {
+        let dminor = u64::from(plane.dminor.unsigned_abs());
+        // Once a line: a square root and a division.
+        let m = ((1 << 32) + dminor * dminor).isqrt();
+        Self {
+            m: m as u32,
+            inverse_m: ((1 << 36) / m) as u32,
+        }
+    }
+}
+
+impl Default for LineShade {
+    /// A plane along x (what a sink holds before its first line).
+    fn default() -> Self {
+        Self::new(&LinePlane {
+            x_major: true,
+            forward: true,
+            dminor: 0,
+        })
     }
 }
 
@@ -1077,6 +1265,100 @@ mod tests {
             );
             assert!(worst <= 2.0, "worst channel difference {worst}");
         }
+    }
+
+    #[test]
+    fn a_line_casters_rays_match_the_exact_model_within_two_levels() {
+        // Rendered through the line caster, which gives the sink each
+        // ray's slope in its line's plane: every pixel, sky and terrain,
+        // within two levels of the exact model along the pixel's own
+        // direction (the terrain one color, so the model needs only the
+        // hit). Level, pitched up and down, rolled, straight down.
+        use crate::{render, Framebuffer, NoProbe, Pyramid, RenderOptions, Terrain};
+        const SIDE: usize = 96;
+        let heights: std::vec::Vec<u16> = (0..SIDE * SIDE)
+            .map(|i| {
+                let (x, y) = ((i % SIDE) as f64, (i / SIDE) as f64);
+                ((20.0 + 12.0 * (x * 0.21).sin() * (y * 0.17).cos()) * 16.0) as u16
+            })
+            .collect();
+        let colors = std::vec![[200u8, 60, 20]; SIDE * SIDE];
+        let terrain = Terrain::new(SIDE as u32, SIDE as u32, &heights, &colors).unwrap();
+        let pyramid = Pyramid::flat(terrain);
+        let mut air = Atmosphere::FLIGHT;
+        air.fog = air.fog.map(|fog| Fog {
+            visibility: 60.0,
+            ..fog
+        });
+        // The sun low in the north-east, in view of the first cameras.
+        air.sun = air.sun.map(|sun| Sun {
+            azimuth_deg: 60.0,
+            elevation_deg: 4.0,
+            ..sun
+        });
+        let clear = Atmosphere { fog: None, ..air };
+        let (mut suns, mut skies) = (0, 0);
+        let cameras = [
+            Camera::looking([10.0, 10.0, 40.0], 45.0, 0.0),
+            Camera::looking([10.0, 10.0, 40.0], 45.0, 12.0),
+            Camera::looking([10.0, 80.0, 30.0], 20.0, -10.0),
+            Camera {
+                roll_deg: 30.0,
+                ..Camera::looking([10.0, 10.0, 40.0], 50.0, 8.0)
+            },
+            Camera::looking([48.0, 48.0, 90.0], 0.0, 90.0),
+        ];
+        for (air, camera) in [air, clear]
+            .into_iter()
+            .flat_map(|air| cameras.map(|camera| (air, camera)))
+        {
+            let prepared = air.prepare().unwrap();
+            let view = View::new(&camera, 80, 60).unwrap();
+            let mut hazy = std::vec![[0u8; 3]; 80 * 60];
+            let options = RenderOptions::default();
+            let mut frame = Framebuffer::new(&mut hazy, 80, 60).unwrap();
+            render(
+                &pyramid,
+                &view,
+                &options,
+                &mut prepared.sink(&view, &mut frame),
+                &mut NoProbe,
+            );
+            // The elevations, from a capture of the samples.
+            let mut samples = std::vec![None; 80 * 60];
+            struct Capture<'a>(&'a mut [Option<Sample>]);
+            impl Sink for Capture<'_> {
+                fn put(&mut self, x: u32, y: u32, sample: Sample) {
+                    self.0[(y * 80 + x) as usize] = Some(sample);
+                }
+            }
+            render(
+                &pyramid,
+                &view,
+                &options,
+                &mut Capture(&mut samples),
+                &mut NoProbe,
+            );
+            let (mut worst, mut sky, mut sun) = (0.0f64, 0, 0);
+            for (i, sample) in samples.iter().enumerate() {
+                let sample = sample.unwrap();
+                sky += usize::from(sample.is_sky());
+                sun += usize::from(hazy[i] == air.sun.unwrap().color);
+                let (x, y) = ((i % 80) as u32, (i / 80) as u32);
+                let exact = exact_color(&air, &view, x, y, &sample);
+                for c in 0..3 {
+                    worst = worst.max((f64::from(hazy[i][c]) - exact[c]).abs());
+                }
+            }
+            assert!(worst <= 2.0, "{camera:?}: worst channel difference {worst}");
+            assert!(sky < 80 * 60, "{camera:?} sees terrain");
+            suns += sun;
+            skies += sky;
+        }
+        assert!(
+            suns > 0 && skies > 80 * 60,
+            "the sky and the sun's disc are in view"
+        );
     }
 
     #[test]

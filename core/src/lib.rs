@@ -61,8 +61,8 @@ mod view;
 mod warp;
 
 pub use atmosphere::{
-    Atmosphere, AtmosphereError, AtmosphereFrame, AtmosphereSink, Fog, PreparedAtmosphere, Sun,
-    VISIBILITY_CONTRAST,
+    Atmosphere, AtmosphereError, AtmosphereFrame, AtmosphereSink, Fog, LineShade,
+    PreparedAtmosphere, Sun, VISIBILITY_CONTRAST,
 };
 pub use color::Rgb;
 
@@ -79,7 +79,7 @@ pub use pyramid::{
     HeightFilter, Pyramid, PyramidError, MAX_LEVELS,
 };
 pub use relief::{shade_relief, Relief, ReliefError};
-pub use sink::{Framebuffer, FramebufferError, Sample, Sink};
+pub use sink::{Framebuffer, FramebufferError, LinePlane, Sample, Sink};
 pub use surface::{Extent, Grid, Surface};
 pub use terrain::{Terrain, TerrainError};
 pub use view::{max_lines, Camera, View, ViewError};

@@ -34,10 +34,33 @@ impl Sample {
 /// at pitch 0 each column bottom to top, under pitch in no row or column
 /// order. A sink that needs columns (a display) takes them from a
 /// [`Framebuffer`].
+///
+/// The line caster also says which vertical plane a line's rays share
+/// ([`Sink::line`]) and the slope in it of each ray that hits
+/// ([`Sink::put_ray`]): a sink that shades by the ray's direction (the
+/// atmosphere's fog) takes it from there instead of working it out from
+/// the pixel's position. Sky, and other renderers' pixels, come through
+/// [`Sink::put`].
 pub trait Sink {
     /// Pixel `(x, y)` (y = 0 at the top) is finished. Out-of-range pixels are
     /// the sink's to discard; they must never panic.
     fn put(&mut self, x: u32, y: u32, sample: Sample);
+
+    /// The rays put after this (until the next call) lie in `plane`.
+    #[inline]
+    fn line(&mut self, plane: &LinePlane) {
+        let _ = plane;
+    }
+
+    /// As [`Sink::put`], for a ray of the current line's plane whose height
+    /// changes by `slope` (Q16) a unit of distance along the plane's major
+    /// axis; a ray with no run along it (straight up or down) has
+    /// [`MAX_RAY_SLOPE`](crate::config::MAX_RAY_SLOPE) in size.
+    #[inline(always)]
+    fn put_ray(&mut self, x: u32, y: u32, sample: Sample, slope: i32) {
+        let _ = slope;
+        self.put(x, y, sample);
+    }
 }
 
 impl<S: Sink + ?Sized> Sink for &mut S {
@@ -45,6 +68,29 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
         (**self).put(x, y, sample);
     }
+
+    #[inline]
+    fn line(&mut self, plane: &LinePlane) {
+        (**self).line(plane);
+    }
+
+    #[inline(always)]
+    fn put_ray(&mut self, x: u32, y: u32, sample: Sample, slope: i32) {
+        (**self).put_ray(x, y, sample, slope);
+    }
+}
+
+/// The vertical plane a line's rays share (see [`Sink::line`]): along
+/// it, a unit of distance along the major axis (x or y, forward or back)
+/// moves `dminor` along the other.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LinePlane {
+    /// The major axis is x (else y).
+    pub x_major: bool,
+    /// The rays move toward larger coordinates along the major axis.
+    pub forward: bool,
+    /// Minor-axis change a unit of major-axis distance, Q16 (within ±1).
+    pub dminor: i32,
 }
 
 /// A caller-provided framebuffer: a color per pixel, optionally a distance

@@ -51,7 +51,7 @@ use crate::view::lines::{Line, OwnedPixels, WindowWord};
 use crate::view::lod::LodPlan;
 use crate::view::plane::{slope_quotient, Plane, DIRECTION_WORD_SHIFT};
 use crate::view::words::saturate;
-use crate::{Sample, Sink, View};
+use crate::{LinePlane, Sample, Sink, View};
 
 /// Heights are U12.4; the walk compares them in Q16.
 const HEIGHT_TO_Q16: u32 = COORD_FRAC_BITS - HEIGHT_FRAC_BITS;
@@ -310,6 +310,12 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // The direction's major-axis component, which a ray's set-up needs
         // with its center's vertical one.
         let axis = [if walk.plane.key.x_major { 0 } else { 1 }];
+        sink.line(&LinePlane {
+            x_major: walk.plane.key.x_major,
+            forward: walk.plane.key.forward,
+            // Within ±1 (`Plane::dminor`).
+            dminor: walk.plane.dminor as i32,
+        });
         if walk.first <= walk.last {
             for pixel in pixels.by_ref() {
                 probe.ray();
@@ -376,7 +382,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                     Some(self.hit::<P, NEAREST>(&walk, at, z, &ray, probe))
                 });
                 match hit {
-                    Some(sample) => sink.put(pixel.x, pixel.y, sample),
+                    Some(sample) => sink.put_ray(pixel.x, pixel.y, sample, dz as i32),
                     None => {
                         // It left the terrain: so does every ray after it.
                         sink.put(pixel.x, pixel.y, self.sky);
