@@ -735,9 +735,13 @@ impl PreparedAtmosphere {
         sample: &Sample,
         distance_q8: u64,
     ) -> Rgb {
-        let height_q8 = i64::from(sample.elevation) >> (COORD_FRAC_BITS - Q8);
-        let mean_q16 = between(&frame.mean, height_q8.max(0)) as u64;
-        let weight = self.transmitted(table, (distance_q8 * mean_q16) >> 16);
+        // In words: the height is below 2^20 (Q8), the mean density at
+        // most 1 (Q16), a distance past 2^32 (Q8) lies far past the fog's
+        // opaque distance.
+        let height_q8 = (sample.elevation >> (COORD_FRAC_BITS - Q8)).max(0) as u32;
+        let mean_q16 = mean_density(&frame.mean, height_q8);
+        let distance_q8 = distance_q8.min(u64::from(u32::MAX));
+        let weight = self.transmitted(table, (distance_q8 * u64::from(mean_q16)) >> 16);
         lerp(table.fog.color, sample.color, weight)
     }
 
@@ -1106,6 +1110,19 @@ impl FogTable {
     fn density_at(&self, h: i64) -> i64 {
         between(&self.density, h.max(0))
     }
+}
+
+/// The frame's mean density (Q16, at most 1) from the eye to height `h`
+/// (Q8), as [`between`] in 32-bit words.
+#[inline(always)]
+fn mean_density(table: &[u32; HEIGHT_STEPS + 1], h: u32) -> u32 {
+    let step_q8 = HEIGHT_STEP_BITS + Q8;
+    let at = (h >> step_q8) as usize;
+    if at >= HEIGHT_STEPS {
+        return table[HEIGHT_STEPS];
+    }
+    let (low, high) = (table[at] as i32, table[at + 1] as i32);
+    (low + (((high - low) * (h & ((1 << step_q8) - 1)) as i32) >> step_q8)) as u32
 }
 
 /// `table` (an entry every 4 voxels of height) at height `h >= 0` (Q8),
