@@ -17,8 +17,8 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use terracast::config::{MAX_EYE_HEIGHT, PITCH_RANGE_DEG};
 use terracast::{
     render_line, render_line_by_footprint, AtmosphereFrame, Camera, Coherence, CountingProbe, Grid,
-    LinePool, PreparedAtmosphere, Probe, RenderOptions, Resolution, Sample, Shading, Sink, Surface,
-    View, Wait, U8F8,
+    LinePlane, LinePool, LineShade, PreparedAtmosphere, Probe, RenderOptions, Resolution, Sample,
+    Shading, Sink, Surface, View, Wait, U8F8,
 };
 
 /// How far above the ground the eye stays, voxels.
@@ -330,19 +330,17 @@ impl Pixels {
 }
 
 /// A worker's sink into [`Pixels`], with the atmosphere over each pixel
-/// where there is one.
+/// where there is one, as [`terracast::AtmosphereSink`] gives it (a line
+/// caster's hits by their ray's slope in the line's plane).
 struct PixelSink<'a>(
     &'a Pixels,
     Option<(&'a PreparedAtmosphere, AtmosphereFrame)>,
+    LineShade,
 );
 
-impl Sink for PixelSink<'_> {
+impl PixelSink<'_> {
     #[inline]
-    fn put(&mut self, x: u32, y: u32, sample: Sample) {
-        let color = match &self.1 {
-            Some((air, frame)) => air.color(frame, x, y, &sample),
-            None => sample.color,
-        };
+    fn store(&self, x: u32, y: u32, color: terracast::Rgb) {
         let [r, g, b] = color.map(u32::from);
         if let Some(word) = self
             .0
@@ -351,6 +349,31 @@ impl Sink for PixelSink<'_> {
         {
             word.store(r << 16 | g << 8 | b, Ordering::Relaxed);
         }
+    }
+}
+
+impl Sink for PixelSink<'_> {
+    #[inline]
+    fn put(&mut self, x: u32, y: u32, sample: Sample) {
+        let color = match &self.1 {
+            Some((air, frame)) => air.color(frame, x, y, &sample),
+            None => sample.color,
+        };
+        self.store(x, y, color);
+    }
+
+    #[inline]
+    fn line(&mut self, plane: &LinePlane) {
+        self.2 = LineShade::new(plane);
+    }
+
+    #[inline]
+    fn put_ray(&mut self, x: u32, y: u32, sample: Sample, slope: i32) {
+        let color = match &self.1 {
+            Some((air, frame)) => air.ray_color(frame, &self.2, (x, y), &sample, slope),
+            None => sample.color,
+        };
+        self.store(x, y, color);
     }
 }
 
@@ -371,7 +394,11 @@ pub fn render_pool<T: Surface + Sync + ?Sized>(
     pool.publish(0);
     let worker = || {
         let mut probe = CountingProbe::default();
-        let mut sink = PixelSink(pixels, atmosphere.map(|air| (air, air.frame(view))));
+        let mut sink = PixelSink(
+            pixels,
+            atmosphere.map(|air| (air, air.frame(view))),
+            LineShade::default(),
+        );
         loop {
             match pool.take() {
                 Ok(task) => render_one(
