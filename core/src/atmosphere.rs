@@ -739,7 +739,7 @@ impl PreparedAtmosphere {
         // most 1 (Q16), a distance past 2^32 (Q8) lies far past the fog's
         // opaque distance.
         let height_q8 = (sample.elevation >> (COORD_FRAC_BITS - Q8)).max(0) as u32;
-        let mean_q16 = mean_density(&frame.mean, height_q8);
+        let mean_q16 = between(&frame.mean, height_q8) as u32;
         let distance_q8 = distance_q8.min(u64::from(u32::MAX));
         let weight = self.transmitted(table, (distance_q8 * u64::from(mean_q16)) >> 16);
         lerp(table.fog.color, sample.color, weight)
@@ -759,12 +759,9 @@ impl PreparedAtmosphere {
         sample: &Sample,
         slope: i32,
     ) -> Rgb {
-        let Some(table) = self.fog.as_ref() else {
+        let Some(table) = self.fog.as_ref().filter(|_| !sample.is_sky()) else {
             return self.color(frame, x, y, sample);
         };
-        if sample.is_sky() {
-            return self.color(frame, x, y, sample);
-        }
         // A ray with no run (straight down) has no major-axis distance:
         // its length is its height change.
         let vertical = slope.unsigned_abs() >= MAX_SLOPE_Q16;
@@ -1102,39 +1099,35 @@ impl FogTable {
         if h <= 0 {
             return h;
         }
-        between(&self.column, h)
+        i64::from(between(&self.column, h.min(i64::from(u32::MAX)) as u32))
     }
 
     /// The density (Q16) at height `h` (Q8 voxels): the ground layer's
     /// below 0.
     fn density_at(&self, h: i64) -> i64 {
-        between(&self.density, h.max(0))
+        i64::from(between(
+            &self.density,
+            h.clamp(0, i64::from(u32::MAX)) as u32,
+        ))
     }
 }
 
-/// The frame's mean density (Q16, at most 1) from the eye to height `h`
-/// (Q8), as [`between`] in 32-bit words.
+/// `table` (an entry every 4 voxels of height, each in [0, 2^21): a
+/// step between two times the fraction fits a word) at height `h` (Q8),
+/// linear between entries, held past the last: in 32-bit words.
 #[inline(always)]
-fn mean_density(table: &[u32; HEIGHT_STEPS + 1], h: u32) -> u32 {
+fn between<T: Copy + Into<i64>>(table: &[T; HEIGHT_STEPS + 1], h: u32) -> i32 {
     let step_q8 = HEIGHT_STEP_BITS + Q8;
     let at = (h >> step_q8) as usize;
+    let entry = |i: usize| -> i32 {
+        let v: i64 = table[i].into();
+        v as i32
+    };
     if at >= HEIGHT_STEPS {
-        return table[HEIGHT_STEPS];
+        return entry(HEIGHT_STEPS);
     }
-    let (low, high) = (table[at] as i32, table[at + 1] as i32);
-    (low + (((high - low) * (h & ((1 << step_q8) - 1)) as i32) >> step_q8)) as u32
-}
-
-/// `table` (an entry every 4 voxels of height) at height `h >= 0` (Q8),
-/// linear between entries, held past the last.
-fn between<T: Copy + Into<i64>>(table: &[T; HEIGHT_STEPS + 1], h: i64) -> i64 {
-    let step_q8 = HEIGHT_STEP_BITS + Q8;
-    let at = (h >> step_q8) as usize;
-    if at >= HEIGHT_STEPS {
-        return table[HEIGHT_STEPS].into();
-    }
-    let (low, high): (i64, i64) = (table[at].into(), table[at + 1].into());
-    low + (((high - low) * (h & ((1 << step_q8) - 1))) >> step_q8)
+    let (low, high) = (entry(at), entry(at + 1));
+    low + (((high - low) * (h & ((1 << step_q8) - 1)) as i32) >> step_q8)
 }
 
 /// A [`Sink`] that gives each pixel its atmosphere (see
@@ -1192,13 +1185,10 @@ impl LineShade {
 }
 
 impl Default for LineShade {
-    /// A plane along x (what a sink holds before its first line).
+    /// A plane along a grid axis (what a sink holds before its first
+    /// line).
     fn default() -> Self {
-        Self::new(&LinePlane {
-            x_major: true,
-            forward: true,
-            dminor: 0,
-        })
+        Self::new(&LinePlane { dminor: 0 })
     }
 }
 

@@ -80,15 +80,12 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     }
 }
 
-/// The vertical plane a line's rays share (see [`Sink::line`]): along
-/// it, a unit of distance along the major axis (x or y, forward or back)
-/// moves `dminor` along the other.
+/// The vertical plane a line's rays share (see [`Sink::line`]), as far
+/// as a sink needs it: along it, a unit of distance along the major axis
+/// (x or y, whichever the plane runs along faster) moves `dminor` along
+/// the other.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LinePlane {
-    /// The major axis is x (else y).
-    pub x_major: bool,
-    /// The rays move toward larger coordinates along the major axis.
-    pub forward: bool,
     /// Minor-axis change a unit of major-axis distance, Q16 (within ±1).
     pub dminor: i32,
 }

@@ -311,8 +311,6 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // with its center's vertical one.
         let axis = [if walk.plane.key.x_major { 0 } else { 1 }];
         sink.line(&LinePlane {
-            x_major: walk.plane.key.x_major,
-            forward: walk.plane.key.forward,
             // Within ±1 (`Plane::dminor`).
             dminor: walk.plane.dminor as i32,
         });
