@@ -54,6 +54,7 @@ mod pyramid;
 mod relief;
 pub mod roughness;
 mod sink;
+mod sticks;
 mod surface;
 mod terrain;
 pub mod tiles;
@@ -80,6 +81,7 @@ pub use pyramid::{
 };
 pub use relief::{shade_relief, Relief, ReliefError};
 pub use sink::{Framebuffer, FramebufferError, LinePlane, Sample, Sink};
+pub use sticks::{Stick, StickError, StickGrid, StickLayer, WithSticks};
 pub use surface::{Extent, Grid, Surface};
 pub use terrain::{Terrain, TerrainError};
 pub use view::{max_lines, Camera, View, ViewError};

@@ -59,6 +59,28 @@ pub trait Grid: Copy {
     fn color_pair(&self, index: isize, across: isize) -> Option<(Rgb, Rgb)> {
         Some((self.color(index)?, self.color(index + across)?))
     }
+    /// [`Grid::color_pair`] where a ray crosses the surface at height `z`
+    /// (Q16): what an object standing at a point shows at that height
+    /// ([`crate::WithSticks`]); the grid's own colors by default.
+    #[inline(always)]
+    fn color_pair_at(&self, index: isize, across: isize, z: i32) -> Option<(Rgb, Rgb)> {
+        let _ = z;
+        self.color_pair(index, across)
+    }
+    /// Whether an object stands at `index` or `index + across` as high as
+    /// `z` (Q16) or higher: a crossing at `z` next to it is on its wall
+    /// ([`crate::StickLayer::pair`]). Never, by default.
+    #[inline(always)]
+    fn stands(&self, index: isize, across: isize, z: i32) -> bool {
+        let _ = (index, across, z);
+        false
+    }
+    /// [`Grid::color`] at height `z` (Q16), as [`Grid::color_pair_at`].
+    #[inline(always)]
+    fn color_at(&self, index: isize, z: i32) -> Option<Rgb> {
+        let _ = z;
+        self.color(index)
+    }
 }
 
 /// A terrain and its coarser levels, as the caster reads them.

@@ -40,7 +40,7 @@
 
 use super::first_hit::first_hit;
 use super::footprint_color::{color_level, levels_color, narrower_side};
-use super::walk::{lerp, line_color};
+use super::walk::{along_weight, lerp, line_color};
 use super::{crossing_fraction, sky, Coherence, Frame, RenderOptions, Shading, VerticalSamples};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_WALK_LEVEL};
@@ -639,16 +639,20 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // A crossing behind the eye (a ray that starts inside the terrain)
         // is the eye itself: distance 0, and the ray's height there.
         let distance = (hit_distance - (back << 8)).max(0);
+        // The crossing's height, where an object standing on the hit's
+        // grid points is seen; worked out where it is used (on a plain
+        // terrain only the sample takes it).
+        let elevation = || {
+            saturate(z - ((i64::from(hit_distance - distance) * i64::from(dz)) >> COORD_FRAC_BITS))
+        };
         let sample = |color| Sample {
             color,
             distance: distance as u32,
-            elevation: saturate(
-                z - ((i64::from(hit_distance - distance) * i64::from(dz)) >> COORD_FRAC_BITS),
-            ),
+            elevation: elevation(),
         };
         if NEAREST {
             let aside = ((i64::from(drift) * i64::from(hit_distance)) >> COORD_FRAC_BITS) as i32;
-            return match self.nearest_color(walk, at, aside, probe) {
+            return match self.nearest_color(walk, at, aside, elevation(), probe) {
                 Some(color) => sample(color),
                 None => self.sky,
             };
@@ -675,18 +679,21 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         if at.level > 0 {
             // A coarse hit whose footprint found no color (at the map's
             // edge): its own level's grid line.
-            return sample(self.coarse_color(walk, at, aside, probe));
+            return sample(self.coarse_color(walk, at, aside, elevation(), probe));
         }
-        let on_hit = self.line_color(walk, 0, at.index, at.minor, aside, probe);
+        let (on_hit, hit_cell) =
+            self.line_color(walk, 0, (at.index, at.minor), aside, elevation(), probe);
         let color = if above.is_some() && t < 256 {
-            let before = self.line_color(
+            let (before, before_cell) = self.line_color(
                 walk,
                 0,
-                at.index - walk.step[0],
-                at.minor - walk.minor_step[0],
+                (at.index - walk.step[0], at.minor - walk.minor_step[0]),
                 aside - drift,
+                elevation(),
                 probe,
             );
+            let cells = (before_cell, hit_cell);
+            let t = along_weight(&self.grids[0], cells, walk.across[0], elevation(), t);
             lerp(before, on_hit, t)
         } else {
             on_hit
@@ -721,27 +728,28 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
 
     /// The color of `level` where the sample on its major grid line
     /// `index` at minor coordinate `minor` crosses its minor grid line,
-    /// looked up `aside` (Q16) across the line: the two voxels across the
-    /// line blended by the subvoxel weight (the sky's color where the map
-    /// has none).
+    /// looked up `aside` (Q16) across the line, the ray at height `z`: the
+    /// two voxels across the line blended by the subvoxel weight (the
+    /// sky's color where the map has none); and the index of the first of
+    /// the two (where an object may stand, [`Grid::stands`]).
     #[inline(always)]
     fn line_color<P: Probe>(
         &self,
         walk: &LineWalk,
         level: u8,
-        index: isize,
-        mut minor: i32,
+        (index, mut minor): (isize, i32),
         aside: i32,
+        z: i32,
         probe: &mut P,
-    ) -> Rgb {
+    ) -> (Rgb, isize) {
         if aside != 0 {
             minor = walk.aside(minor, aside);
         }
         let (l, across) = (usize::from(level), walk.across[usize::from(level)]);
-        let color = line_color(&self.grids[l], index, across, minor, level);
+        let color = line_color(&self.grids[l], index, across, minor, level, z);
         let cell = index + (minor >> (COORD_FRAC_BITS + u32::from(level))) as isize * across;
         probe.color(level, cell as usize);
-        color.unwrap_or(self.sky.color)
+        (color.unwrap_or(self.sky.color), cell)
     }
 
     /// The color of the voxel of the hit's level nearest to where the hit
@@ -754,6 +762,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         walk: &LineWalk,
         at: &At,
         aside: i32,
+        z: i32,
         probe: &mut P,
     ) -> Option<Rgb> {
         let minor = if aside == 0 {
@@ -771,14 +780,22 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             cell + across
         };
         probe.color(at.level, cell as usize);
-        self.grids[l].color(nearest)
+        self.grids[l].color_at(nearest, z)
     }
 
     /// [`LineCaster::line_color`] on a coarse hit's own level. Out of line:
     /// rare (a coarse hit whose footprint found no color).
     #[inline(never)]
-    fn coarse_color<P: Probe>(&self, walk: &LineWalk, at: &At, aside: i32, probe: &mut P) -> Rgb {
-        self.line_color(walk, at.level, at.index, at.minor, aside, probe)
+    fn coarse_color<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        at: &At,
+        aside: i32,
+        z: i32,
+        probe: &mut P,
+    ) -> Rgb {
+        self.line_color(walk, at.level, (at.index, at.minor), aside, z, probe)
+            .0
     }
 
     /// The color at the crossing `crossing`/256 samples along the line,

@@ -262,8 +262,9 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
         // Colored as a hit there would be: by the footprint past the color
         // reach (at the sample itself; there is no crossing), else level 0's
         // grid line.
-        let color = footprint_color(surface, ray, &at, 0, None, 0, probe)
-            .or_else(|| Stage::new(surface, ray, at.level).color(&ray.color_cursor(&at), probe));
+        let color = footprint_color(surface, ray, &at, 0, None, 0, probe).or_else(|| {
+            Stage::new(surface, ray, at.level).color(&ray.color_cursor(&at), at.z, probe)
+        });
         match color {
             Some(color) => Sample {
                 color,
@@ -325,7 +326,7 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
         // The walk's last stage, unless a retrace left its level.
         let stage = walked.on_level(surface, ray, hit.level);
         let color = if options.shading == Shading::Nearest {
-            stage.nearest_color(&ray.color_cursor(&hit), probe)
+            stage.nearest_color(&ray.color_cursor(&hit), position.elevation, probe)
         } else {
             // Most hits are near the eye, on level 0 (the crossing is no
             // farther than the hit sample): their colors need no coarse level,
@@ -340,9 +341,11 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
             far.or_else(|| {
                 // Level 0 is fine enough: its colors on the hit's grid line and
                 // (when known) the one before, blended by where the ray crossed.
+                let z = position.elevation;
+                let hit_cursor = ray.color_cursor(&hit);
                 let on_hit_line = stage
-                    .color(&ray.color_cursor(&hit), probe)
-                    .or_else(|| stage.color(&hit, probe))?;
+                    .color(&hit_cursor, z, probe)
+                    .or_else(|| stage.color(&hit, z, probe))?;
                 let Some((k, f)) = before else {
                     return Some(on_hit_line);
                 };
@@ -355,12 +358,15 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
                     other_level = Stage::new(surface, ray, before.level);
                     &other_level
                 };
-                Some(
-                    match before_stage.color(&ray.color_cursor(&before), probe) {
-                        Some(on_line_before) => lerp(on_line_before, on_hit_line, f),
-                        None => on_hit_line,
-                    },
-                )
+                let before_cursor = ray.color_cursor(&before);
+                Some(match before_stage.color(&before_cursor, z, probe) {
+                    Some(on_line_before) => {
+                        let cursors = (&before_cursor, &hit_cursor);
+                        let f = stage.along_weight(before_stage, cursors, z, f);
+                        lerp(on_line_before, on_hit_line, f)
+                    }
+                    None => on_hit_line,
+                })
             })
         };
         let Some(color) = color else {

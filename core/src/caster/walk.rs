@@ -147,8 +147,38 @@ impl<G: Grid> Stage<G> {
         Some((cell, self.clearance_in(&cell, at.minor, at.z)))
     }
 
+    /// The index of the first voxel of the grid line a sample is on.
+    #[inline(always)]
+    pub fn line_start(&self, at: &Cursor) -> isize {
+        index(at.base, self.minor_stride, at.minor, self.level)
+    }
+
+    /// Where the ray crosses at height `z` (Q16), `t`/256 of the way from
+    /// the sample `before` (on `before_stage`) to the hit sample `hit` on
+    /// this stage: the hit's weight against the sample before
+    /// ([`along_weight`], on level 0; `t` elsewhere).
+    #[inline(always)]
+    pub fn along_weight(
+        &self,
+        before_stage: &Self,
+        (before, hit): (&Cursor, &Cursor),
+        z: i32,
+        t: u32,
+    ) -> u32 {
+        if self.level != 0 || before_stage.level != 0 {
+            return t;
+        }
+        along_weight(
+            &self.here,
+            (self.line_start(before), self.line_start(hit)),
+            self.minor_stride,
+            z,
+            t,
+        )
+    }
+
     /// The color of the voxel nearest a sample, on this level alone.
-    pub fn nearest_color<P: Probe>(&self, at: &Cursor, probe: &mut P) -> Option<Rgb> {
+    pub fn nearest_color<P: Probe>(&self, at: &Cursor, z: i32, probe: &mut P) -> Option<Rgb> {
         let i = index(at.base, self.minor_stride, at.minor, self.level);
         let half = 1 << (COORD_FRAC_BITS - 1 + u32::from(self.level));
         let nearest = if at.minor & ((half << 1) - 1) < half {
@@ -157,7 +187,7 @@ impl<G: Grid> Stage<G> {
             i + self.minor_stride
         };
         probe.color(self.level, i as usize);
-        self.here.color(nearest)
+        self.here.color_at(nearest, z)
     }
 
     /// The color where a sample's grid line is crossed: two voxels of this
@@ -167,8 +197,15 @@ impl<G: Grid> Stage<G> {
     ///
     /// Reported to `probe` once a color was found: a lookup that finds
     /// none leaves the caller to try another, uncounted.
-    pub fn color<P: Probe>(&self, at: &Cursor, probe: &mut P) -> Option<Rgb> {
-        let color = line_color(&self.here, at.base, self.minor_stride, at.minor, self.level)?;
+    pub fn color<P: Probe>(&self, at: &Cursor, z: i32, probe: &mut P) -> Option<Rgb> {
+        let color = line_color(
+            &self.here,
+            at.base,
+            self.minor_stride,
+            at.minor,
+            self.level,
+            z,
+        )?;
         probe.color(
             self.level,
             index(at.base, self.minor_stride, at.minor, self.level) as usize,
@@ -218,7 +255,8 @@ impl Recent {
 
 /// Two colors across a grid line blended by the subvoxel weight: at minor
 /// coordinate `minor` (Q16, world voxels) of level `level`'s grid line
-/// starting at `base`, the neighbour `minor_stride` away.
+/// starting at `base`, the neighbour `minor_stride` away, where the ray
+/// crosses the surface at height `z` (Q16; see [`Grid::color_pair_at`]).
 #[inline]
 pub(crate) fn line_color<G: Grid>(
     grid: &G,
@@ -226,12 +264,33 @@ pub(crate) fn line_color<G: Grid>(
     minor_stride: isize,
     minor: i32,
     level: u8,
+    z: i32,
 ) -> Option<Rgb> {
     let i = index(base, minor_stride, minor, level);
     let weight =
         (minor >> (COORD_FRAC_BITS - WEIGHT_BITS + u32::from(level))) & ((1 << WEIGHT_BITS) - 1);
-    let (c0, c1) = grid.color_pair(i, minor_stride)?;
+    let (c0, c1) = grid.color_pair_at(i, minor_stride, z)?;
     Some(lerp(c0, c1, weight as u32))
+}
+
+/// The weight (of 256) a hit's color takes against the color at the
+/// sample before it, where the ray crosses the surface `t`/256 of the way
+/// between them at height `z` (Q16): `t`, but where an object stands on
+/// one of the two grid lines and not on the other, the crossing is on its
+/// wall, whose color is that line's alone (see [`Grid::stands`]).
+#[inline(always)]
+pub(crate) fn along_weight<G: Grid>(
+    grid: &G,
+    (before, hit): (isize, isize),
+    across: isize,
+    z: i32,
+    t: u32,
+) -> u32 {
+    match (grid.stands(before, across, z), grid.stands(hit, across, z)) {
+        (false, true) => 256,
+        (true, false) => 0,
+        _ => t,
+    }
 }
 
 /// Blends `a` toward `b` by `t`/256 (`WEIGHT_BITS` = 8).
