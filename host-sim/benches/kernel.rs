@@ -24,7 +24,11 @@
 //!   with the flight's sky, sun and fog (`Atmosphere::FLIGHT`), each
 //!   frame's time against the one without.
 //!
-//! The `roll` and `atmosphere` tables are timed apart from criterion: the
+//! * `objects` (a table only): the built-in scene with its wood and village
+//!   (`--objects`) against the same scene bare, four views, each frame's
+//!   time against the bare one's.
+//!
+//! The `roll`, `atmosphere` and `objects` tables are timed apart from criterion: the
 //! renders a table compares take turns, 25 rounds, and each keeps its
 //! best, so that a change in the shared machine's load falls on all alike.
 //!
@@ -444,6 +448,7 @@ fn main() {
     }
 
     atmosphere_table(&levels_for(&RenderOptions::default()), pixels);
+    objects_table(pixels);
 
     println!("\n| roll (pitch 10) | steps/pixel | ns/pixel | time against roll 0 |");
     println!("|---|---|---|---|");
@@ -516,6 +521,70 @@ fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
             fog / off,
             flight / pixels as f64,
             flight / off
+        );
+    }
+}
+
+/// The cost of 3D objects: the built-in scene (1024², seed 1) with its
+/// wood and village planted (`--objects`) against the same scene bare,
+/// from the views of the objects accuracy test (`tests/tests/objects.rs`),
+/// the renders taking turns ([`best_in_turns`]).
+fn objects_table(pixels: u64) {
+    let bare = procedural(1024, 1);
+    let mut planted = bare.clone();
+    let planting = planted.plant_objects(1);
+    let views = [
+        ("default", Camera::looking(bare.default_eye(), 90.0, 12.0)),
+        (
+            "into the wood",
+            Camera::looking([420.0, 300.0, 140.0], 60.0, 8.0),
+        ),
+        (
+            "over the village",
+            Camera::looking([200.0, 560.0, 190.0], 20.0, 35.0),
+        ),
+        (
+            "grazing",
+            Camera::looking([600.0, 150.0, 110.0], 110.0, 2.0),
+        ),
+    ];
+    let scenes = [bare, planted].map(|scene| scene.to_kernel().expect("kernel scene"));
+    let default = RenderOptions::default();
+    let pyramids = scenes
+        .each_ref()
+        .map(|k| k.pyramid_for(&default).expect("pyramid"));
+    let sticks = scenes[1]
+        .sticks()
+        .expect("sticks")
+        .expect("objects planted");
+    let with_sticks = terracast::WithSticks::new(&pyramids[1], sticks);
+    println!("\nobjects: {planting}");
+    println!("\n| view | bare ns/pixel | with objects ns/pixel | against bare | bare steps/pixel | with objects steps/pixel |");
+    println!("|---|---|---|---|---|---|");
+    let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+    for (name, camera) in views {
+        let view = View::new(&camera, SIZE.0, SIZE.1).expect("view");
+        let (mut bare_steps, mut planted_steps) =
+            (CountingProbe::default(), CountingProbe::default());
+        render(&pyramids[0], &view, &default, &mut buffer, &mut bare_steps);
+        render(
+            &with_sticks,
+            &view,
+            &default,
+            &mut buffer,
+            &mut planted_steps,
+        );
+        let best = best_in_turns(2, |i| match i {
+            0 => render(&pyramids[0], &view, &default, &mut buffer, &mut NoProbe),
+            _ => render(&with_sticks, &view, &default, &mut buffer, &mut NoProbe),
+        });
+        println!(
+            "| {name} | {:.1} | {:.1} | {:.2}x | {:.2} | {:.2} |",
+            best[0] / pixels as f64,
+            best[1] / pixels as f64,
+            best[1] / best[0],
+            bare_steps.steps as f64 / pixels as f64,
+            planted_steps.steps as f64 / pixels as f64,
         );
     }
 }

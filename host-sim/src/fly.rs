@@ -25,8 +25,9 @@ use crate::metrics::psnr;
 use crate::scene::{KernelScene, Scene};
 use crate::sim::Machine;
 use terracast::{
-    control_points, with_margin, Camera, CountingProbe, Framebuffer, Governor, PreparedAtmosphere,
-    RenderOptions, Rgb, Sample, View, Warp, MAX_COLOR_FETCHES_A_RAY,
+    control_points, with_margin, Camera, CountingProbe, FrameCost, Framebuffer, Governor,
+    PreparedAtmosphere, RenderOptions, Rgb, Sample, Surface, View, Warp, WithSticks,
+    MAX_COLOR_FETCHES_A_RAY,
 };
 
 /// A camera path: keyframes in time, linearly interpolated.
@@ -318,6 +319,28 @@ struct Render {
     millis: f64,
 }
 
+/// One frame of `surface` within `governor`'s budget, through the
+/// flight's atmosphere when it has one.
+fn governed<T: Surface + ?Sized>(
+    governor: &mut Governor,
+    surface: &T,
+    view: &View,
+    options: &FlyOptions,
+    frame: &mut Framebuffer,
+    counts: &mut CountingProbe,
+) -> FrameCost {
+    match &options.atmosphere {
+        Some(air) => governor.render(
+            surface,
+            view,
+            &options.render,
+            &mut air.sink(view, frame),
+            counts,
+        ),
+        None => governor.render(surface, view, &options.render, frame, counts),
+    }
+}
+
 /// Flies `path` over `scene` on `machine`; `progress` is called after each
 /// display frame with its number.
 pub fn fly(
@@ -337,6 +360,7 @@ pub fn fly(
         return Err(Error::new("the render rate cannot exceed the display rate"));
     }
     let pyramid = kernel.pyramid_for(&options.render)?;
+    let sticks = kernel.sticks()?;
     let first = path.camera(0.0, options.hfov);
     let (_, render_size) = with_margin(&first, options.size, options.margin);
     // The budget: the rendering period's cycles on the workers, less the
@@ -375,15 +399,16 @@ pub fn fly(
         let mut frame = Framebuffer::with_distances(&mut colors, &mut distances, size.0, size.1)
             .map_err(|e| Error::new(e.to_string()))?;
         let mut counts = CountingProbe::default();
-        let cost = match &options.atmosphere {
-            Some(air) => governor.render(
-                &pyramid,
+        let cost = match sticks {
+            Some(layer) => governed(
+                governor,
+                &WithSticks::new(&pyramid, layer),
                 &view,
-                &options.render,
-                &mut air.sink(&view, &mut frame),
+                options,
+                &mut frame,
                 &mut counts,
             ),
-            None => governor.render(&pyramid, &view, &options.render, &mut frame, &mut counts),
+            None => governed(governor, &pyramid, &view, options, &mut frame, &mut counts),
         };
         let seconds = (rays * c.per_ray
             + counts.color_fetches * c.per_color

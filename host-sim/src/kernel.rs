@@ -7,7 +7,7 @@ use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
     render, render_by_footprint, Camera, Coherence, CountingProbe, PreparedAtmosphere, Probe,
-    RenderOptions, Sample, Sink, Surface, View,
+    RenderOptions, Sample, Sink, Surface, View, WithSticks,
 };
 
 /// How many rays each pixel gets.
@@ -108,9 +108,18 @@ pub fn render_kernel_in(
     atmosphere: Option<&PreparedAtmosphere>,
 ) -> Result<(Frame, RenderStats)> {
     let pyramid = scene.pyramid_for(options)?;
-    let (frame, mut stats) =
-        render_surface_in(&pyramid, camera, (width, height), options, rays, atmosphere)?;
-    stats.resident_bytes = pyramid.bytes() as u64;
+    let size = (width, height);
+    let (frame, mut stats) = match scene.sticks()? {
+        Some(sticks) => {
+            let surface = WithSticks::new(&pyramid, sticks);
+            let (frame, mut stats) =
+                render_surface_in(&surface, camera, size, options, rays, atmosphere)?;
+            stats.resident_bytes = sticks.bytes() as u64;
+            (frame, stats)
+        }
+        None => render_surface_in(&pyramid, camera, size, options, rays, atmosphere)?,
+    };
+    stats.resident_bytes += pyramid.bytes() as u64;
     if let Some(levels) = &mut stats.levels {
         levels.levels = pyramid.levels();
     }

@@ -17,6 +17,7 @@ pub mod fly;
 pub mod frame;
 pub mod kernel;
 pub mod metrics;
+pub mod objects;
 pub mod output;
 pub mod outputs;
 pub mod reference;

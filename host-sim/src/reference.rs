@@ -250,7 +250,11 @@ impl<'s> Reference<'s> {
                                         );
                                         let hit = self.intersect(rays.eye, dir, &mut count);
                                         let c = match (hit, &options.atmosphere) {
-                                            (Some(hit), None) => self.color_at(hit.x, hit.y),
+                                            (Some(hit), None) => self.scene.color_at_height(
+                                                hit.x,
+                                                hit.y,
+                                                rays.eye[2] + hit.t * dir[2],
+                                            ),
                                             (None, None) => options.sky.map(f64::from),
                                             (hit, Some(air)) => {
                                                 let eye = rays.eye[2];
@@ -258,7 +262,11 @@ impl<'s> Reference<'s> {
                                                     (hit.t * length(dir), eye + hit.t * dir[2])
                                                 });
                                                 let color = hit.map_or([0.0; 3], |hit| {
-                                                    self.color_at(hit.x, hit.y)
+                                                    self.scene.color_at_height(
+                                                        hit.x,
+                                                        hit.y,
+                                                        eye + hit.t * dir[2],
+                                                    )
                                                 });
                                                 air.exact(dir, eye, at, color)
                                             }

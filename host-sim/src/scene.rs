@@ -16,8 +16,10 @@ pub use procedural::{color_by_height_and_slope, procedural};
 pub(crate) use procedural::{terrain_color, value_noise, WATER_LEVEL};
 
 use crate::error::{Error, Result};
+use crate::objects::Objects;
 use terracast::{
-    pyramid_cells, pyramid_points, HeightFilter, Pyramid, RenderOptions, Resolution, Rgb, Terrain,
+    pyramid_cells, pyramid_points, HeightFilter, Pyramid, RenderOptions, Resolution, Rgb,
+    StickLayer, Terrain,
 };
 
 /// A height field and its colors, one per grid point, row-major.
@@ -31,6 +33,9 @@ pub struct Scene {
     pub heights: Vec<f32>,
     /// Color of each grid point.
     pub colors: Vec<Rgb>,
+    /// 3D objects standing on the terrain, as sticks ([`crate::objects`]):
+    /// `heights` are their tops where they stand.
+    pub objects: Option<Objects>,
 }
 
 /// A scene in the kernel's storage format with its pyramid; lends a
@@ -49,6 +54,7 @@ pub struct KernelScene {
     /// `Pyramid::new` (a pass over a quarter of the rows: on a 4096² map
     /// about as long as a 320 × 240 render).
     roughness: u8,
+    objects: Option<Objects>,
 }
 
 /// Loads a height map and its color map (colored by height and slope when
@@ -157,7 +163,24 @@ impl Scene {
             depth,
             heights,
             colors,
+            objects: None,
         })
+    }
+
+    /// Plants a wood and a village on the terrain by a rule seeded with
+    /// `seed` ([`crate::objects::plant`]), and reports what it planted in
+    /// one line.
+    pub fn plant_objects(&mut self, seed: u64) -> String {
+        let objects = crate::objects::plant(self, seed);
+        let line = format!(
+            "planted {} trees and {} houses: {} sticks on {} grid points",
+            objects.trees,
+            objects.houses,
+            objects.sticks.len(),
+            objects.points_with_sticks()
+        );
+        self.objects = Some(objects);
+        line
     }
 
     /// Height of grid point (x, y).
@@ -190,6 +213,37 @@ impl Scene {
         let (i, j, fx, fy) = self.cell_at(x, y);
         let at = |a: usize, b: usize| self.colors[b * self.width as usize + a].map(f64::from);
         let (a, b, c, e) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
+        core::array::from_fn(|k| {
+            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy
+        })
+    }
+
+    /// [`Scene::color_at`] where a ray meets the surface at height `z`:
+    /// a corner that holds a stick shows its texel at `z`, and a corner
+    /// lower than `z` beside a stick that stands as high shows that
+    /// stick's texel, the wall's (as the kernel's `StickLayer::pair`).
+    pub fn color_at_height(&self, x: f64, y: f64, z: f64) -> [f64; 3] {
+        let Some(objects) = &self.objects else {
+            return self.color_at(x, y);
+        };
+        let (i, j, fx, fy) = self.cell_at(x, y);
+        let w = self.width as usize;
+        let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)].map(|(a, b)| b * w + a);
+        let top = |c: usize| f64::from(self.heights[c]);
+        let wall = corners
+            .iter()
+            .filter(|&&c| objects.stands(c, top(c), z))
+            .max_by(|&&a, &&b| top(a).total_cmp(&top(b)))
+            .and_then(|&c| objects.texel(c, top(c), z));
+        let [a, b, c, e] = corners.map(|c| {
+            let own = objects.texel(c, top(c), z);
+            let seen = match (own, wall) {
+                (Some(texel), _) => texel,
+                (None, Some(texel)) if top(c) < z => texel,
+                _ => self.colors[c],
+            };
+            seen.map(f64::from)
+        });
         core::array::from_fn(|k| {
             (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy
         })
@@ -239,6 +293,7 @@ impl Scene {
             coarse_colors: vec![[0; 3]; pyramid_points(w, d)],
             bounds: vec![0; pyramid_cells(w, d)],
             roughness: 0,
+            objects: self.objects.clone(),
         };
         let terrain = Terrain::new(w, d, &scene.heights, &scene.colors)
             .map_err(|e| Error::new(format!("terrain rejected by the kernel: {e}")))?;
@@ -291,6 +346,18 @@ impl KernelScene {
         } else {
             Ok(full)
         }
+    }
+
+    /// The kernel's layer of the scene's objects, if it has any.
+    pub fn sticks(&self) -> Result<Option<StickLayer<'_>>> {
+        let Some(objects) = &self.objects else {
+            return Ok(None);
+        };
+        let terrain = self.terrain()?;
+        objects
+            .layer(&terrain)
+            .map(Some)
+            .map_err(|e| Error::new(format!("objects rejected by the kernel: {e}")))
     }
 
     /// The filter the coarse heights were made with.

@@ -250,9 +250,13 @@ struct SceneArgs {
     /// [default: 1024; `sim --table`: 4096].
     #[arg(long, value_name = "N", value_parser = number(2u32, 8192), allow_hyphen_values = true)]
     procedural_size: Option<u32>,
-    /// Seed of the procedural scene.
+    /// Seed of the procedural scene (and of the objects' planting).
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = seed, allow_hyphen_values = true)]
     seed: u64,
+    /// Plant a wood and a village on the terrain by a rule seeded with
+    /// --seed: 3D objects as sticks (trees and houses).
+    #[arg(long)]
+    objects: bool,
 }
 
 /// Where the camera is and where it looks.
@@ -496,6 +500,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     }
     let files = RenderFiles::name(&args, &mut outputs)?;
     if let Some(spec) = &args.terrain {
+        args.scene.refuse_objects("a tiled terrain (--terrain)")?;
         return paging::render_tiled_command(&args, spec, outputs, files);
     }
     let mut scene = load_scene(&args.scene)?;
@@ -677,6 +682,16 @@ impl KernelArgs {
 }
 
 impl SceneArgs {
+    /// `--objects` refused where `what` cannot carry them yet.
+    fn refuse_objects(&self, what: &str) -> Result<()> {
+        if self.objects {
+            return Err(Error::new(format!(
+                "--objects plants on a terrain in memory; {what} does not carry objects yet"
+            )));
+        }
+        Ok(())
+    }
+
     /// Names the files the scene is read from as inputs.
     fn name_inputs(&self, outputs: &mut Outputs) {
         if let Some(path) = &self.height {
@@ -695,6 +710,15 @@ fn load_scene(args: &SceneArgs) -> Result<Scene> {
 /// The scene the arguments name; the built-in one is `default_side` a side
 /// unless --procedural-size says otherwise.
 fn load_scene_or(args: &SceneArgs, default_side: u32) -> Result<Scene> {
+    let mut scene = load_terrain(args, default_side)?;
+    if args.objects {
+        eprintln!("{}", scene.plant_objects(args.seed));
+    }
+    Ok(scene)
+}
+
+/// The terrain the arguments name, without objects.
+fn load_terrain(args: &SceneArgs, default_side: u32) -> Result<Scene> {
     match (&args.height, args.color.as_slice()) {
         (None, [_, ..]) => Err(Error::new("--color needs --height")),
         (None, []) => Ok(procedural(

@@ -122,6 +122,7 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
     } else {
         (DEFAULT_PROCEDURAL_SIDE, DEFAULT_HFOV_DEG)
     };
+    args.scene.refuse_objects("sim")?;
     let scene = load_scene_or(&args.scene, side)?;
     let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
     let [yaw, pitch] = super::DEFAULT_YAW_PITCH;

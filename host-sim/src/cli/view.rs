@@ -20,7 +20,10 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::time::Instant;
 use terracast::config::DEFAULT_HFOV_DEG;
-use terracast::{Camera, PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, View};
+use terracast::{
+    Camera, PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, StickLayer, View,
+    WithSticks,
+};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
 use winit::event::{ElementState, MouseButton, WindowEvent};
@@ -123,6 +126,7 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
     let world = match &args.terrain {
         Some(spec) => {
             args.atmosphere.check_tiled()?;
+            args.scene.refuse_objects("a tiled terrain (--terrain)")?;
             let terrain = Terrain::open(spec, args.scene.seed)?;
             if let (Terrain::File(file), Some(wanted)) = (&terrain, args.kernel.height_filter) {
                 if file.filter() != terracast::HeightFilter::from(wanted) {
@@ -151,6 +155,7 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
             World::Memory {
                 flat: Box::new(Pyramid::flat(*full.base())),
                 full: Box::new(full),
+                sticks: scene.0.sticks()?,
                 eye: scene.1,
             }
         }
@@ -300,6 +305,8 @@ enum World<'s> {
     Memory {
         full: Box<Pyramid<'s>>,
         flat: Box<Pyramid<'s>>,
+        /// Its objects (`--objects`), if any.
+        sticks: Option<StickLayer<'s>>,
         eye: [f32; 3],
     },
     /// A tiled terrain through the tile cache.
@@ -343,7 +350,9 @@ impl World<'_> {
     ) -> Result<u64> {
         let size = pixels.size();
         match self {
-            Self::Memory { full, flat, .. } => {
+            Self::Memory {
+                full, flat, sticks, ..
+            } => {
                 let view = View::new(camera, size.0, size.1).map_err(view_error)?;
                 let surface: &Pyramid = if options.0.resolution == Resolution::Single
                     && !options.0.hierarchical_first_hit
@@ -352,7 +361,13 @@ impl World<'_> {
                 } else {
                     full
                 };
-                Ok(render_pool(surface, &view, options, rays, threads, pixels))
+                Ok(match sticks {
+                    Some(layer) => {
+                        let surface = WithSticks::new(surface, *layer);
+                        render_pool(&surface, &view, options, rays, threads, pixels)
+                    }
+                    None => render_pool(surface, &view, options, rays, threads, pixels),
+                })
             }
             Self::Tiled(viewer) => {
                 let (steps, _misses) =

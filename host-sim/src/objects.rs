@@ -1,0 +1,464 @@
+//! 3D objects on a terrain as sticks (the kernel's [`StickLayer`]): a
+//! procedural library of trees and houses, planted as a wood and a village
+//! by a seeded rule.
+//!
+//! An object is a set of sticks on a footprint of grid points, each a run
+//! of voxels standing on the terrain with a texture up its height. Planting
+//! raises the scene's heights to the sticks' tops and gives each point its
+//! top texel as its color (the color coarser levels filter), and records
+//! the point's stick in a table that replicated objects share: ten
+//! thousand trees of a few shapes are a few hundred sticks.
+//!
+//! Every object is at least two grid points across: the caster samples
+//! the surface once a grid line, so a wall two points thick is solid to
+//! every ray, where a lone stick is seen as the surface through its point.
+
+use crate::scene::Scene;
+use std::collections::HashMap;
+use terracast::{Rgb, Stick, StickLayer, Terrain};
+
+/// The sticks standing on a scene's grid points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Objects {
+    /// Per grid point: 0 for plain terrain, `i` for `sticks[i − 1]`.
+    pub points: Vec<u16>,
+    /// The stick table, shared by every object that has the same stick.
+    pub sticks: Vec<Stick>,
+    /// The sticks' texels.
+    pub texels: Vec<Rgb>,
+    /// Objects planted, by kind.
+    pub trees: usize,
+    /// Houses planted.
+    pub houses: usize,
+}
+
+/// The most sticks a table may hold (the index is 16-bit, 0 for none).
+const MAX_STICKS: usize = u16::MAX as usize;
+
+impl Objects {
+    /// No objects on a `points`-point map.
+    pub fn empty(points: usize) -> Self {
+        Self {
+            points: vec![0; points],
+            sticks: Vec::new(),
+            texels: Vec::new(),
+            trees: 0,
+            houses: 0,
+        }
+    }
+
+    /// The kernel's layer of these sticks over `terrain` (this scene's,
+    /// with the sticks' tops as its heights).
+    pub fn layer<'a>(&'a self, terrain: &Terrain<'_>) -> Result<StickLayer<'a>, String> {
+        StickLayer::new(terrain, &self.points, &self.sticks, &self.texels)
+            .map_err(|e| e.to_string())
+    }
+
+    /// Grid points that hold a stick.
+    pub fn points_with_sticks(&self) -> usize {
+        self.points.iter().filter(|&&p| p != 0).count()
+    }
+
+    /// Bytes the kernel holds for the layer: a 16-bit index a grid point,
+    /// the stick table and its texels.
+    pub fn bytes(&self) -> usize {
+        self.points.len() * 2
+            + self.sticks.len() * std::mem::size_of::<Stick>()
+            + self.texels.len() * 3
+    }
+
+    /// The texel of the stick at grid point `index`, whose top is `top`
+    /// voxels high, at height `z` (voxels): as the kernel's
+    /// [`StickLayer::texel`] picks it, the stick's texel at `z` above its
+    /// base; `None` where no stick stands.
+    pub fn texel(&self, index: usize, top: f64, z: f64) -> Option<Rgb> {
+        let stick = self
+            .sticks
+            .get(usize::from(*self.points.get(index)?).checked_sub(1)?)?;
+        let base = top - f64::from(stick.height) / 16.0;
+        let texel = ((z - base).floor().max(0.0) as usize).min(usize::from(stick.texels) - 1);
+        self.texels.get(stick.first as usize + texel).copied()
+    }
+
+    /// Whether a stick stands at grid point `index` (top `top` voxels) as
+    /// high as `z` or higher: a crossing at `z` beside it is on its wall.
+    pub fn stands(&self, index: usize, top: f64, z: f64) -> bool {
+        self.points.get(index).is_some_and(|&p| p != 0) && top >= z
+    }
+
+    /// Adds a stick of `height` (U12.4) with `texels` to the table, or
+    /// finds the one already there; its index plus one.
+    fn stick(
+        &mut self,
+        table: &mut HashMap<(u16, Vec<Rgb>), u16>,
+        height: u16,
+        texels: Vec<Rgb>,
+    ) -> Option<u16> {
+        if let Some(&index) = table.get(&(height, texels.clone())) {
+            return Some(index);
+        }
+        if self.sticks.len() >= MAX_STICKS {
+            return None;
+        }
+        self.sticks.push(Stick {
+            first: self.texels.len() as u32,
+            texels: texels.len() as u16,
+            height,
+        });
+        self.texels.extend_from_slice(&texels);
+        let index = self.sticks.len() as u16;
+        table.insert((height, texels), index);
+        Some(index)
+    }
+}
+
+/// One stick of an object: its grid point relative to the object's
+/// anchor, its height in voxels (whole) and its texels, bottom up.
+#[derive(Debug, Clone, PartialEq)]
+struct Column {
+    dx: i32,
+    dy: i32,
+    height: u16,
+    texels: Vec<Rgb>,
+}
+
+/// A conifer: a cone of `radius` points, `height` voxels tall, dark green
+/// toward the ground and lighter up its height.
+fn conifer(radius: i32, height: u16, shade: u8) -> Vec<Column> {
+    footprint(radius, |d| {
+        let h = (f64::from(height) * (1.0 - d / (f64::from(radius) + 1.0)))
+            .round()
+            .max(2.0) as u16;
+        let texels = (0..h)
+            .map(|z| {
+                let up = f64::from(z) / f64::from(height);
+                let g = 70.0 + 60.0 * up + f64::from(shade);
+                [
+                    (20.0 + 20.0 * up) as u8,
+                    g.min(255.0) as u8,
+                    (25.0 + 15.0 * up) as u8,
+                ]
+            })
+            .collect();
+        (h, texels)
+    })
+}
+
+/// A broadleaf tree: a dome of `radius` points, `height` voxels tall,
+/// its crown on a short brown trunk at the middle.
+fn broadleaf(radius: i32, height: u16, shade: u8) -> Vec<Column> {
+    footprint(radius, |d| {
+        let r = f64::from(radius) + 0.5;
+        let h = (f64::from(height) * (1.0 - (d / r).powi(2)).max(0.0).sqrt())
+            .round()
+            .max(2.0) as u16;
+        let texels = (0..h)
+            .map(|z| {
+                if d < 1.0 && z < 2 {
+                    [90, 60, 35]
+                } else {
+                    let up = f64::from(z) / f64::from(height);
+                    [
+                        (45.0 + 40.0 * up) as u8,
+                        (95.0 + 55.0 * up + f64::from(shade)).min(255.0) as u8,
+                        30,
+                    ]
+                }
+            })
+            .collect();
+        (h, texels)
+    })
+}
+
+/// The points within `radius` (and a half) of the anchor, each with the
+/// stick `column` gives for its distance.
+fn footprint(radius: i32, mut column: impl FnMut(f64) -> (u16, Vec<Rgb>)) -> Vec<Column> {
+    let mut columns = Vec::new();
+    for dy in -radius..=radius {
+        for dx in -radius..=radius {
+            let d = f64::from(dx * dx + dy * dy).sqrt();
+            if d <= f64::from(radius) + 0.5 {
+                let (height, texels) = column(d);
+                columns.push(Column {
+                    dx,
+                    dy,
+                    height,
+                    texels,
+                });
+            }
+        }
+    }
+    columns
+}
+
+/// A house `width` × `depth` points (the ridge along x), walls `walls`
+/// voxels high under a pitched roof rising `rise` more at the ridge: white
+/// walls with a band of dark windows, a red roof.
+fn house(width: i32, depth: i32, walls: u16, rise: u16, roof: Rgb) -> Vec<Column> {
+    let half = f64::from(depth - 1) / 2.0;
+    let mut columns = Vec::new();
+    for dy in 0..depth {
+        for dx in 0..width {
+            let from_ridge = (f64::from(dy) - half).abs() / half.max(1.0);
+            let height = walls + (f64::from(rise) * (1.0 - from_ridge)).round() as u16;
+            let outside = dx == 0 || dy == 0 || dx == width - 1 || dy == depth - 1;
+            let texels = (0..height)
+                .map(|z| {
+                    if z >= walls {
+                        roof
+                    } else if outside && z == walls / 2 && (dx + dy) % 3 == 1 {
+                        [60, 70, 90]
+                    } else {
+                        [225, 215, 195]
+                    }
+                })
+                .collect();
+            columns.push(Column {
+                dx,
+                dy,
+                height,
+                texels,
+            });
+        }
+    }
+    columns
+}
+
+/// A small seeded generator (SplitMix64): the same planting for the same
+/// seed on every machine.
+struct Seeded(u64);
+
+impl Seeded {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in `low..high`.
+    fn below(&mut self, low: i32, high: i32) -> i32 {
+        low + (self.unit() * f64::from(high - low)) as i32
+    }
+}
+
+/// How steep the terrain is at `(x, y)`: the larger height change to a
+/// neighbouring point, in voxels a point.
+fn slope(scene: &Scene, x: i32, y: i32) -> f32 {
+    let (w, d) = (scene.width as i32, scene.depth as i32);
+    let at = |x: i32, y: i32| scene.heights[(y.clamp(0, d - 1) * w + x.clamp(0, w - 1)) as usize];
+    let h = at(x, y);
+    [(1, 0), (-1, 0), (0, 1), (0, -1)]
+        .iter()
+        .map(|&(dx, dy)| (at(x + dx, y + dy) - h).abs())
+        .fold(0.0, f32::max)
+}
+
+/// Plants a wood and a village on `scene` by a rule seeded with `seed`:
+/// about a tree every hundred grid points of the wood's regions and a
+/// house every few thousand of the village's, on dry land gentle enough
+/// for them, none overlapping another. Raises the scene's heights to the
+/// sticks' tops; a point where an object would rise past the kernel's
+/// highest height is left bare.
+pub fn plant(scene: &mut Scene, seed: u64) -> Objects {
+    let (w, d) = (scene.width as i32, scene.depth as i32);
+    let mut objects = Objects::empty(scene.heights.len());
+    let mut table = HashMap::new();
+    let mut taken = vec![false; scene.heights.len()];
+    let mut random = Seeded(seed ^ 0x00b1_ec75);
+    // Nothing grows or stands in the water: at the map's lowest height
+    // (the built-in scene's lake, a coast's sea).
+    let water = scene.heights.iter().copied().fold(f32::MAX, f32::min);
+    let area = f64::from(w) * f64::from(d);
+    // Trees of a few shapes, each planted many times: the shapes share
+    // their sticks.
+    let shapes: Vec<Vec<Column>> = (0..12)
+        .map(|i| {
+            let (radius, height, shade) = (2 + i % 3, 7 + 3 * (i % 4) as u16, (i * 7 % 20) as u8);
+            if i % 2 == 0 {
+                conifer(radius, height, shade)
+            } else {
+                broadleaf(radius, height - 2, shade)
+            }
+        })
+        .collect();
+    // The village: houses on a loose grid around a flat spot.
+    let houses = (area / 3500.0) as usize;
+    let roofs = [[170, 60, 45], [120, 55, 40], [90, 90, 100]];
+    let homes: Vec<Vec<Column>> = (0..6)
+        .map(|i| {
+            house(
+                6 + 2 * (i % 3),
+                5 + (i % 2),
+                4 + (i % 2) as u16,
+                3,
+                roofs[i as usize % 3],
+            )
+        })
+        .collect();
+    let mut tries = 0;
+    while objects.houses < houses && tries < 50 {
+        tries += 1;
+        let (cx, cy) = (
+            random.below(w / 8, w - w / 8),
+            random.below(d / 8, d - d / 8),
+        );
+        if !(scene.heights[(cy * w + cx) as usize] > water + 1.0 && slope(scene, cx, cy) < 0.6) {
+            continue;
+        }
+        let side = (houses as f64).sqrt().ceil() as i32 + 1;
+        for gy in 0..side {
+            for gx in 0..side {
+                if objects.houses >= houses {
+                    break;
+                }
+                let x = cx + (gx - side / 2) * 16 + random.below(-3, 4);
+                let y = cy + (gy - side / 2) * 14 + random.below(-3, 4);
+                let shape = &homes[random.below(0, homes.len() as i32) as usize];
+                if place(
+                    scene,
+                    &mut objects,
+                    &mut table,
+                    &mut taken,
+                    shape,
+                    (x, y),
+                    |h, s| h > water + 1.0 && s < 1.0,
+                ) {
+                    objects.houses += 1;
+                }
+            }
+        }
+    }
+    // The wood: round stands around the village, most of the trees.
+    let stands = 16;
+    let trees = (area / 100.0) as usize;
+    for _ in 0..stands {
+        let (cx, cy) = (random.below(0, w), random.below(0, d));
+        let radius = f64::from(w.min(d)) * 0.25;
+        for _ in 0..trees / stands * 8 {
+            if objects.trees >= trees {
+                break;
+            }
+            let (a, r) = (
+                random.unit() * std::f64::consts::TAU,
+                radius * random.unit().sqrt(),
+            );
+            let (x, y) = (cx + (r * a.cos()) as i32, cy + (r * a.sin()) as i32);
+            let shape = &shapes[random.below(0, shapes.len() as i32) as usize];
+            if place(
+                scene,
+                &mut objects,
+                &mut table,
+                &mut taken,
+                shape,
+                (x, y),
+                |h, s| h > water + 1.0 && s < 2.5,
+            ) {
+                objects.trees += 1;
+            }
+        }
+    }
+    objects
+}
+
+/// Plants `shape` at `(x, y)` if every point of its footprint (and a point
+/// around it) is on the map, free, and passes `fits` (height and slope);
+/// whether it did.
+fn place(
+    scene: &mut Scene,
+    objects: &mut Objects,
+    table: &mut HashMap<(u16, Vec<Rgb>), u16>,
+    taken: &mut [bool],
+    shape: &[Column],
+    (x, y): (i32, i32),
+    fits: impl Fn(f32, f32) -> bool,
+) -> bool {
+    let (w, d) = (scene.width as i32, scene.depth as i32);
+    let index = |c: &Column| {
+        let (px, py) = (x + c.dx, y + c.dy);
+        ((1..w - 1).contains(&px) && (1..d - 1).contains(&py)).then_some((py * w + px) as usize)
+    };
+    for c in shape {
+        let Some(i) = index(c) else {
+            return false;
+        };
+        let (px, py) = (x + c.dx, y + c.dy);
+        let around = [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)];
+        if around
+            .iter()
+            .any(|&(ax, ay)| taken[((py + ay) * w + px + ax) as usize])
+            || !fits(scene.heights[i], slope(scene, px, py))
+            || scene.heights[i] + f32::from(c.height) > Terrain::MAX_HEIGHT - 1.0
+        {
+            return false;
+        }
+    }
+    for c in shape {
+        let Some(i) = index(c) else {
+            continue;
+        };
+        let Some(stick) = objects.stick(table, c.height * 16, c.texels.clone()) else {
+            return false;
+        };
+        // The stick stands on the terrain as the kernel stores it (1/16
+        // voxel), so that its base is the terrain's height exactly.
+        let ground = (scene.heights[i] * 16.0).round() / 16.0;
+        scene.heights[i] = ground + f32::from(c.height);
+        scene.colors[i] = *c.texels.last().unwrap_or(&scene.colors[i]);
+        objects.points[i] = stick;
+        taken[i] = true;
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::procedural;
+
+    #[test]
+    fn planting_is_deterministic_and_shares_sticks() {
+        let mut a = procedural(256, 3);
+        let mut b = procedural(256, 3);
+        let (oa, ob) = (plant(&mut a, 3), plant(&mut b, 3));
+        assert_eq!(oa, ob);
+        assert_eq!(a.heights, b.heights);
+        assert!(oa.trees > 300, "{} trees", oa.trees);
+        assert!(oa.houses >= 10, "{} houses", oa.houses);
+        // Replicated shapes share their sticks: far fewer sticks than
+        // points that hold one.
+        assert!(
+            oa.sticks.len() * 10 < oa.points_with_sticks(),
+            "{} sticks",
+            oa.sticks.len()
+        );
+        let kernel = a.to_kernel().unwrap();
+        assert!(oa.layer(&kernel.terrain().unwrap()).is_ok());
+    }
+
+    #[test]
+    fn a_stick_stands_on_the_terrain_with_its_texels_up_its_height() {
+        let mut scene = procedural(128, 1);
+        let before = scene.heights.clone();
+        let objects = plant(&mut scene, 1);
+        let (i, &p) = objects
+            .points
+            .iter()
+            .enumerate()
+            .find(|(_, &p)| p != 0)
+            .unwrap();
+        let stick = objects.sticks[usize::from(p) - 1];
+        let top = f64::from(scene.heights[i]);
+        let ground = f64::from(before[i]);
+        assert!((top - ground - f64::from(stick.height) / 16.0).abs() < 1.0 / 16.0);
+        let first = objects.texels[stick.first as usize];
+        let last = objects.texels[stick.first as usize + usize::from(stick.texels) - 1];
+        assert_eq!(objects.texel(i, top, ground + 0.5), Some(first));
+        assert_eq!(objects.texel(i, top, top), Some(last));
+        assert_eq!(scene.colors[i], last);
+    }
+}
