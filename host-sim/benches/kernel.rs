@@ -533,21 +533,7 @@ fn objects_table(pixels: u64) {
     let bare = procedural(1024, 1);
     let mut planted = bare.clone();
     let planting = planted.plant_objects(1);
-    let views = [
-        ("default", Camera::looking(bare.default_eye(), 90.0, 12.0)),
-        (
-            "into the wood",
-            Camera::looking([420.0, 300.0, 140.0], 60.0, 8.0),
-        ),
-        (
-            "over the village",
-            Camera::looking([200.0, 560.0, 190.0], 20.0, 35.0),
-        ),
-        (
-            "grazing",
-            Camera::looking([600.0, 150.0, 110.0], 110.0, 2.0),
-        ),
-    ];
+    let views = terracast_sim::objects::showcase_views(&bare);
     let scenes = [bare, planted].map(|scene| scene.to_kernel().expect("kernel scene"));
     let default = RenderOptions::default();
     let pyramids = scenes

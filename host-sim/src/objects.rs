@@ -15,7 +15,7 @@
 
 use crate::scene::Scene;
 use std::collections::HashMap;
-use terracast::{Rgb, Stick, StickLayer, Terrain};
+use terracast::{Camera, Rgb, Stick, StickLayer, Terrain};
 
 /// The sticks standing on a scene's grid points.
 #[derive(Debug, Clone, PartialEq)]
@@ -266,14 +266,17 @@ fn slope(scene: &Scene, x: i32, y: i32) -> f32 {
 /// highest height is left bare.
 pub fn plant(scene: &mut Scene, seed: u64) -> Objects {
     let (w, d) = (scene.width as i32, scene.depth as i32);
-    let mut objects = Objects::empty(scene.heights.len());
-    let mut table = HashMap::new();
-    let mut taken = vec![false; scene.heights.len()];
     let mut random = Seeded(seed ^ 0x00b1_ec75);
     // Nothing grows or stands in the water: at the map's lowest height
     // (the built-in scene's lake, a coast's sea).
     let water = scene.heights.iter().copied().fold(f32::MAX, f32::min);
     let area = f64::from(w) * f64::from(d);
+    let mut planting = Planting {
+        objects: Objects::empty(scene.heights.len()),
+        table: HashMap::new(),
+        taken: vec![false; scene.heights.len()],
+        scene,
+    };
     // Trees of a few shapes, each planted many times: the shapes share
     // their sticks.
     let shapes: Vec<Vec<Column>> = (0..12)
@@ -301,34 +304,27 @@ pub fn plant(scene: &mut Scene, seed: u64) -> Objects {
         })
         .collect();
     let mut tries = 0;
-    while objects.houses < houses && tries < 50 {
+    while planting.objects.houses < houses && tries < 50 {
         tries += 1;
         let (cx, cy) = (
             random.below(w / 8, w - w / 8),
             random.below(d / 8, d - d / 8),
         );
+        let scene = &*planting.scene;
         if !(scene.heights[(cy * w + cx) as usize] > water + 1.0 && slope(scene, cx, cy) < 0.6) {
             continue;
         }
         let side = (houses as f64).sqrt().ceil() as i32 + 1;
         for gy in 0..side {
             for gx in 0..side {
-                if objects.houses >= houses {
+                if planting.objects.houses >= houses {
                     break;
                 }
                 let x = cx + (gx - side / 2) * 16 + random.below(-3, 4);
                 let y = cy + (gy - side / 2) * 14 + random.below(-3, 4);
                 let shape = &homes[random.below(0, homes.len() as i32) as usize];
-                if place(
-                    scene,
-                    &mut objects,
-                    &mut table,
-                    &mut taken,
-                    shape,
-                    (x, y),
-                    |h, s| h > water + 1.0 && s < 1.0,
-                ) {
-                    objects.houses += 1;
+                if planting.place(shape, (x, y), |h, s| h > water + 1.0 && s < 1.0) {
+                    planting.objects.houses += 1;
                 }
             }
         }
@@ -340,7 +336,7 @@ pub fn plant(scene: &mut Scene, seed: u64) -> Objects {
         let (cx, cy) = (random.below(0, w), random.below(0, d));
         let radius = f64::from(w.min(d)) * 0.25;
         for _ in 0..trees / stands * 8 {
-            if objects.trees >= trees {
+            if planting.objects.trees >= trees {
                 break;
             }
             let (a, r) = (
@@ -349,70 +345,96 @@ pub fn plant(scene: &mut Scene, seed: u64) -> Objects {
             );
             let (x, y) = (cx + (r * a.cos()) as i32, cy + (r * a.sin()) as i32);
             let shape = &shapes[random.below(0, shapes.len() as i32) as usize];
-            if place(
-                scene,
-                &mut objects,
-                &mut table,
-                &mut taken,
-                shape,
-                (x, y),
-                |h, s| h > water + 1.0 && s < 2.5,
-            ) {
-                objects.trees += 1;
+            if planting.place(shape, (x, y), |h, s| h > water + 1.0 && s < 2.5) {
+                planting.objects.trees += 1;
             }
         }
     }
-    objects
+    planting.objects
 }
 
-/// Plants `shape` at `(x, y)` if every point of its footprint (and a point
-/// around it) is on the map, free, and passes `fits` (height and slope);
-/// whether it did.
-fn place(
-    scene: &mut Scene,
-    objects: &mut Objects,
-    table: &mut HashMap<(u16, Vec<Rgb>), u16>,
-    taken: &mut [bool],
-    shape: &[Column],
-    (x, y): (i32, i32),
-    fits: impl Fn(f32, f32) -> bool,
-) -> bool {
-    let (w, d) = (scene.width as i32, scene.depth as i32);
-    let index = |c: &Column| {
-        let (px, py) = (x + c.dx, y + c.dy);
-        ((1..w - 1).contains(&px) && (1..d - 1).contains(&py)).then_some((py * w + px) as usize)
-    };
-    for c in shape {
-        let Some(i) = index(c) else {
-            return false;
-        };
-        let (px, py) = (x + c.dx, y + c.dy);
-        let around = [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)];
-        if around
-            .iter()
-            .any(|&(ax, ay)| taken[((py + ay) * w + px + ax) as usize])
-            || !fits(scene.heights[i], slope(scene, px, py))
-            || scene.heights[i] + f32::from(c.height) > Terrain::MAX_HEIGHT - 1.0
-        {
-            return false;
+/// A planting under way: the scene, what stands on it, the stick table's
+/// index by height and texels, and the points objects take.
+struct Planting<'s> {
+    scene: &'s mut Scene,
+    objects: Objects,
+    table: HashMap<(u16, Vec<Rgb>), u16>,
+    taken: Vec<bool>,
+}
+
+impl Planting<'_> {
+    /// Plants `shape` at `(x, y)` if every point of its footprint (and a
+    /// point around it) is on the map, free, and passes `fits` (height and
+    /// slope), and the stick table has room for it; whether it did.
+    fn place(
+        &mut self,
+        shape: &[Column],
+        (x, y): (i32, i32),
+        fits: impl Fn(f32, f32) -> bool,
+    ) -> bool {
+        let scene = &*self.scene;
+        let (w, d) = (scene.width as i32, scene.depth as i32);
+        let mut points = Vec::with_capacity(shape.len());
+        for c in shape {
+            let (px, py) = (x + c.dx, y + c.dy);
+            if !((1..w - 1).contains(&px) && (1..d - 1).contains(&py)) {
+                return false;
+            }
+            let i = (py * w + px) as usize;
+            let around = [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)];
+            if around
+                .iter()
+                .any(|&(ax, ay)| self.taken[((py + ay) * w + px + ax) as usize])
+                || !fits(scene.heights[i], slope(scene, px, py))
+                || scene.heights[i] + f32::from(c.height) > Terrain::MAX_HEIGHT - 1.0
+            {
+                return false;
+            }
+            points.push(i);
         }
+        let mut sticks = Vec::with_capacity(shape.len());
+        for c in shape {
+            match self
+                .objects
+                .stick(&mut self.table, c.height * 16, c.texels.clone())
+            {
+                Some(stick) => sticks.push(stick),
+                None => return false,
+            }
+        }
+        for ((c, i), stick) in shape.iter().zip(points).zip(sticks) {
+            // The stick stands on the terrain as the kernel stores it (1/16
+            // voxel), so that its base is the terrain's height exactly.
+            let ground = (self.scene.heights[i] * 16.0).round() / 16.0;
+            self.scene.heights[i] = ground + f32::from(c.height);
+            self.scene.colors[i] = *c.texels.last().unwrap_or(&self.scene.colors[i]);
+            self.objects.points[i] = stick;
+            self.taken[i] = true;
+        }
+        true
     }
-    for c in shape {
-        let Some(i) = index(c) else {
-            continue;
-        };
-        let Some(stick) = objects.stick(table, c.height * 16, c.texels.clone()) else {
-            return false;
-        };
-        // The stick stands on the terrain as the kernel stores it (1/16
-        // voxel), so that its base is the terrain's height exactly.
-        let ground = (scene.heights[i] * 16.0).round() / 16.0;
-        scene.heights[i] = ground + f32::from(c.height);
-        scene.colors[i] = *c.texels.last().unwrap_or(&scene.colors[i]);
-        objects.points[i] = stick;
-        taken[i] = true;
-    }
-    true
+}
+
+/// The views the objects' accuracy test and the kernel bench's `objects`
+/// table render, over `bare`, the terrain before planting (whose default
+/// eye they take): from afar, into the wood, over the village and
+/// grazing along the trees, on the built-in scene (1024², seed 1).
+pub fn showcase_views(bare: &Scene) -> [(&'static str, Camera); 4] {
+    [
+        ("default", Camera::looking(bare.default_eye(), 90.0, 12.0)),
+        (
+            "into the wood",
+            Camera::looking([420.0, 300.0, 140.0], 60.0, 8.0),
+        ),
+        (
+            "over the village",
+            Camera::looking([200.0, 560.0, 190.0], 20.0, 35.0),
+        ),
+        (
+            "grazing",
+            Camera::looking([600.0, 150.0, 110.0], 110.0, 2.0),
+        ),
+    ]
 }
 
 #[cfg(test)]

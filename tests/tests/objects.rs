@@ -16,6 +16,7 @@
 use terracast::{Camera, RenderOptions};
 use terracast_sim::kernel::render_kernel;
 use terracast_sim::metrics::{psnr, sky_agreement};
+use terracast_sim::objects::showcase_views;
 use terracast_sim::reference::{Reference, ReferenceOptions};
 use terracast_sim::scene::{procedural, Scene};
 
@@ -47,21 +48,7 @@ fn objects_render_as_the_reference_sees_them() {
     let bare = procedural(1024, 1);
     let mut planted = bare.clone();
     println!("{}", planted.plant_objects(1));
-    let views = [
-        ("default", Camera::looking(bare.default_eye(), 90.0, 12.0)),
-        (
-            "into the wood",
-            Camera::looking([420.0, 300.0, 140.0], 60.0, 8.0),
-        ),
-        (
-            "over the village",
-            Camera::looking([200.0, 560.0, 190.0], 20.0, 35.0),
-        ),
-        (
-            "grazing",
-            Camera::looking([600.0, 150.0, 110.0], 110.0, 2.0),
-        ),
-    ];
+    let views = showcase_views(&bare);
     println!("| view | kernel dB | one exact ray a pixel dB | sky agreement | without objects: kernel dB | steps/px | without objects |");
     println!("|---|---|---|---|---|---|---|");
     let mut failures = Vec::new();
