@@ -211,11 +211,6 @@ impl<'a> StickLayer<'a> {
         self.points.get(index as usize).is_some_and(|&p| p != 0)
     }
 
-    /// How many grid points hold a stick.
-    pub fn points_with_sticks(&self) -> usize {
-        self.points.iter().filter(|&&p| p != 0).count()
-    }
-
     /// Bytes of the layer: its points, sticks and texels.
     pub fn bytes(&self) -> usize {
         core::mem::size_of_val(self.points)
@@ -475,11 +470,7 @@ mod tests {
         let (colors, distances) = render_walled(&facing_the_wall(), &options, true);
         // The middle column looks straight at the wall: from the bottom up
         // it meets the ground, then each band of the wall in order.
-        let column: Vec<Rgb> = (0..36)
-            .rev()
-            .map(|y| colors[y * 48 + 24])
-            .filter(|_| true)
-            .collect();
+        let column: Vec<Rgb> = (0..36).rev().map(|y| colors[y * 48 + 24]).collect();
         let on_wall: Vec<usize> = column
             .iter()
             .filter_map(|c| BANDS.iter().position(|b| b == c))

@@ -38,6 +38,14 @@ pub struct Scene {
     pub objects: Option<Objects>,
 }
 
+/// Colors at a cell's corners (`(i, j)`, `(i + 1, j)`, `(i, j + 1)`,
+/// `(i + 1, j + 1)`) blended at `(fx, fy)` within it.
+fn bilinear([a, b, c, e]: [[f64; 3]; 4], fx: f64, fy: f64) -> [f64; 3] {
+    core::array::from_fn(|k| {
+        (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy
+    })
+}
+
 /// A scene in the kernel's storage format with its pyramid; lends a
 /// [`Terrain`] and a [`Pyramid`].
 #[derive(Debug, Clone)]
@@ -173,11 +181,12 @@ impl Scene {
     pub fn plant_objects(&mut self, seed: u64) -> String {
         let objects = crate::objects::plant(self, seed);
         let line = format!(
-            "planted {} trees and {} houses: {} sticks on {} grid points",
+            "planted {} trees and {} houses: {} sticks on {} grid points, {} bytes in the kernel",
             objects.trees,
             objects.houses,
             objects.sticks.len(),
-            objects.points_with_sticks()
+            objects.points_with_sticks(),
+            objects.bytes()
         );
         self.objects = Some(objects);
         line
@@ -211,11 +220,10 @@ impl Scene {
     /// Bilinear color of the grid at world (x, y).
     pub fn color_at(&self, x: f64, y: f64) -> [f64; 3] {
         let (i, j, fx, fy) = self.cell_at(x, y);
-        let at = |a: usize, b: usize| self.colors[b * self.width as usize + a].map(f64::from);
-        let (a, b, c, e) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
-        core::array::from_fn(|k| {
-            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy
-        })
+        let w = self.width as usize;
+        let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+            .map(|(a, b)| self.colors[b * w + a].map(f64::from));
+        bilinear(corners, fx, fy)
     }
 
     /// [`Scene::color_at`] where a ray meets the surface at height `z`:
@@ -235,7 +243,7 @@ impl Scene {
             .filter(|&&c| objects.stands(c, top(c), z))
             .max_by(|&&a, &&b| top(a).total_cmp(&top(b)))
             .and_then(|&c| objects.texel(c, top(c), z));
-        let [a, b, c, e] = corners.map(|c| {
+        let seen = corners.map(|c| {
             let own = objects.texel(c, top(c), z);
             let seen = match (own, wall) {
                 (Some(texel), _) => texel,
@@ -244,9 +252,7 @@ impl Scene {
             };
             seen.map(f64::from)
         });
-        core::array::from_fn(|k| {
-            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + e[k] * fx) * fy
-        })
+        bilinear(seen, fx, fy)
     }
 
     /// Highest height in voxels.
