@@ -12,9 +12,17 @@
 //! Every object is at least two grid points across: the caster samples
 //! the surface once a grid line, so a wall two points thick is solid to
 //! every ray, where a lone stick is seen as the surface through its point.
+//!
+//! Objects also come from a scene file that places them by name
+//! ([`placing`]), the library's or ones sculpted from three photographs
+//! ([`sculpt`]).
+
+pub mod placing;
+pub mod sculpt;
 
 use crate::scene::Scene;
 use std::collections::HashMap;
+use std::fmt;
 use terracast::{Camera, Rgb, Stick, StickLayer, Terrain};
 
 /// The sticks standing on a scene's grid points.
@@ -30,6 +38,8 @@ pub struct Objects {
     pub trees: usize,
     /// Houses planted.
     pub houses: usize,
+    /// Objects a scene file placed.
+    pub placed: usize,
 }
 
 /// The most sticks a table may hold (the index is 16-bit, 0 for none).
@@ -44,6 +54,7 @@ impl Objects {
             texels: Vec::new(),
             trees: 0,
             houses: 0,
+            placed: 0,
         }
     }
 
@@ -113,13 +124,115 @@ impl Objects {
 }
 
 /// One stick of an object: its grid point relative to the object's
-/// anchor, its height in voxels (whole) and its texels, bottom up.
+/// anchor, its height in voxels (whole) and its texels, bottom up (one a
+/// voxel of its height).
 #[derive(Debug, Clone, PartialEq)]
-struct Column {
-    dx: i32,
-    dy: i32,
-    height: u16,
-    texels: Vec<Rgb>,
+pub struct Column {
+    /// Grid points from the anchor along x.
+    pub dx: i32,
+    /// Grid points from the anchor along y.
+    pub dy: i32,
+    /// Height in whole voxels.
+    pub height: u16,
+    /// The texels, bottom up.
+    pub texels: Vec<Rgb>,
+}
+
+/// An object: its sticks around an anchor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Shape {
+    /// The sticks, at most one a grid point.
+    pub columns: Vec<Column>,
+}
+
+impl Shape {
+    /// The library's objects by name, at their own size: `conifer`,
+    /// `broadleaf`, `house` and `vehicle`.
+    pub const LIBRARY: [&'static str; 4] = ["conifer", "broadleaf", "house", "vehicle"];
+
+    /// The library's object `name` ([`Shape::LIBRARY`]).
+    pub fn library(name: &str) -> Option<Self> {
+        let columns = match name {
+            "conifer" => conifer(3, 13, 10),
+            "broadleaf" => broadleaf(3, 11, 10),
+            "house" => house(8, 6, 4, 3, [170, 60, 45]),
+            "vehicle" => vehicle([40, 70, 150]),
+            _ => return None,
+        };
+        Some(Self { columns })
+    }
+
+    /// This shape turned by `heading` degrees (from +x toward +y) and
+    /// scaled by `scale`, about the middle of its footprint, which becomes
+    /// its anchor: each grid point of the new footprint takes the stick
+    /// of the nearest point it came from, its height and texels stretched
+    /// by `scale` (nearest texel).
+    pub fn placed(&self, heading: f64, scale: f64) -> Self {
+        let Some((low, high)) = self.bounds() else {
+            return self.clone();
+        };
+        let center = [
+            f64::from(low[0] + high[0]) / 2.0,
+            f64::from(low[1] + high[1]) / 2.0,
+        ];
+        let by_point: HashMap<(i32, i32), &Column> =
+            self.columns.iter().map(|c| ((c.dx, c.dy), c)).collect();
+        let (sin, cos) = heading.to_radians().sin_cos();
+        // The new footprint's bounds: the old corners turned and scaled.
+        let reach = [
+            (f64::from(high[0] - low[0]) / 2.0 + 0.5) * scale,
+            (f64::from(high[1] - low[1]) / 2.0 + 0.5) * scale,
+        ];
+        let half = [
+            (reach[0] * cos.abs() + reach[1] * sin.abs()).ceil() as i32,
+            (reach[0] * sin.abs() + reach[1] * cos.abs()).ceil() as i32,
+        ];
+        let mut columns = Vec::new();
+        for dy in -half[1]..=half[1] {
+            for dx in -half[0]..=half[0] {
+                // Back to the shape's own frame: turned back, unscaled,
+                // to the nearest point (halves up, so that a footprint
+                // scaled by a whole number keeps its proportions).
+                let (x, y) = (f64::from(dx) / scale, f64::from(dy) / scale);
+                let nearest = |v: f64| (v + 0.5).floor() as i32;
+                let from = (
+                    nearest(center[0] + x * cos + y * sin),
+                    nearest(center[1] - x * sin + y * cos),
+                );
+                let Some(source) = by_point.get(&from) else {
+                    continue;
+                };
+                let height = (f64::from(source.height) * scale).round().max(1.0) as u16;
+                let texels = (0..height)
+                    .map(|z| {
+                        let at = (f64::from(z) / scale) as usize;
+                        source.texels[at.min(source.texels.len() - 1)]
+                    })
+                    .collect();
+                columns.push(Column {
+                    dx,
+                    dy,
+                    height,
+                    texels,
+                });
+            }
+        }
+        Self { columns }
+    }
+
+    /// The lowest and highest grid offsets of the footprint, if any.
+    fn bounds(&self) -> Option<([i32; 2], [i32; 2])> {
+        let first = self.columns.first()?;
+        Some(self.columns.iter().fold(
+            ([first.dx, first.dy], [first.dx, first.dy]),
+            |(low, high), c| {
+                (
+                    [low[0].min(c.dx), low[1].min(c.dy)],
+                    [high[0].max(c.dx), high[1].max(c.dy)],
+                )
+            },
+        ))
+    }
 }
 
 /// A conifer: a cone of `radius` points, `height` voxels tall, dark green
@@ -196,23 +309,53 @@ fn footprint(radius: i32, mut column: impl FnMut(f64) -> (u16, Vec<Rgb>)) -> Vec
 /// walls with a band of dark windows, a red roof.
 fn house(width: i32, depth: i32, walls: u16, rise: u16, roof: Rgb) -> Vec<Column> {
     let half = f64::from(depth - 1) / 2.0;
+    block(width, depth, |dx, dy| {
+        let from_ridge = (f64::from(dy) - half).abs() / half.max(1.0);
+        let height = walls + (f64::from(rise) * (1.0 - from_ridge)).round() as u16;
+        let outside = dx == 0 || dy == 0 || dx == width - 1 || dy == depth - 1;
+        let texels = (0..height)
+            .map(|z| {
+                if z >= walls {
+                    roof
+                } else if outside && z == walls / 2 && (dx + dy) % 3 == 1 {
+                    [60, 70, 90]
+                } else {
+                    [225, 215, 195]
+                }
+            })
+            .collect();
+        (height, texels)
+    })
+}
+
+/// A vehicle, 3 × 6 points (its length along x): a dark chassis, a body
+/// in `paint` and a glazed cab over the front half.
+fn vehicle(paint: Rgb) -> Vec<Column> {
+    block(6, 3, |dx, dy| {
+        let height = if dx >= 3 { 4 } else { 3 };
+        let texels = (0..height)
+            .map(|z| match z {
+                0 => [30, 30, 35],
+                3 if dy == 1 => paint,
+                3 => [70, 90, 110],
+                _ => paint,
+            })
+            .collect();
+        (height, texels)
+    })
+}
+
+/// The points of a `width` × `depth` rectangle from the anchor, each with
+/// the stick `column` gives for its offset.
+fn block(
+    width: i32,
+    depth: i32,
+    mut column: impl FnMut(i32, i32) -> (u16, Vec<Rgb>),
+) -> Vec<Column> {
     let mut columns = Vec::new();
     for dy in 0..depth {
         for dx in 0..width {
-            let from_ridge = (f64::from(dy) - half).abs() / half.max(1.0);
-            let height = walls + (f64::from(rise) * (1.0 - from_ridge)).round() as u16;
-            let outside = dx == 0 || dy == 0 || dx == width - 1 || dy == depth - 1;
-            let texels = (0..height)
-                .map(|z| {
-                    if z >= walls {
-                        roof
-                    } else if outside && z == walls / 2 && (dx + dy) % 3 == 1 {
-                        [60, 70, 90]
-                    } else {
-                        [225, 215, 195]
-                    }
-                })
-                .collect();
+            let (height, texels) = column(dx, dy);
             columns.push(Column {
                 dx,
                 dy,
@@ -265,130 +408,191 @@ fn slope(scene: &Scene, x: i32, y: i32) -> f32 {
 /// sticks' tops; a point where an object would rise past the kernel's
 /// highest height is left bare.
 pub fn plant(scene: &mut Scene, seed: u64) -> Objects {
-    let (w, d) = (scene.width as i32, scene.depth as i32);
-    let mut random = Seeded(seed ^ 0x00b1_ec75);
-    // Nothing grows or stands in the water: at the map's lowest height
-    // (the built-in scene's lake, a coast's sea).
-    let water = scene.heights.iter().copied().fold(f32::MAX, f32::min);
-    let area = f64::from(w) * f64::from(d);
-    let mut planting = Planting {
-        objects: Objects::empty(scene.heights.len()),
-        table: HashMap::new(),
-        taken: vec![false; scene.heights.len()],
-        scene,
-    };
-    // Trees of a few shapes, each planted many times: the shapes share
-    // their sticks.
-    let shapes: Vec<Vec<Column>> = (0..12)
-        .map(|i| {
-            let (radius, height, shade) = (2 + i % 3, 7 + 3 * (i % 4) as u16, (i * 7 % 20) as u8);
-            if i % 2 == 0 {
-                conifer(radius, height, shade)
-            } else {
-                broadleaf(radius, height - 2, shade)
-            }
-        })
-        .collect();
-    // The village: houses on a loose grid around a flat spot.
-    let houses = (area / 3500.0) as usize;
-    let roofs = [[170, 60, 45], [120, 55, 40], [90, 90, 100]];
-    let homes: Vec<Vec<Column>> = (0..6)
-        .map(|i| {
-            house(
-                6 + 2 * (i % 3),
-                5 + (i % 2),
-                4 + (i % 2) as u16,
-                3,
-                roofs[i as usize % 3],
-            )
-        })
-        .collect();
-    let mut tries = 0;
-    while planting.objects.houses < houses && tries < 50 {
-        tries += 1;
-        let (cx, cy) = (
-            random.below(w / 8, w - w / 8),
-            random.below(d / 8, d - d / 8),
-        );
+    let mut planting = Planting::new(scene);
+    planting.plant(seed);
+    planting.objects
+}
+
+impl Planting<'_> {
+    /// Plants a wood and a village by the rule of [`plant`], around the
+    /// objects already placed.
+    pub fn plant(&mut self, seed: u64) {
+        let planting = self;
         let scene = &*planting.scene;
-        if !(scene.heights[(cy * w + cx) as usize] > water + 1.0 && slope(scene, cx, cy) < 0.6) {
-            continue;
+        let (w, d) = (scene.width as i32, scene.depth as i32);
+        let mut random = Seeded(seed ^ 0x00b1_ec75);
+        // Nothing grows or stands in the water: at the map's lowest height
+        // (the built-in scene's lake, a coast's sea).
+        let water = scene.heights.iter().copied().fold(f32::MAX, f32::min);
+        let area = f64::from(w) * f64::from(d);
+        // Trees of a few shapes, each planted many times: the shapes share
+        // their sticks.
+        let shapes: Vec<Vec<Column>> = (0..12)
+            .map(|i| {
+                let (radius, height, shade) =
+                    (2 + i % 3, 7 + 3 * (i % 4) as u16, (i * 7 % 20) as u8);
+                if i % 2 == 0 {
+                    conifer(radius, height, shade)
+                } else {
+                    broadleaf(radius, height - 2, shade)
+                }
+            })
+            .collect();
+        // The village: houses on a loose grid around a flat spot.
+        let houses = (area / 3500.0) as usize;
+        let roofs = [[170, 60, 45], [120, 55, 40], [90, 90, 100]];
+        let homes: Vec<Vec<Column>> = (0..6)
+            .map(|i| {
+                house(
+                    6 + 2 * (i % 3),
+                    5 + (i % 2),
+                    4 + (i % 2) as u16,
+                    3,
+                    roofs[i as usize % 3],
+                )
+            })
+            .collect();
+        let mut tries = 0;
+        while planting.objects.houses < houses && tries < 50 {
+            tries += 1;
+            let (cx, cy) = (
+                random.below(w / 8, w - w / 8),
+                random.below(d / 8, d - d / 8),
+            );
+            let scene = &*planting.scene;
+            if !(scene.heights[(cy * w + cx) as usize] > water + 1.0 && slope(scene, cx, cy) < 0.6)
+            {
+                continue;
+            }
+            let side = (houses as f64).sqrt().ceil() as i32 + 1;
+            for gy in 0..side {
+                for gx in 0..side {
+                    if planting.objects.houses >= houses {
+                        break;
+                    }
+                    let x = cx + (gx - side / 2) * 16 + random.below(-3, 4);
+                    let y = cy + (gy - side / 2) * 14 + random.below(-3, 4);
+                    let shape = &homes[random.below(0, homes.len() as i32) as usize];
+                    if planting
+                        .place(shape, (x, y), |h, s| h > water + 1.0 && s < 1.0)
+                        .is_ok()
+                    {
+                        planting.objects.houses += 1;
+                    }
+                }
+            }
         }
-        let side = (houses as f64).sqrt().ceil() as i32 + 1;
-        for gy in 0..side {
-            for gx in 0..side {
-                if planting.objects.houses >= houses {
+        // The wood: round stands around the village, most of the trees.
+        let stands = 16;
+        let trees = (area / 100.0) as usize;
+        for _ in 0..stands {
+            let (cx, cy) = (random.below(0, w), random.below(0, d));
+            let radius = f64::from(w.min(d)) * 0.25;
+            for _ in 0..trees / stands * 8 {
+                if planting.objects.trees >= trees {
                     break;
                 }
-                let x = cx + (gx - side / 2) * 16 + random.below(-3, 4);
-                let y = cy + (gy - side / 2) * 14 + random.below(-3, 4);
-                let shape = &homes[random.below(0, homes.len() as i32) as usize];
-                if planting.place(shape, (x, y), |h, s| h > water + 1.0 && s < 1.0) {
-                    planting.objects.houses += 1;
+                let (a, r) = (
+                    random.unit() * std::f64::consts::TAU,
+                    radius * random.unit().sqrt(),
+                );
+                let (x, y) = (cx + (r * a.cos()) as i32, cy + (r * a.sin()) as i32);
+                let shape = &shapes[random.below(0, shapes.len() as i32) as usize];
+                if planting
+                    .place(shape, (x, y), |h, s| h > water + 1.0 && s < 2.5)
+                    .is_ok()
+                {
+                    planting.objects.trees += 1;
                 }
             }
         }
     }
-    // The wood: round stands around the village, most of the trees.
-    let stands = 16;
-    let trees = (area / 100.0) as usize;
-    for _ in 0..stands {
-        let (cx, cy) = (random.below(0, w), random.below(0, d));
-        let radius = f64::from(w.min(d)) * 0.25;
-        for _ in 0..trees / stands * 8 {
-            if planting.objects.trees >= trees {
-                break;
-            }
-            let (a, r) = (
-                random.unit() * std::f64::consts::TAU,
-                radius * random.unit().sqrt(),
-            );
-            let (x, y) = (cx + (r * a.cos()) as i32, cy + (r * a.sin()) as i32);
-            let shape = &shapes[random.below(0, shapes.len() as i32) as usize];
-            if planting.place(shape, (x, y), |h, s| h > water + 1.0 && s < 2.5) {
-                planting.objects.trees += 1;
-            }
-        }
-    }
-    planting.objects
 }
 
 /// A planting under way: the scene, what stands on it, the stick table's
 /// index by height and texels, and the points objects take.
-struct Planting<'s> {
+pub struct Planting<'s> {
     scene: &'s mut Scene,
     objects: Objects,
     table: HashMap<(u16, Vec<Rgb>), u16>,
     taken: Vec<bool>,
 }
 
-impl Planting<'_> {
-    /// Plants `shape` at `(x, y)` if every point of its footprint (and a
-    /// point around it) is on the map, free, and passes `fits` (height and
-    /// slope), and the stick table has room for it; whether it did.
-    fn place(
+/// Why an object could not be placed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlaceError {
+    /// A point of its footprint is off the map or on its edge.
+    OffMap,
+    /// A point of its footprint, or one beside it, holds another object.
+    Taken,
+    /// The ground there does not suit it (water, too steep).
+    Unfit,
+    /// It would rise above the highest height the kernel stores.
+    TooHigh,
+    /// The stick table is full.
+    TableFull,
+}
+
+impl fmt::Display for PlaceError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::OffMap => "it does not fit on the map (a point of it off the map or on its edge)",
+            Self::Taken => "it overlaps another object (or stands right beside one)",
+            Self::Unfit => "the ground there does not suit it",
+            Self::TooHigh => "it would rise above the highest height the kernel stores",
+            Self::TableFull => "the stick table is full",
+        })
+    }
+}
+
+impl<'s> Planting<'s> {
+    /// A planting on `scene`, with nothing on it yet.
+    pub fn new(scene: &'s mut Scene) -> Self {
+        let points = scene.heights.len();
+        Self {
+            scene,
+            objects: Objects::empty(points),
+            table: HashMap::new(),
+            taken: vec![false; points],
+        }
+    }
+
+    /// What stands on the scene.
+    pub fn finish(self) -> Objects {
+        self.objects
+    }
+
+    /// Plants `shape` with its anchor at grid point `(x, y)` if every
+    /// point of its footprint (and a point around it) is on the map, free,
+    /// and passes `fits` (height and slope), and the stick table has room
+    /// for it; the scene is left alone when it is not placed.
+    pub fn place(
         &mut self,
         shape: &[Column],
         (x, y): (i32, i32),
         fits: impl Fn(f32, f32) -> bool,
-    ) -> bool {
+    ) -> Result<(), PlaceError> {
         let scene = &*self.scene;
         let (w, d) = (scene.width as i32, scene.depth as i32);
         let mut points = Vec::with_capacity(shape.len());
         for c in shape {
             let (px, py) = (x + c.dx, y + c.dy);
             if !((1..w - 1).contains(&px) && (1..d - 1).contains(&py)) {
-                return false;
+                return Err(PlaceError::OffMap);
             }
             let i = (py * w + px) as usize;
             let around = [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)];
             if around
                 .iter()
                 .any(|&(ax, ay)| self.taken[((py + ay) * w + px + ax) as usize])
-                || !fits(scene.heights[i], slope(scene, px, py))
-                || scene.heights[i] + f32::from(c.height) > Terrain::MAX_HEIGHT - 1.0
             {
-                return false;
+                return Err(PlaceError::Taken);
+            }
+            if !fits(scene.heights[i], slope(scene, px, py)) {
+                return Err(PlaceError::Unfit);
+            }
+            if scene.heights[i] + f32::from(c.height) > Terrain::MAX_HEIGHT - 1.0 {
+                return Err(PlaceError::TooHigh);
             }
             points.push(i);
         }
@@ -399,7 +603,7 @@ impl Planting<'_> {
                 .stick(&mut self.table, c.height * 16, c.texels.clone())
             {
                 Some(stick) => sticks.push(stick),
-                None => return false,
+                None => return Err(PlaceError::TableFull),
             }
         }
         for ((c, i), stick) in shape.iter().zip(points).zip(sticks) {
@@ -411,7 +615,7 @@ impl Planting<'_> {
             self.objects.points[i] = stick;
             self.taken[i] = true;
         }
-        true
+        Ok(())
     }
 }
 

@@ -179,17 +179,53 @@ impl Scene {
     /// `seed` ([`crate::objects::plant`]), and reports what it planted in
     /// one line.
     pub fn plant_objects(&mut self, seed: u64) -> String {
-        let objects = crate::objects::plant(self, seed);
+        self.add_objects(None, Some(seed))
+            .expect("planting by the seeded rule skips what does not fit")
+    }
+
+    /// Stands the objects of a scene file (`plan`) on the terrain, then,
+    /// with a `seed`, plants a wood and a village around them; reports
+    /// what stands in one line. An object of the file that cannot stand is
+    /// an error, and the scene is left without objects.
+    pub fn add_objects(
+        &mut self,
+        plan: Option<&crate::objects::placing::ScenePlan>,
+        seed: Option<u64>,
+    ) -> Result<String> {
+        let bare = (self.heights.clone(), self.colors.clone());
+        let mut planting = crate::objects::Planting::new(self);
+        let placed = plan.map(|plan| plan.place(&mut planting));
+        if let Some(Err(e)) = placed {
+            drop(planting);
+            (self.heights, self.colors) = bare;
+            return Err(e);
+        }
+        if let Some(seed) = seed {
+            planting.plant(seed);
+        }
+        let objects = planting.finish();
+        let mut parts = Vec::new();
+        if let Some(plan) = plan {
+            parts.push(format!(
+                "placed {} objects ({} sculpted kinds)",
+                objects.placed, plan.sculpted
+            ));
+        }
+        if seed.is_some() {
+            parts.push(format!(
+                "planted {} trees and {} houses",
+                objects.trees, objects.houses
+            ));
+        }
         let line = format!(
-            "planted {} trees and {} houses: {} sticks on {} grid points, {} bytes in the kernel",
-            objects.trees,
-            objects.houses,
+            "{}: {} sticks on {} grid points, {} bytes in the kernel",
+            parts.join("; "),
             objects.sticks.len(),
             objects.points_with_sticks(),
             objects.bytes()
         );
         self.objects = Some(objects);
-        line
+        Ok(line)
     }
 
     /// Height of grid point (x, y).

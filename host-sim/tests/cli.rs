@@ -438,3 +438,84 @@ fn every_method_renders_the_atmosphere_and_bad_settings_get_one_line() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
     }
 }
+
+/// The example scene file in the repository (`scenes/farm.toml`).
+fn farm() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes/farm.toml")
+}
+
+#[test]
+fn a_scene_file_stands_its_objects_on_the_terrain_and_bad_ones_get_one_line() {
+    let (bare, placed) = (temp("farm-bare.png"), temp("farm.png"));
+    let view = [
+        "--procedural-size",
+        "1024",
+        "--eye",
+        "520,440,150",
+        "--yaw",
+        "265",
+        "--pitch",
+        "22",
+        "--size",
+        "160x90",
+    ];
+    let render = |out: &PathBuf, extra: &[&str]| {
+        let mut args = vec!["render", "--out", s(out)];
+        args.extend_from_slice(&view);
+        args.extend_from_slice(extra);
+        sim(&args)
+    };
+    let (code, _, err) = render(&bare, &[]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = render(&placed, &["--place", s(&farm())]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("placed 6 objects (1 sculpted kinds)"), "{err}");
+    let (a, b) = (image::open(&bare).unwrap(), image::open(&placed).unwrap());
+    let changed = a
+        .to_rgb8()
+        .pixels()
+        .zip(b.to_rgb8().pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(changed > 160 * 90 / 20, "the farm changes {changed} pixels");
+    // With --objects the wood and the village grow around the farm.
+    let (code, _, err) = render(&placed, &["--place", s(&farm()), "--objects"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("placed 6 objects") && err.contains("trees and"),
+        "{err}"
+    );
+
+    // Bad scene files, and --place where objects cannot go: one line each.
+    let bad = temp("bad-scene.toml");
+    std::fs::write(&bad, "[[place]]\nobject = \"castle\"\nat = [1, 2]\n").unwrap();
+    let off = temp("off-map.toml");
+    std::fs::write(&off, "[[place]]\nobject = \"house\"\nat = [5000, 2]\n").unwrap();
+    let missing = temp("no-such-scene.toml");
+    let farm = farm();
+    let cases: [(&[&str], &str); 4] = [
+        (&["--place", s(&bad)], "no object \"castle\""),
+        (
+            &["--place", s(&off)],
+            "place 1 (house at 5000, 2): it does not fit on the map",
+        ),
+        (&["--place", s(&missing)], "cannot read scene file"),
+        (
+            &["--place", s(&farm), "--terrain", "procedural:4096"],
+            "--place stands objects on a terrain in memory",
+        ),
+    ];
+    for (extra, expected) in cases {
+        let (code, _, err) = render(&placed, extra);
+        assert_ne!(code, 0, "{extra:?}");
+        assert!(err.contains(expected), "{extra:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{extra:?}: {err}");
+    }
+    // A view of a sculpted object is an input: never written over.
+    let front = farm.with_file_name("barn-front.png");
+    let before = std::fs::read(&front).unwrap();
+    let (code, _, err) = render(&front, &["--place", s(&farm)]);
+    assert_ne!(code, 0);
+    assert!(err.contains("--place"), "{err}");
+    assert_eq!(std::fs::read(&front).unwrap(), before);
+}

@@ -13,6 +13,7 @@ use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
 use crate::board::{board_views, verify, write_scene};
 use crate::error::{Error, Result};
 use crate::kernel::{render_kernel_in, PixelRays};
+use crate::objects::placing::ScenePlan;
 use crate::output::{stats_json, write_json, write_pfm, write_png};
 use crate::outputs::{OutputId, Outputs};
 use crate::reference::{Reference, ReferenceOptions};
@@ -257,6 +258,12 @@ struct SceneArgs {
     /// --seed: 3D objects as sticks (trees and houses).
     #[arg(long)]
     objects: bool,
+    /// Stand the objects a scene file places on the terrain: library
+    /// objects and ones sculpted from three views, by name, position,
+    /// heading and scale (TOML; see docs/objects.md). With --objects, the
+    /// wood and the village grow around them.
+    #[arg(long, value_name = "FILE.toml")]
+    place: Option<PathBuf>,
 }
 
 /// Where the camera is and where it looks.
@@ -684,12 +691,16 @@ impl KernelArgs {
 impl SceneArgs {
     /// `--objects` refused where `what` cannot carry them yet.
     fn refuse_objects(&self, what: &str) -> Result<()> {
-        if self.objects {
-            return Err(Error::new(format!(
-                "--objects plants on a terrain in memory; {what} does not carry objects yet"
-            )));
-        }
-        Ok(())
+        let flag = if self.objects {
+            "--objects"
+        } else if self.place.is_some() {
+            "--place"
+        } else {
+            return Ok(());
+        };
+        Err(Error::new(format!(
+            "{flag} stands objects on a terrain in memory; {what} does not carry objects yet"
+        )))
     }
 
     /// Names the files the scene is read from as inputs.
@@ -699,6 +710,12 @@ impl SceneArgs {
         }
         for path in &self.color {
             outputs.input("--color", path);
+        }
+        if let Some(path) = &self.place {
+            outputs.input("--place", path);
+            for view in ScenePlan::view_paths(path) {
+                outputs.input("--place", &view);
+            }
         }
     }
 }
@@ -711,8 +728,10 @@ fn load_scene(args: &SceneArgs) -> Result<Scene> {
 /// unless --procedural-size says otherwise.
 fn load_scene_or(args: &SceneArgs, default_side: u32) -> Result<Scene> {
     let mut scene = load_terrain(args, default_side)?;
-    if args.objects {
-        eprintln!("{}", scene.plant_objects(args.seed));
+    let plan = args.place.as_deref().map(ScenePlan::read).transpose()?;
+    if plan.is_some() || args.objects {
+        let seed = args.objects.then_some(args.seed);
+        eprintln!("{}", scene.add_objects(plan.as_ref(), seed)?);
     }
     Ok(scene)
 }
