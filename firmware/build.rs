@@ -33,9 +33,10 @@ fn main() {
     });
     let header = terracast_board::scene::Header::decode(&bytes)
         .unwrap_or_else(|e| panic!("{}: {e}", scene.display()));
-    if bytes.len() != header.file_bytes() {
+    // Objects may follow the colors; the firmware checks them at boot.
+    if bytes.len() < header.file_bytes() {
         panic!(
-            "{}: {} bytes, but its header says {}",
+            "{}: {} bytes, but its header says at least {}",
             scene.display(),
             bytes.len(),
             header.file_bytes()

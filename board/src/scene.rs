@@ -14,9 +14,23 @@
 //!
 //! The header is padded to [`HEADER_BYTES`] so that the heights start
 //! aligned when the file is.
+//!
+//! 3D objects (the kernel's [`StickLayer`]) may follow, from the first
+//! multiple of 4 after the colors ([`objects_at`]):
+//!
+//! | offset | size | what |
+//! |---|---|---|
+//! | 0 | 8 | [`OBJECTS_MAGIC`] |
+//! | 8 | 2 × u32 | sticks (at most [`MAX_STICKS`]), texels |
+//! | 16 | 2 a voxel | a stick index a grid point (0: none) |
+//! | then, from a multiple of 4 | 8 a stick | first texel u32, texels u16, height u16 |
+//! | after them | 3 a texel | texels, RGB |
+//!
+//! The terrain's heights and colors are then the planted ones: a stick's
+//! top and its top texel where it stands.
 
 use core::fmt;
-use terracast::{Camera, Rgb, Terrain, TerrainError};
+use terracast::{Camera, Rgb, Stick, StickError, StickLayer, Terrain, TerrainError};
 
 /// First bytes of a board scene file.
 pub const MAGIC: [u8; 8] = *b"TCBOARD2";
@@ -24,6 +38,13 @@ pub const MAGIC: [u8; 8] = *b"TCBOARD2";
 pub const HEADER_BYTES: usize = 256;
 /// Most views a scene carries.
 pub const MAX_VIEWS: usize = 8;
+/// First bytes of the objects' section.
+pub const OBJECTS_MAGIC: [u8; 8] = *b"TCSTICKS";
+/// Most sticks a board scene's table holds (the firmware's storage for
+/// them is this many).
+pub const MAX_STICKS: usize = 4096;
+/// Bytes of a stick in the file.
+pub const STICK_BYTES: usize = 8;
 const VIEWS_AT: usize = 28;
 const VIEW_BYTES: usize = 28;
 const _: () = assert!(VIEWS_AT + MAX_VIEWS * VIEW_BYTES <= HEADER_BYTES);
@@ -155,6 +176,25 @@ impl Header {
     }
 }
 
+/// Where the objects' section of a scene of `voxels` starts.
+pub const fn objects_at(voxels: usize) -> usize {
+    (HEADER_BYTES + 5 * voxels).next_multiple_of(4)
+}
+
+/// Where, past the objects' section's start, its stick table starts.
+pub const fn sticks_at(voxels: usize) -> usize {
+    (16 + 2 * voxels).next_multiple_of(4)
+}
+
+/// A stick's bytes in the file.
+pub fn encode_stick(stick: &Stick) -> [u8; STICK_BYTES] {
+    let mut out = [0u8; STICK_BYTES];
+    out[..4].copy_from_slice(&stick.first.to_le_bytes());
+    out[4..6].copy_from_slice(&stick.texels.to_le_bytes());
+    out[6..].copy_from_slice(&stick.height.to_le_bytes());
+    out
+}
+
 /// A scene file read in place: the terrain borrows the file's bytes.
 #[derive(Debug, Clone, Copy)]
 pub struct BoardScene<'a> {
@@ -162,6 +202,15 @@ pub struct BoardScene<'a> {
     pub header: Header,
     heights: &'a [u16],
     colors: &'a [Rgb],
+    objects: Option<Objects<'a>>,
+}
+
+/// The objects' section, borrowed from the file.
+#[derive(Debug, Clone, Copy)]
+struct Objects<'a> {
+    points: &'a [u16],
+    sticks: &'a [u8],
+    texels: &'a [Rgb],
 }
 
 /// Why a scene file was refused.
@@ -178,6 +227,12 @@ pub enum SceneError {
     Misaligned,
     /// The kernel refused the terrain.
     Terrain(TerrainError),
+    /// The objects' section does not start with [`OBJECTS_MAGIC`].
+    NotObjects,
+    /// More than [`MAX_STICKS`] sticks, or more than the storage given.
+    TooManySticks,
+    /// The kernel refused the objects.
+    Objects(StickError),
 }
 
 impl fmt::Display for SceneError {
@@ -190,11 +245,50 @@ impl fmt::Display for SceneError {
                 f.write_str("board scene heights are not 2-byte aligned little-endian u16")
             }
             Self::Terrain(e) => write!(f, "board scene terrain refused: {e}"),
+            Self::NotObjects => {
+                f.write_str("board scene has bytes after its colors that are not objects")
+            }
+            Self::TooManySticks => write!(f, "board scene has more than {MAX_STICKS} sticks"),
+            Self::Objects(e) => write!(f, "board scene objects refused: {e}"),
         }
     }
 }
 
 impl core::error::Error for SceneError {}
+
+impl<'a> Objects<'a> {
+    /// Reads the objects' section `bytes` of a scene of `voxels`.
+    fn parse(bytes: &'a [u8], voxels: usize) -> Result<Self, SceneError> {
+        if bytes.get(..OBJECTS_MAGIC.len()) != Some(OBJECTS_MAGIC.as_slice()) {
+            return Err(SceneError::NotObjects);
+        }
+        let number = |at: usize| -> Result<usize, SceneError> {
+            let word = bytes.get(at..at + 4).ok_or(SceneError::Truncated)?;
+            Ok(u32::from_le_bytes([word[0], word[1], word[2], word[3]]) as usize)
+        };
+        let (sticks, texels) = (number(8)?, number(12)?);
+        if sticks > MAX_STICKS {
+            return Err(SceneError::TooManySticks);
+        }
+        let points = bytes
+            .get(16..16 + 2 * voxels)
+            .ok_or(SceneError::Truncated)?;
+        let table = sticks_at(voxels);
+        let sticks = bytes
+            .get(table..table + sticks * STICK_BYTES)
+            .ok_or(SceneError::Truncated)?;
+        let texels_at = table + sticks.len();
+        let texels = texels
+            .checked_mul(3)
+            .and_then(|len| bytes.get(texels_at..texels_at.checked_add(len)?))
+            .ok_or(SceneError::Truncated)?;
+        Ok(Self {
+            points: bytemuck::try_cast_slice(points).map_err(|_| SceneError::Misaligned)?,
+            sticks,
+            texels: bytemuck::try_cast_slice(texels).map_err(|_| SceneError::Misaligned)?,
+        })
+    }
+}
 
 impl<'a> BoardScene<'a> {
     /// Reads a scene file without copying it.
@@ -214,13 +308,56 @@ impl<'a> BoardScene<'a> {
             bytemuck::try_cast_slice(heights).map_err(|_| SceneError::Misaligned)?;
         let colors: &[Rgb] =
             bytemuck::try_cast_slice(colors).map_err(|_| SceneError::Misaligned)?;
+        let objects = match bytes.get(objects_at(voxels)..) {
+            None | Some([]) => None,
+            Some(section) => Some(Objects::parse(section, voxels)?),
+        };
         let scene = Self {
             header,
             heights,
             colors,
+            objects,
         };
         scene.terrain()?;
         Ok(scene)
+    }
+
+    /// Sticks in the scene's table (0 without objects).
+    pub fn stick_count(&self) -> usize {
+        self.objects.map_or(0, |o| o.sticks.len() / STICK_BYTES)
+    }
+
+    /// The scene's objects over `terrain` (its [`BoardScene::terrain`]),
+    /// their stick table decoded into `storage` (at least
+    /// [`BoardScene::stick_count`] long); `None` for a scene without
+    /// objects.
+    pub fn objects<'s>(
+        &self,
+        terrain: &Terrain<'_>,
+        storage: &'s mut [Stick],
+    ) -> Result<Option<StickLayer<'s>>, SceneError>
+    where
+        'a: 's,
+    {
+        let Some(objects) = self.objects else {
+            return Ok(None);
+        };
+        let count = objects.sticks.len() / STICK_BYTES;
+        let sticks = storage.get_mut(..count).ok_or(SceneError::TooManySticks)?;
+        for (stick, bytes) in sticks
+            .iter_mut()
+            .zip(objects.sticks.chunks_exact(STICK_BYTES))
+        {
+            let half = |at: usize| u16::from_le_bytes([bytes[at], bytes[at + 1]]);
+            *stick = Stick {
+                first: u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
+                texels: half(4),
+                height: half(6),
+            };
+        }
+        StickLayer::new(terrain, objects.points, sticks, objects.texels)
+            .map(Some)
+            .map_err(SceneError::Objects)
     }
 
     /// The kernel's terrain over the file's voxels.

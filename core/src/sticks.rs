@@ -57,7 +57,7 @@ use core::fmt;
 const HEIGHT_TO_Q16: u32 = COORD_FRAC_BITS - HEIGHT_FRAC_BITS;
 
 /// One stick of a [`StickLayer`]'s table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Stick {
     /// Its texels are the layer's `texels[first..first + texels]`, bottom
     /// up, one a voxel of height (the last one also above that).

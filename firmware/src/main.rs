@@ -17,6 +17,10 @@
 //!    (`Atmosphere::FLIGHT`), written as `frame-K-atmosphere.rgb`: what
 //!    the atmosphere costs a pixel.
 //!
+//! A scene with objects (`terracast-sim board scene --objects`) renders
+//! them through its stick layer, whose table is decoded into static RAM at
+//! boot.
+//!
 //! The renders, and the render plus the transfer, are timed with SysTick. Under QEMU's `-icount` the clock
 //! advances by instruction count, so ticks convert to instructions exactly
 //! and repeatably (QEMU does not model the DWT cycle counter). A loop of a
@@ -40,10 +44,11 @@ use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
     pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines, Atmosphere,
-    Camera, Coherence, Framebuffer, HeightFilter, NoProbe, Pyramid, RenderOptions, Resolution, Rgb,
-    Shading, View, U8F8,
+    Camera, Coherence, Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid,
+    RenderOptions, Resolution, Rgb, Shading, Stick, Surface, View, WithSticks, U8F8,
 };
-use terracast_board::{scene::BoardScene, wire::frame_capture_bytes, CaptureBus, SpiDisplay};
+use terracast_board::scene::{BoardScene, MAX_STICKS};
+use terracast_board::{wire::frame_capture_bytes, CaptureBus, SpiDisplay};
 
 /// Lets the scene file be read in place as `u16` heights.
 #[repr(C, align(4))]
@@ -68,6 +73,11 @@ static mut COARSE_COLORS: [Rgb; PYRAMID_POINTS] = [[0; 3]; PYRAMID_POINTS];
 static mut BOUNDS: [u16; PYRAMID_CELLS] = [0; PYRAMID_CELLS];
 static mut FRAME: [Rgb; PIXELS] = [[0; 3]; PIXELS];
 static mut CAPTURE: [u8; CAPTURE_BYTES] = [0; CAPTURE_BYTES];
+static mut STICKS: [Stick; MAX_STICKS] = [Stick {
+    first: 0,
+    texels: 0,
+    height: 0,
+}; MAX_STICKS];
 
 /// SysTick's reload: the full 24 bits.
 const RELOAD: u32 = 0x00FF_FFFF;
@@ -248,13 +258,14 @@ fn run() -> Result<(), &'static str> {
     // SAFETY: `run` is called once, from `main`, before any interrupt that
     // could reach these statics is enabled (none ever does); each is
     // borrowed exactly once here.
-    let (coarse_heights, coarse_colors, bounds, frame, capture) = unsafe {
+    let (coarse_heights, coarse_colors, bounds, frame, capture, sticks) = unsafe {
         (
             &mut *addr_of_mut!(COARSE_HEIGHTS),
             &mut *addr_of_mut!(COARSE_COLORS),
             &mut *addr_of_mut!(BOUNDS),
             &mut *addr_of_mut!(FRAME),
             &mut *addr_of_mut!(CAPTURE),
+            &mut *addr_of_mut!(STICKS),
         )
     };
     let mut core = cortex_m::Peripherals::take().ok_or("core peripherals taken twice")?;
@@ -320,99 +331,150 @@ fn run() -> Result<(), &'static str> {
         );
         return level_bound(&pyramid, scene.header.views(), frame);
     }
-    let mut led = FrameLed;
-    for (index, camera) in scene.header.views().iter().enumerate() {
-        let view = View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+    let renders = Renders {
+        options,
+        from_eye,
+        air,
+    };
+    let views = scene.header.views();
+    match scene
+        .objects(&terrain, sticks)
+        .map_err(|_| "the kernel refused the scene's objects")?
+    {
+        Some(layer) => renders.all(
+            &WithSticks::new(&pyramid, layer),
+            views,
+            frame,
+            capture,
+            &mut results,
+        )?,
+        None => renders.all(&pyramid, views, frame, capture, &mut results)?,
+    }
+    write_host_file("board-results.txt\0", results.as_bytes())
+}
 
-        let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
-            .map_err(|_| "framebuffer too small")?;
-        let start = ticks();
-        // scripts/board-profile with ATMOSPHERE=1 profiles the render under
-        // the flight's atmosphere in its place.
-        if option_env!("TERRACAST_BOARD_ATMOSPHERE").is_some() {
-            let mut hazy = air.sink(&view, &mut framebuffer);
-            render(&pyramid, &view, &options, &mut hazy, &mut NoProbe);
-        } else {
-            render(&pyramid, &view, &options, &mut framebuffer, &mut NoProbe);
-        }
-        let kernel_ticks = ticks() - start;
+/// How each view is rendered: the default, from the eye, and under the
+/// flight's atmosphere.
+struct Renders {
+    options: RenderOptions,
+    from_eye: RenderOptions,
+    air: PreparedAtmosphere,
+}
 
-        let bus = CaptureBus::new(capture);
-        let mut display: SpiDisplay<_, _, _, COLUMN> = SpiDisplay::new(
-            bus.spi(),
-            bus.data_command(),
-            bus.frame_done(),
-            IMAGE_WIDTH,
-            IMAGE_HEIGHT,
-        )
-        .map_err(|_| "display refused the image size")?;
-        display
-            .init(&mut BusyDelay)
-            .map_err(|_| "display init failed")?;
-        // The kernel's lines are not columns under pitch: the frame goes to
-        // the display from the framebuffer. A displayed frame costs both.
-        let start = ticks();
-        display
-            .send_frame(frame)
-            .map_err(|_| "display frame failed")?;
-        let display_ticks = kernel_ticks + (ticks() - start);
-        let _ = display.release();
-        let wire = bus
-            .into_written()
-            .map_err(|_| "display capture overflowed")?;
-        let _ = led.set_high();
-        let _ = led.set_low();
+impl Renders {
+    /// Renders every view of `cameras` over `surface` each way, sends the
+    /// default frame through the display driver, writes the frames and
+    /// wire captures to the host and each render's ticks to `results`.
+    fn all<T: Surface>(
+        &self,
+        surface: &T,
+        cameras: &[Camera],
+        frame: &mut [Rgb; PIXELS],
+        capture: &mut [u8; CAPTURE_BYTES],
+        results: &mut heapless::String<1024>,
+    ) -> Result<(), &'static str> {
+        let Self {
+            options,
+            from_eye,
+            air,
+        } = self;
+        let mut led = FrameLed;
+        for (index, camera) in cameras.iter().enumerate() {
+            let view =
+                View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
 
-        let mut name: heapless::String<32> = heapless::String::new();
-        let _ = write!(name, "frame-{index}.rgb\0");
-        write_host_file(&name, frame.as_flattened())?;
-        name.clear();
-        let _ = write!(name, "wire-{index}.bin\0");
-        write_host_file(&name, wire)?;
+            let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+                .map_err(|_| "framebuffer too small")?;
+            let start = ticks();
+            // scripts/board-profile with ATMOSPHERE=1 profiles the render
+            // under the flight's atmosphere in its place.
+            if option_env!("TERRACAST_BOARD_ATMOSPHERE").is_some() {
+                let mut hazy = air.sink(&view, &mut framebuffer);
+                render(surface, &view, options, &mut hazy, &mut NoProbe);
+            } else {
+                render(surface, &view, options, &mut framebuffer, &mut NoProbe);
+            }
+            let kernel_ticks = ticks() - start;
 
-        // The same view with every ray cast from the eye: many more steps
-        // for the same rays, which separates the cost of a step from the
-        // cost of a ray, and checks the slow path on the board too.
-        // scripts/board-profile leaves it out, to profile the default alone.
-        if option_env!("TERRACAST_BOARD_DEFAULT_ONLY").is_some() {
-            continue;
-        }
-        let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
-            .map_err(|_| "framebuffer too small")?;
-        let start = ticks();
-        render(&pyramid, &view, &from_eye, &mut framebuffer, &mut NoProbe);
-        let from_eye_ticks = ticks() - start;
-        name.clear();
-        let _ = write!(name, "frame-{index}-from-eye.rgb\0");
-        write_host_file(&name, frame.as_flattened())?;
+            let bus = CaptureBus::new(capture);
+            let mut display: SpiDisplay<_, _, _, COLUMN> = SpiDisplay::new(
+                bus.spi(),
+                bus.data_command(),
+                bus.frame_done(),
+                IMAGE_WIDTH,
+                IMAGE_HEIGHT,
+            )
+            .map_err(|_| "display refused the image size")?;
+            display
+                .init(&mut BusyDelay)
+                .map_err(|_| "display init failed")?;
+            // The kernel's lines are not columns under pitch: the frame goes
+            // to the display from the framebuffer. A displayed frame costs
+            // both.
+            let start = ticks();
+            display
+                .send_frame(frame)
+                .map_err(|_| "display frame failed")?;
+            let display_ticks = kernel_ticks + (ticks() - start);
+            let _ = display.release();
+            let wire = bus
+                .into_written()
+                .map_err(|_| "display capture overflowed")?;
+            let _ = led.set_high();
+            let _ = led.set_low();
 
-        // The same view under the flight's sky, sun and fog.
-        let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
-            .map_err(|_| "framebuffer too small")?;
-        let start = ticks();
-        render(
-            &pyramid,
-            &view,
-            &options,
-            &mut air.sink(&view, &mut framebuffer),
-            &mut NoProbe,
-        );
-        let atmosphere_ticks = ticks() - start;
-        name.clear();
-        let _ = write!(name, "frame-{index}-atmosphere.rgb\0");
-        write_host_file(&name, frame.as_flattened())?;
-        let _ = writeln!(
+            let mut name: heapless::String<32> = heapless::String::new();
+            let _ = write!(name, "frame-{index}.rgb\0");
+            write_host_file(&name, frame.as_flattened())?;
+            name.clear();
+            let _ = write!(name, "wire-{index}.bin\0");
+            write_host_file(&name, wire)?;
+
+            // The same view with every ray cast from the eye: many more
+            // steps for the same rays, which separates the cost of a step
+            // from the cost of a ray, and checks the slow path on the board
+            // too. scripts/board-profile leaves it out, to profile the
+            // default alone.
+            if option_env!("TERRACAST_BOARD_DEFAULT_ONLY").is_some() {
+                continue;
+            }
+            let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+                .map_err(|_| "framebuffer too small")?;
+            let start = ticks();
+            render(surface, &view, from_eye, &mut framebuffer, &mut NoProbe);
+            let from_eye_ticks = ticks() - start;
+            name.clear();
+            let _ = write!(name, "frame-{index}-from-eye.rgb\0");
+            write_host_file(&name, frame.as_flattened())?;
+
+            // The same view under the flight's sky, sun and fog.
+            let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+                .map_err(|_| "framebuffer too small")?;
+            let start = ticks();
+            render(
+                surface,
+                &view,
+                options,
+                &mut air.sink(&view, &mut framebuffer),
+                &mut NoProbe,
+            );
+            let atmosphere_ticks = ticks() - start;
+            name.clear();
+            let _ = write!(name, "frame-{index}-atmosphere.rgb\0");
+            write_host_file(&name, frame.as_flattened())?;
+            let _ = writeln!(
             results,
             "frame {index} kernel_ticks {kernel_ticks} display_ticks {display_ticks} from_eye_ticks {from_eye_ticks} atmosphere_ticks {atmosphere_ticks}"
         );
-        hprintln!(
-            "terracast-firmware: frame {} rendered in {} ticks ({} with the display)",
-            index,
-            kernel_ticks,
-            display_ticks
-        );
+            hprintln!(
+                "terracast-firmware: frame {} rendered in {} ticks ({} with the display)",
+                index,
+                kernel_ticks,
+                display_ticks
+            );
+        }
+        Ok(())
     }
-    write_host_file("board-results.txt\0", results.as_bytes())
 }
 
 /// Each view turned level (pitch 0, no roll), rendered by the kernel's

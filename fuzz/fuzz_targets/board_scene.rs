@@ -1,6 +1,7 @@
 #![no_main]
 //! The board scene file, read in place as the firmware reads it; every
-//! view it carries goes through the kernel's camera check.
+//! view it carries goes through the kernel's camera check, and its
+//! objects, if any, through the kernel's stick layer check.
 use libfuzzer_sys::fuzz_target;
 use terracast_board::scene::BoardScene;
 
@@ -15,6 +16,10 @@ fuzz_target!(|data: &[u8]| {
         let header = scene.header;
         for camera in header.views() {
             let _ = terracast::View::new(camera, header.image_width, header.image_height);
+        }
+        if let Ok(terrain) = scene.terrain() {
+            let mut sticks = vec![terracast::Stick::default(); scene.stick_count()];
+            let _ = scene.objects(&terrain, &mut sticks);
         }
     }
 });

@@ -10,9 +10,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 use terracast::{
     pyramid_cells, pyramid_points, render, Atmosphere, Camera, Coherence, CountingProbe,
-    Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid, RenderOptions, View,
+    Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid, RenderOptions, Stick, Surface,
+    View, WithSticks,
 };
-use terracast_board::scene::{BoardScene, Header};
+use terracast_board::scene::{self, BoardScene, Header};
 use terracast_board::wire::frame_capture_bytes;
 use terracast_board::{decode, rgb565, CaptureBus, SpiDisplay};
 
@@ -61,6 +62,29 @@ pub fn write_scene(path: &Path, scene: &Scene, image: (u32, u32), views: &[Camer
         bytes.extend_from_slice(&h.to_le_bytes());
     }
     bytes.extend(terrain.colors().iter().flatten());
+    if let Some(objects) = &scene.objects {
+        let voxels = header.voxels();
+        if objects.sticks.len() > scene::MAX_STICKS {
+            return Err(Error::new(format!(
+                "{} sticks; a board scene holds at most {}",
+                objects.sticks.len(),
+                scene::MAX_STICKS
+            )));
+        }
+        bytes.resize(scene::objects_at(voxels), 0);
+        let section = bytes.len();
+        bytes.extend_from_slice(&scene::OBJECTS_MAGIC);
+        bytes.extend_from_slice(&(objects.sticks.len() as u32).to_le_bytes());
+        bytes.extend_from_slice(&(objects.texels.len() as u32).to_le_bytes());
+        for p in &objects.points {
+            bytes.extend_from_slice(&p.to_le_bytes());
+        }
+        bytes.resize(section + scene::sticks_at(voxels), 0);
+        for stick in &objects.sticks {
+            bytes.extend_from_slice(&scene::encode_stick(stick));
+        }
+        bytes.extend(objects.texels.iter().flatten());
+    }
     std::fs::write(path, &bytes)
         .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))
 }
@@ -318,13 +342,13 @@ impl SceneFile {
         BoardScene::parse(&bytemuck::cast_slice::<u16, u8>(&self.words)[..self.len])
     }
 
-    /// Renders every view as the firmware does: pyramid with mean heights,
-    /// default options, into a framebuffer and through the display driver;
-    /// then with every ray cast from the eye.
+    /// Renders every view as the firmware does: pyramid with the default
+    /// height filter (and the scene's objects, if it has them), default
+    /// options, into a framebuffer and through the display driver; then
+    /// with every ray cast from the eye, and under the flight's atmosphere.
     pub fn render(&self) -> Result<Vec<HostFrame>> {
         let scene = self.scene().map_err(|e| Error::new(e.to_string()))?;
         let header = scene.header;
-        let (width, height) = (header.image_width, header.image_height);
         let terrain = scene.terrain().map_err(|e| Error::new(e.to_string()))?;
         let (w, d) = (header.map_width, header.map_depth);
         let mut coarse_heights = vec![0u16; pyramid_points(w, d)];
@@ -340,6 +364,20 @@ impl SceneFile {
         .map_err(|e| Error::new(format!("pyramid not built: {e}")))?;
         let pyramid = Pyramid::new(terrain, &coarse_heights, &coarse_colors, &bounds)
             .map_err(|e| Error::new(format!("pyramid rejected: {e}")))?;
+        let mut sticks = vec![Stick::default(); scene.stick_count()];
+        match scene
+            .objects(&terrain, &mut sticks)
+            .map_err(|e| Error::new(e.to_string()))?
+        {
+            Some(layer) => Self::render_views(&WithSticks::new(&pyramid, layer), header),
+            None => Self::render_views(&pyramid, header),
+        }
+    }
+
+    /// Renders every view of `header` over `surface` (see
+    /// [`SceneFile::render`]).
+    fn render_views<T: Surface>(surface: &T, header: Header) -> Result<Vec<HostFrame>> {
+        let (width, height) = (header.image_width, header.image_height);
         let options = RenderOptions::default();
         let from_eye = RenderOptions {
             coherence: Coherence::Off,
@@ -361,13 +399,13 @@ impl SceneFile {
                 let mut probe = CountingProbe::default();
                 match air {
                     Some(air) => render(
-                        &pyramid,
+                        surface,
                         &view,
                         options,
                         &mut air.sink(&view, &mut framebuffer),
                         &mut probe,
                     ),
-                    None => render(&pyramid, &view, options, &mut framebuffer, &mut probe),
+                    None => render(surface, &view, options, &mut framebuffer, &mut probe),
                 }
                 Ok((colors.into_iter().flatten().collect(), probe))
             };
@@ -376,7 +414,7 @@ impl SceneFile {
             let (atmosphere_rgb, _) = frame(&options, Some(&air))?;
             frames.push(HostFrame {
                 rgb,
-                wire: display_capture(&pyramid, &view, &options, width, height)?,
+                wire: display_capture(surface, &view, &options, width, height)?,
                 steps: counts.steps,
                 color_fetches: counts.color_fetches,
                 from_eye_rgb,
@@ -460,9 +498,52 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
     })
 }
 
+/// The board's kernel renders of `report` (a scene with objects) against
+/// those of the same views without them, whose `board-results.txt` is in
+/// `without`: instructions a pixel of each and their ratio, as a table.
+pub fn against_without(report: &BoardReport, without: &Path) -> Result<String> {
+    let bare = parse_results(&read(&without.join("board-results.txt"))?)?;
+    if bare.frames.len() != report.frames.len() {
+        return Err(Error::new(format!(
+            "{} has {} views, the scene with objects {}",
+            without.display(),
+            bare.frames.len(),
+            report.frames.len()
+        )));
+    }
+    let pixels = f64::from(report.image.0) * f64::from(report.image.1);
+    let (with_tick, bare_tick) = (report.instructions_per_tick, bare.instructions_per_tick()?);
+    let mut out = String::from(
+        "with objects against without (the same views): instructions a pixel\nview  without  with  ratio\n",
+    );
+    let (mut all_bare, mut all_with) = (0.0, 0.0);
+    for (f, &(bare_ticks, ..)) in report.frames.iter().zip(&bare.frames) {
+        let (without, with) = (
+            bare_ticks as f64 * bare_tick / pixels,
+            f.kernel_ticks as f64 * with_tick / pixels,
+        );
+        let _ = writeln!(
+            out,
+            "{:>4}  {without:>7.0}  {with:>4.0}  {:>5.3}x",
+            f.index,
+            with / without.max(1.0)
+        );
+        all_bare += without;
+        all_with += with;
+    }
+    let _ = writeln!(
+        out,
+        " all  {:>7.0}  {:>4.0}  {:>5.3}x",
+        all_bare / report.frames.len().max(1) as f64,
+        all_with / report.frames.len().max(1) as f64,
+        all_with / all_bare.max(1.0)
+    );
+    Ok(out)
+}
+
 /// The display wire the host produces for a view, init included.
-fn display_capture(
-    pyramid: &Pyramid<'_>,
+fn display_capture<T: Surface>(
+    surface: &T,
     view: &View,
     options: &RenderOptions,
     width: u32,
@@ -484,7 +565,7 @@ fn display_capture(
     let mut colors = vec![[0u8; 3]; width as usize * height as usize];
     let mut framebuffer =
         Framebuffer::new(&mut colors, width, height).map_err(|e| Error::new(e.to_string()))?;
-    render(pyramid, view, options, &mut framebuffer, &mut NoProbe);
+    render(surface, view, options, &mut framebuffer, &mut NoProbe);
     display
         .send_frame(&colors)
         .map_err(|e| Error::new(e.to_string()))?;

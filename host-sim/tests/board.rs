@@ -20,9 +20,15 @@ fn fresh_dir(name: &str) -> PathBuf {
 /// for it (the host's own frames, 1000 ticks a frame at 40 instructions a
 /// tick).
 fn scene_and_board_output(name: &str) -> (PathBuf, PathBuf) {
+    scene_and_board_output_with(name, &[], 1000)
+}
+
+/// A small scene written with the extra `board scene` arguments `extra`,
+/// and what the board would have written for it, `ticks` a frame.
+fn scene_and_board_output_with(name: &str, extra: &[&str], ticks: u32) -> (PathBuf, PathBuf) {
     let dir = fresh_dir(name);
     let scene = dir.join("scene.tcb");
-    let (code, out, err) = sim(&[
+    let mut args = vec![
         "board",
         "scene",
         "--procedural-size",
@@ -31,7 +37,9 @@ fn scene_and_board_output(name: &str) -> (PathBuf, PathBuf) {
         "40x30",
         "--out",
         s(&scene),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let (code, out, err) = sim(&args);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("96x96 map, 6 views at 40x30"), "{out}");
     let board = dir.join("board");
@@ -53,7 +61,7 @@ fn scene_and_board_output(name: &str) -> (PathBuf, PathBuf) {
         )
         .unwrap();
         results += &format!(
-            "frame {k} kernel_ticks 1000 display_ticks 1100 from_eye_ticks 3000 atmosphere_ticks 1050\n"
+            "frame {k} kernel_ticks {ticks} display_ticks 1100 from_eye_ticks 3000 atmosphere_ticks 1050\n"
         );
     }
     std::fs::write(board.join("board-results.txt"), results).unwrap();
@@ -186,4 +194,66 @@ fn exceeded_budget_fails_and_missing_or_bad_files_are_named() {
         err.contains("'--procedural-size ") && err.contains("from 2 to 800"),
         "{err}"
     );
+}
+
+#[test]
+fn a_scene_with_objects_renders_them_and_is_compared_with_the_bare_map() {
+    let (bare_scene, bare_board) = scene_and_board_output("objects-bare");
+    let (scene, board) = scene_and_board_output_with("objects", &["--objects"], 1300);
+    let (code, out, err) = sim(&[
+        "board",
+        "verify",
+        "--scene",
+        s(&scene),
+        "--from",
+        s(&board),
+        "--without",
+        s(&bare_board),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("with objects against without"), "{out}");
+    assert!(out.contains("   0       33    43  1.300x"), "{out}");
+    assert!(out.contains(" all       33    43  1.300x"), "{out}");
+    // The objects are in the frames.
+    let bare = SceneFile::read(&bare_scene).unwrap().render().unwrap();
+    let planted = SceneFile::read(&scene).unwrap().render().unwrap();
+    assert!(bare.iter().zip(&planted).any(|(b, p)| b.rgb != p.rgb));
+
+    // A damaged objects section: one line that names it.
+    let bytes = std::fs::read(&scene).unwrap();
+    let section = terracast_board::scene::objects_at(96 * 96);
+    let damaged = |name: &str, change: &dyn Fn(&mut Vec<u8>)| {
+        let mut bytes = bytes.clone();
+        change(&mut bytes);
+        let path = scene.with_file_name(name);
+        std::fs::write(&path, bytes).unwrap();
+        path
+    };
+    let bad_magic = damaged("magic.tcb", &|b| b[section] = b'X');
+    let error = SceneFile::read(&bad_magic).unwrap_err().to_string();
+    assert!(error.contains("not objects"), "{error}");
+    let short = damaged("short.tcb", &|b| b.truncate(b.len() - 2));
+    let error = SceneFile::read(&short).unwrap_err().to_string();
+    assert!(error.contains("shorter than its header says"), "{error}");
+    // A grid point naming a stick past the table: refused by the kernel
+    // when the scene is rendered (on the board, at boot).
+    let past = damaged("past.tcb", &|b| {
+        b[section + 16..section + 18].copy_from_slice(&60_000u16.to_le_bytes())
+    });
+    let (code, _, err) = sim(&["board", "verify", "--scene", s(&past), "--from", s(&board)]);
+    assert_ne!(code, 0);
+    assert!(err.contains("objects refused"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    // A map too large for the board's code memory with its objects.
+    let (code, _, err) = sim(&[
+        "board",
+        "scene",
+        "--objects",
+        "--procedural-size",
+        "800",
+        "--out",
+        s(&scene.with_file_name("large.tcb")),
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("at most 740 a side"), "{err}");
 }

@@ -10,7 +10,7 @@ mod values;
 mod view;
 
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
-use crate::board::{board_views, verify, write_scene};
+use crate::board::{against_without, board_views, verify, write_scene};
 use crate::error::{Error, Result};
 use crate::kernel::{render_kernel_in, PixelRays};
 use crate::objects::placing::ScenePlan;
@@ -96,6 +96,11 @@ struct BoardSceneArgs {
     /// Only the board's view N (0 to 5), to profile one view alone.
     #[arg(long, value_name = "N", value_parser = number(0usize, 5), allow_hyphen_values = true)]
     view: Option<usize>,
+    /// Plant a wood and a village on the map (as `render --objects`): the
+    /// scene carries their stick layer and the board renders through it
+    /// (maps up to 740 a side).
+    #[arg(long)]
+    objects: bool,
     /// Output scene file.
     #[arg(long, value_name = "SCENE.tcb")]
     out: PathBuf,
@@ -114,6 +119,11 @@ struct BoardVerifyArgs {
     /// this.
     #[arg(long, value_name = "N", value_parser = positive(0.0f64, 1e9), allow_hyphen_values = true)]
     budget: Option<f64>,
+    /// The board's results for the same views without objects (a folder
+    /// holding its board-results.txt): the scene's instructions a pixel
+    /// against them, view by view.
+    #[arg(long, value_name = "DIR")]
+    without: Option<PathBuf>,
 }
 
 /// The kernel's vertical ray coherence.
@@ -447,15 +457,29 @@ pub fn run(cli: Cli) -> Result<()> {
 fn board_scene_command(args: BoardSceneArgs) -> Result<()> {
     let mut outputs = Outputs::new();
     let out = outputs.output("--out", &args.out)?;
-    let scene = procedural(args.procedural_size, args.seed);
+    // 5 bytes a voxel, and 2 more for the objects' stick index, must fit
+    // the board's 4 MiB of code memory beside the code.
+    const MAX_SIDE_WITH_OBJECTS: u32 = 740;
+    if args.objects && args.procedural_size > MAX_SIDE_WITH_OBJECTS {
+        return Err(Error::new(format!(
+            "with --objects a board map is at most {MAX_SIDE_WITH_OBJECTS} a side \
+             (7 bytes a voxel in the board's 4 MiB of code memory)"
+        )));
+    }
+    let mut scene = procedural(args.procedural_size, args.seed);
+    // The views stand where they do over the bare map, objects or not.
     let mut views = board_views(args.procedural_size, scene.max_height());
     if let Some(view) = args.view {
         views = vec![views[view]];
     }
+    let planted = args
+        .objects
+        .then(|| scene.plant_objects(args.seed))
+        .map_or(String::new(), |line| format!("; {line}"));
     write_scene(outputs.temporary(out), &scene, args.size, &views)?;
     outputs.commit()?;
     println!(
-        "board scene: {0}x{0} map, {1} views at {2}x{3} -> {4}",
+        "board scene: {0}x{0} map, {1} views at {2}x{3} -> {4}{planted}",
         args.procedural_size,
         views.len(),
         args.size.0,
@@ -468,6 +492,9 @@ fn board_scene_command(args: BoardSceneArgs) -> Result<()> {
 fn board_verify_command(args: BoardVerifyArgs) -> Result<()> {
     let report = verify(&args.scene, &args.from)?;
     print!("{}", report.table());
+    if let Some(without) = &args.without {
+        print!("{}", against_without(&report, without)?);
+    }
     let differing: Vec<String> = report
         .frames
         .iter()
