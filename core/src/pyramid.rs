@@ -275,39 +275,28 @@ impl<'a> Pyramid<'a> {
         colors: &mut [Rgb],
         bounds: &mut [u16],
     ) -> Result<(), PyramidError> {
+        Self::build_with_sticks(terrain, filter, None, heights, colors, bounds)
+    }
+
+    /// [`Pyramid::build`] for a terrain with objects standing on it
+    /// (`sticks`, if any): each coarser level's heights are raised to the
+    /// tops of the sticks nearest its points before the bounds are made,
+    /// so a far object keeps its silhouette (Cohen-Or's coarse heights as
+    /// the maximum over the finer sticks); colors are filtered as the
+    /// terrain's.
+    pub fn build_with_sticks(
+        terrain: &Terrain<'_>,
+        filter: HeightFilter,
+        sticks: Option<&crate::StickLayer<'_>>,
+        heights: &mut [u16],
+        colors: &mut [Rgb],
+        bounds: &mut [u16],
+    ) -> Result<(), PyramidError> {
         let (width, depth) = (terrain.width(), terrain.depth());
         check_storage(width, depth, heights.len(), colors.len(), bounds.len())?;
-        let levels = level_count(width, depth) as u32;
-
-        // Mean (or max) levels, each from the one below.
-        let mut offset = 0;
-        for level in 1..levels {
-            let (w, d) = (level_side(width, level), level_side(depth, level));
-            let points = w as usize * d as usize;
-            let (done, rest) = heights.split_at_mut(offset);
-            let (done_c, rest_c) = colors.split_at_mut(offset);
-            let (fine_h, fine_c, fw, fd): (&[u16], &[Rgb], u32, u32) = if level == 1 {
-                (terrain.heights(), terrain.colors(), width, depth)
-            } else {
-                let (fw, fd) = (level_side(width, level - 1), level_side(depth, level - 1));
-                let fine = fw as usize * fd as usize;
-                (&done[offset - fine..], &done_c[offset - fine..], fw, fd)
-            };
-            let coarse = Grid { width: w, depth: d };
-            let fine = Grid {
-                width: fw,
-                depth: fd,
-            };
-            downsample(
-                fine,
-                fine_h,
-                fine_c,
-                coarse,
-                &mut rest[..points],
-                &mut rest_c[..points],
-                filter,
-            );
-            offset += points;
+        build_levels(terrain, filter, heights, colors);
+        if let Some(sticks) = sticks {
+            sticks.raise_coarse(terrain, heights);
         }
         build_bounds(terrain, heights, bounds);
         Ok(())
@@ -436,6 +425,48 @@ fn check_storage(
         return Err(PyramidError::BoundStorage { needed: cells });
     }
     Ok(())
+}
+
+/// Fills `heights` and `colors` (sized as [`check_storage`] checked) with
+/// the coarser levels of `terrain`, each from the one below.
+fn build_levels(
+    terrain: &Terrain<'_>,
+    filter: HeightFilter,
+    heights: &mut [u16],
+    colors: &mut [Rgb],
+) {
+    let (width, depth) = (terrain.width(), terrain.depth());
+    let levels = level_count(width, depth) as u32;
+    // Mean (or max) levels, each from the one below.
+    let mut offset = 0;
+    for level in 1..levels {
+        let (w, d) = (level_side(width, level), level_side(depth, level));
+        let points = w as usize * d as usize;
+        let (done, rest) = heights.split_at_mut(offset);
+        let (done_c, rest_c) = colors.split_at_mut(offset);
+        let (fine_h, fine_c, fw, fd): (&[u16], &[Rgb], u32, u32) = if level == 1 {
+            (terrain.heights(), terrain.colors(), width, depth)
+        } else {
+            let (fw, fd) = (level_side(width, level - 1), level_side(depth, level - 1));
+            let fine = fw as usize * fd as usize;
+            (&done[offset - fine..], &done_c[offset - fine..], fw, fd)
+        };
+        let coarse = Grid { width: w, depth: d };
+        let fine = Grid {
+            width: fw,
+            depth: fd,
+        };
+        downsample(
+            fine,
+            fine_h,
+            fine_c,
+            coarse,
+            &mut rest[..points],
+            &mut rest_c[..points],
+            filter,
+        );
+        offset += points;
+    }
 }
 
 #[derive(Debug, Clone, Copy)]

@@ -49,6 +49,7 @@
 
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS};
+use crate::pyramid::{level_count, level_side, MAX_LEVELS};
 use crate::surface::{Extent, Grid, Surface};
 use crate::terrain::Terrain;
 use core::fmt;
@@ -217,6 +218,48 @@ impl<'a> StickLayer<'a> {
             + core::mem::size_of_val(self.sticks)
             + core::mem::size_of_val(self.texels)
     }
+
+    /// Raises the coarser levels' heights (`coarse`: levels 1 and up of
+    /// `terrain`'s pyramid, laid out as [`Pyramid::build`] fills them) to
+    /// the top of every stick nearest each of their points, so that a
+    /// coarse level keeps an object's silhouette rather than filtering it
+    /// down with the ground around it. Visits each stick once a level.
+    ///
+    /// [`Pyramid::build`]: crate::Pyramid::build
+    pub(crate) fn raise_coarse(&self, terrain: &Terrain<'_>, coarse: &mut [u16]) {
+        let (width, depth) = (terrain.width(), terrain.depth());
+        let levels = level_count(width, depth);
+        // Each coarser level's width and where it starts in `coarse`, once.
+        let mut layout = [(0usize, 0usize, 0usize); MAX_LEVELS];
+        let mut offset = 0;
+        for (level, slot) in layout.iter_mut().enumerate().take(levels).skip(1) {
+            let (w, d) = (
+                level_side(width, level as u32) as usize,
+                level_side(depth, level as u32) as usize,
+            );
+            *slot = (offset, w, d);
+            offset += w * d;
+        }
+        let row = width as usize;
+        for (index, (&point, &top)) in self.points.iter().zip(terrain.heights()).enumerate() {
+            if point == 0 {
+                continue;
+            }
+            let (x, y) = (index % row, index / row);
+            for (level, &(offset, w, d)) in layout.iter().enumerate().take(levels).skip(1) {
+                // The nearest point of the level: it sits on level 0's
+                // point 2^level times its own coordinates.
+                let half = 1 << (level - 1);
+                let (cx, cy) = (
+                    ((x + half) >> level).min(w - 1),
+                    ((y + half) >> level).min(d - 1),
+                );
+                if let Some(h) = coarse.get_mut(offset + cy * w + cx) {
+                    *h = (*h).max(top);
+                }
+            }
+        }
+    }
 }
 
 /// A surface with sticks on its level 0 (see the module).
@@ -359,7 +402,8 @@ impl<'s, T: Surface + ?Sized> Surface for WithSticks<'s, T> {
 mod tests {
     use super::*;
     use crate::{
-        render, Camera, Coherence, Framebuffer, NoProbe, Pyramid, RenderOptions, Resolution, View,
+        pyramid_cells, pyramid_points, render, Camera, Coherence, Framebuffer, HeightFilter,
+        NoProbe, Pyramid, RenderOptions, Resolution, View,
     };
     use std::vec;
     use std::vec::Vec;
@@ -580,6 +624,74 @@ mod tests {
                 "{camera:?}"
             );
         }
+    }
+
+    #[test]
+    fn coarse_levels_keep_the_sticks_tops() {
+        let map = walled();
+        let terrain = Terrain::new(SIDE, SIDE, &map.heights, &map.colors).unwrap();
+        let texels = texels();
+        let layer = StickLayer::new(&terrain, &map.points, &STICKS, &texels).unwrap();
+        let build = |sticks: Option<&StickLayer<'_>>| {
+            let (points, cells) = (pyramid_points(SIDE, SIDE), pyramid_cells(SIDE, SIDE));
+            let (mut heights, mut colors, mut bounds) =
+                (vec![0; points], vec![[0; 3]; points], vec![0; cells]);
+            Pyramid::build_with_sticks(
+                &terrain,
+                HeightFilter::default(),
+                sticks,
+                &mut heights,
+                &mut colors,
+                &mut bounds,
+            )
+            .unwrap();
+            (heights, colors, bounds)
+        };
+        let (filtered, filtered_colors, _) = build(None);
+        let (raised, raised_colors, raised_bounds) = build(Some(&layer));
+        let pyramid = Pyramid::new(terrain, &raised, &raised_colors, &raised_bounds).unwrap();
+        let wall_top = GROUND + 6 * 16;
+        let lone_top = GROUND + 3 * 16;
+        for level in 1..pyramid.levels() {
+            let grid = pyramid.level(level).unwrap();
+            let at = |x: usize, y: usize| {
+                let (w, shift) = (grid.width() as usize, level);
+                let half = 1 << (shift - 1);
+                let (cx, cy) = ((x + half) >> shift, (y + half) >> shift);
+                grid.heights()[cy.min(w - 1) * w + cx.min(w - 1)]
+            };
+            // The point nearest a stick stands as high as its top, on
+            // every level; the ground far from them is left alone.
+            assert_eq!(at(20, 16), wall_top, "level {level}");
+            assert!(at(10, 8) >= lone_top, "level {level}");
+        }
+        // Filtered, the sticks sink into the ground around them: raising
+        // only ever lifts a point, and lifts some.
+        assert!(filtered.iter().zip(&raised).all(|(f, r)| f <= r));
+        assert_ne!(filtered, raised);
+        // Colors are filtered either way.
+        assert_eq!(filtered_colors, raised_colors);
+        // And the raised pyramid renders: the first hit's bounds hold the
+        // raised heights, so a ray through the bounds sees what the walk
+        // alone sees.
+        let view = View::new(&Camera::looking([2.0, 16.0, 9.0], 15.0, 10.0), 48, 36).unwrap();
+        let frame = |hierarchical_first_hit| {
+            let mut colors = vec![[0; 3]; 48 * 36];
+            let mut frame = Framebuffer::new(&mut colors, 48, 36).unwrap();
+            let options = RenderOptions {
+                hierarchical_first_hit,
+                ..RenderOptions::default()
+            };
+            render(
+                &WithSticks::new(&pyramid, layer),
+                &view,
+                &options,
+                &mut frame,
+                &mut NoProbe,
+            );
+            colors
+        };
+        assert_eq!(frame(true), frame(false));
     }
 
     #[test]

@@ -283,10 +283,14 @@ fn run() -> Result<(), &'static str> {
     let terrain = scene
         .terrain()
         .map_err(|_| "the kernel refused the terrain")?;
+    let objects = scene
+        .objects(&terrain, sticks)
+        .map_err(|_| "the kernel refused the scene's objects")?;
     let start = ticks();
-    Pyramid::build(
+    Pyramid::build_with_sticks(
         &terrain,
         HeightFilter::default(),
+        objects.as_ref(),
         coarse_heights,
         coarse_colors,
         bounds,
@@ -337,10 +341,7 @@ fn run() -> Result<(), &'static str> {
         air,
     };
     let views = scene.header.views();
-    match scene
-        .objects(&terrain, sticks)
-        .map_err(|_| "the kernel refused the scene's objects")?
-    {
+    match objects {
         Some(layer) => renders.all(
             &WithSticks::new(&pyramid, layer),
             views,

@@ -351,12 +351,17 @@ impl SceneFile {
         let header = scene.header;
         let terrain = scene.terrain().map_err(|e| Error::new(e.to_string()))?;
         let (w, d) = (header.map_width, header.map_depth);
+        let mut sticks = vec![Stick::default(); scene.stick_count()];
+        let objects = scene
+            .objects(&terrain, &mut sticks)
+            .map_err(|e| Error::new(e.to_string()))?;
         let mut coarse_heights = vec![0u16; pyramid_points(w, d)];
         let mut coarse_colors = vec![[0u8; 3]; pyramid_points(w, d)];
         let mut bounds = vec![0u16; pyramid_cells(w, d)];
-        Pyramid::build(
+        Pyramid::build_with_sticks(
             &terrain,
             HeightFilter::default(),
+            objects.as_ref(),
             &mut coarse_heights,
             &mut coarse_colors,
             &mut bounds,
@@ -364,11 +369,7 @@ impl SceneFile {
         .map_err(|e| Error::new(format!("pyramid not built: {e}")))?;
         let pyramid = Pyramid::new(terrain, &coarse_heights, &coarse_colors, &bounds)
             .map_err(|e| Error::new(format!("pyramid rejected: {e}")))?;
-        let mut sticks = vec![Stick::default(); scene.stick_count()];
-        match scene
-            .objects(&terrain, &mut sticks)
-            .map_err(|e| Error::new(e.to_string()))?
-        {
+        match objects {
             Some(layer) => Self::render_views(&WithSticks::new(&pyramid, layer), header),
             None => Self::render_views(&pyramid, header),
         }

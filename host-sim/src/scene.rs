@@ -46,6 +46,18 @@ fn bilinear([a, b, c, e]: [[f64; 3]; 4], fx: f64, fy: f64) -> [f64; 3] {
     })
 }
 
+/// How the pyramid's coarser levels carry the objects' heights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ObjectHeights {
+    /// Raised to the tallest stick nearest each coarse point
+    /// ([`Pyramid::build_with_sticks`]): far objects keep their
+    /// silhouettes.
+    #[default]
+    Max,
+    /// Filtered with the ground around them, as the terrain's heights are.
+    Filtered,
+}
+
 /// A scene in the kernel's storage format with its pyramid; lends a
 /// [`Terrain`] and a [`Pyramid`].
 #[derive(Debug, Clone)]
@@ -309,6 +321,16 @@ impl Scene {
 
     /// As [`Scene::to_kernel`], with the coarse levels' height filter.
     pub fn to_kernel_with(&self, filter: HeightFilter) -> Result<KernelScene> {
+        self.to_kernel_with_object_heights(filter, ObjectHeights::Max)
+    }
+
+    /// [`Scene::to_kernel_with`], the objects' heights on the coarser
+    /// levels made as `object_heights` says.
+    pub fn to_kernel_with_object_heights(
+        &self,
+        filter: HeightFilter,
+        object_heights: ObjectHeights,
+    ) -> Result<KernelScene> {
         let heights = self
             .heights
             .iter()
@@ -339,9 +361,19 @@ impl Scene {
         };
         let terrain = Terrain::new(w, d, &scene.heights, &scene.colors)
             .map_err(|e| Error::new(format!("terrain rejected by the kernel: {e}")))?;
-        Pyramid::build(
+        // Coarse levels keep the objects' silhouettes unless asked not to.
+        let sticks = match &scene.objects {
+            Some(objects) if object_heights == ObjectHeights::Max => Some(
+                objects
+                    .layer(&terrain)
+                    .map_err(|e| Error::new(format!("objects rejected by the kernel: {e}")))?,
+            ),
+            _ => None,
+        };
+        Pyramid::build_with_sticks(
             &terrain,
             filter,
+            sticks.as_ref(),
             &mut scene.coarse_heights,
             &mut scene.coarse_colors,
             &mut scene.bounds,
