@@ -220,6 +220,31 @@ impl Shape {
         Self { columns }
     }
 
+    /// The most grid points across and the most voxels tall an object
+    /// may be once placed (turned and scaled).
+    pub const MAX_PLACED_SIDE: f64 = 1024.0;
+
+    /// Why this shape cannot be placed at `scale`: too wide or too tall
+    /// once scaled (checked before [`Shape::placed`] builds it).
+    pub fn too_large_at(&self, scale: f64) -> Option<String> {
+        let (low, high) = self.bounds()?;
+        let across = f64::from((high[0] - low[0]).max(high[1] - low[1]) + 1) * scale;
+        let tall = f64::from(self.columns.iter().map(|c| c.height).max().unwrap_or(0)) * scale;
+        if across * std::f64::consts::SQRT_2 > Self::MAX_PLACED_SIDE {
+            Some(format!(
+                "scaled, it is {across:.0} points across; an object turned any way must fit {} points",
+                Self::MAX_PLACED_SIDE
+            ))
+        } else if tall > f64::from(Terrain::MAX_HEIGHT) {
+            Some(format!(
+                "scaled, it is {tall:.0} voxels tall; the kernel's heights reach {}",
+                Terrain::MAX_HEIGHT
+            ))
+        } else {
+            None
+        }
+    }
+
     /// The lowest and highest grid offsets of the footprint, if any.
     fn bounds(&self) -> Option<([i32; 2], [i32; 2])> {
         let first = self.columns.first()?;
@@ -664,6 +689,29 @@ mod tests {
         );
         let kernel = a.to_kernel().unwrap();
         assert!(oa.layer(&kernel.terrain().unwrap()).is_ok());
+    }
+
+    #[test]
+    fn an_object_too_large_once_scaled_is_refused_before_it_is_built() {
+        let wide = Shape {
+            columns: (0..200)
+                .map(|dx| Column {
+                    dx,
+                    dy: 0,
+                    height: 600,
+                    texels: vec![[1, 2, 3]; 600],
+                })
+                .collect(),
+        };
+        assert_eq!(wide.too_large_at(1.0), None);
+        let why = wide.too_large_at(8.0).unwrap();
+        assert!(why.contains("1600 points across"), "{why}");
+        let tall = Shape {
+            columns: wide.columns[..2].to_vec(),
+        };
+        let why = tall.too_large_at(8.0).unwrap();
+        assert!(why.contains("4800 voxels tall"), "{why}");
+        assert!(Shape::library("house").unwrap().too_large_at(8.0).is_none());
     }
 
     #[test]

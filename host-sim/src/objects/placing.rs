@@ -185,6 +185,9 @@ impl ScenePlan {
                     "{name}: {what}: heading and position must be finite numbers"
                 )));
             }
+            if let Some(why) = shape.too_large_at(place.scale) {
+                return Err(Error::new(format!("{name}: {what}: {why}")));
+            }
             let at = (place.at[0].round() as i32, place.at[1].round() as i32);
             placements.push((what, shape.placed(place.heading, place.scale), at));
         }
