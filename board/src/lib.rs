@@ -13,6 +13,8 @@
 //!   image the way the controller would. On the host the capture is the mock
 //!   bus of the driver's tests; on the emulated board it is how the frame
 //!   leaves the chip.
+//! - [`governed`]: the governor's check: the cameras and the budget of a
+//!   run of frames the board renders within one budget, as the host does.
 //! - [`scene`]: the board scene file: a terrain and a list of views, packed by
 //!   the host (`terracast-sim board scene`) and baked into the firmware.
 //!
@@ -21,6 +23,7 @@
 #![deny(missing_docs, unsafe_code, missing_debug_implementations)]
 
 pub mod display;
+pub mod governed;
 pub mod scene;
 pub mod wire;
 

@@ -9,10 +9,11 @@ use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
 use terracast::{
-    pyramid_cells, pyramid_points, render, Atmosphere, Camera, Coherence, CountingProbe,
+    pyramid_cells, pyramid_points, render, Atmosphere, Camera, Coherence, CountingProbe, FrameCost,
     Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid, RenderOptions, Stick, Surface,
     View, WithSticks,
 };
+use terracast_board::governed;
 use terracast_board::scene::{self, BoardScene, Header};
 use terracast_board::wire::frame_capture_bytes;
 use terracast_board::{decode, rgb565, CaptureBus, SpiDisplay};
@@ -165,6 +166,21 @@ pub struct BoardReport {
     pub pyramid_ticks: u64,
     /// Instructions a tick, from the board's calibration loop.
     pub instructions_per_tick: f64,
+    /// The governor's run (`terracast_board::governed`), on a bare map.
+    pub governed: Vec<GovernedCheck>,
+}
+
+/// One frame of the governor's run on the board.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GovernedCheck {
+    /// The camera it was rendered from.
+    pub camera: Camera,
+    /// Pixels that differ between board and host.
+    pub differing_pixels: usize,
+    /// What the host's governor did, the board's too when the frames agree.
+    pub cost: FrameCost,
+    /// The board's ticks for the frame.
+    pub ticks: u64,
 }
 
 impl BoardReport {
@@ -279,7 +295,81 @@ impl BoardReport {
             "pyramid build at boot: {:.0} instructions",
             self.pyramid_ticks as f64 * per_tick
         );
+        if !self.governed.is_empty() {
+            out.push_str(&self.governed_table());
+        }
         out
+    }
+
+    /// Each governed frame's board instructions.
+    fn governed_instructions(&self, check: &GovernedCheck) -> f64 {
+        check.ticks as f64 * self.instructions_per_tick
+    }
+
+    /// The governor's run: each frame's bias, refinement, cost as priced
+    /// and as counted on the board, against the budget; their spread; the
+    /// prices fitted to the counts.
+    fn governed_table(&self) -> String {
+        let mut out = String::from(
+            "\ngoverned frames (one budget, Prices::BOARD); work a pixel of the image\nframe  pitch  frame      bias  coarse lines  filled rays  refined lines  pixels  lines  rays  steps  colors  hits  levels  base/px  priced/budget  board/budget  board/priced\n",
+        );
+        let image = f64::from(self.image.0) * f64::from(self.image.1);
+        for (index, g) in self.governed.iter().enumerate() {
+            let budget = g.cost.budget.max(1) as f64;
+            let board = self.governed_instructions(g);
+            let w = &g.cost.work;
+            let _ = writeln!(
+                out,
+                "{:>5}  {:>5.0}  {:<9}  {:>4.2}  {:>12}  {:>11}  {:>13}  {:>6.3}  {:>5.4}  {:>4.2}  {:>5.2}  {:>6.2}  {:>4.2}  {:>6.2}  {:>7.0}  {:>13.3}  {:>12.3}  {:>12.3}",
+                index,
+                g.camera.pitch_deg,
+                if g.differing_pixels == 0 {
+                    "identical"
+                } else {
+                    "DIFFERENT"
+                },
+                g.cost.level_bias.to_num::<f64>(),
+                g.cost.coarse_lines,
+                g.cost.filled_rays,
+                g.cost.refined_lines,
+                w.pixels as f64 / image,
+                w.lines as f64 / image,
+                w.rays as f64 / image,
+                w.steps as f64 / image,
+                w.colors as f64 / image,
+                w.hits as f64 / image,
+                w.hit_levels as f64 / image,
+                g.cost.base_cost as f64 / image,
+                g.cost.cost as f64 / budget,
+                board / budget,
+                board / (g.cost.cost.max(1) as f64),
+            );
+        }
+        let (least, most) = self.governed_shares();
+        let _ = writeln!(
+            out,
+            "board instructions {least:.3} to {most:.3} of the budget: max/min {:.3}",
+            most / least.max(1e-12)
+        );
+        let (least, most) = self
+            .governed
+            .iter()
+            .map(|g| self.governed_instructions(g) / g.cost.cost.max(1) as f64)
+            .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r), h.max(r)));
+        let _ = writeln!(
+            out,
+            "board instructions {least:.3} to {most:.3} of the priced cost (Prices::BOARD must stay above the count)"
+        );
+        out
+    }
+
+    /// The least and the most of the governed frames' board instructions,
+    /// as shares of their budget.
+    pub fn governed_shares(&self) -> (f64, f64) {
+        self.governed
+            .iter()
+            .map(|g| self.governed_instructions(g) / g.cost.budget.max(1) as f64)
+            .fold((f64::INFINITY, 0.0f64), |(l, h), s| (l.min(s), h.max(s)))
     }
 }
 
@@ -345,8 +435,9 @@ impl SceneFile {
     /// Renders every view as the firmware does: pyramid with the default
     /// height filter (and the scene's objects, if it has them), default
     /// options, into a framebuffer and through the display driver; then
-    /// with every ray cast from the eye, and under the flight's atmosphere.
-    pub fn render(&self) -> Result<Vec<HostFrame>> {
+    /// with every ray cast from the eye, and under the flight's atmosphere;
+    /// and, over a bare map, the governor's run.
+    pub fn render(&self) -> Result<(Vec<HostFrame>, Vec<GovernedFrame>)> {
         let scene = self.scene().map_err(|e| Error::new(e.to_string()))?;
         let header = scene.header;
         let terrain = scene.terrain().map_err(|e| Error::new(e.to_string()))?;
@@ -370,8 +461,14 @@ impl SceneFile {
         let pyramid = Pyramid::new(terrain, &coarse_heights, &coarse_colors, &bounds)
             .map_err(|e| Error::new(format!("pyramid rejected: {e}")))?;
         match objects {
-            Some(layer) => Self::render_views(&WithSticks::new(&pyramid, layer), header),
-            None => Self::render_views(&pyramid, header),
+            Some(layer) => Ok((
+                Self::render_views(&WithSticks::new(&pyramid, layer), header)?,
+                Vec::new(),
+            )),
+            None => Ok((
+                Self::render_views(&pyramid, header)?,
+                governed_run(&pyramid, &header)?,
+            )),
         }
     }
 
@@ -428,6 +525,36 @@ impl SceneFile {
     }
 }
 
+/// A frame of the governor's run on the host: its camera, RGB888 bytes
+/// and cost.
+pub type GovernedFrame = (Camera, Vec<u8>, FrameCost);
+
+/// The governor's run (`terracast_board::governed`) over `surface`, as the
+/// firmware renders it (a bare map's only).
+fn governed_run<T: Surface>(surface: &T, header: &Header) -> Result<Vec<GovernedFrame>> {
+    let (width, height) = (header.image_width, header.image_height);
+    let mut governor = governed::governor(width, height);
+    let (cameras, count) = governed::cameras(header.views());
+    cameras[..count]
+        .iter()
+        .map(|camera| {
+            let view = View::new(camera, width, height)
+                .map_err(|e| Error::new(format!("bad governed view: {e}")))?;
+            let mut colors = vec![[0u8; 3]; width as usize * height as usize];
+            let mut framebuffer = Framebuffer::new(&mut colors, width, height)
+                .map_err(|e| Error::new(e.to_string()))?;
+            let cost = governor.render(
+                surface,
+                &view,
+                &RenderOptions::default(),
+                &mut framebuffer,
+                &mut NoProbe,
+            );
+            Ok((*camera, colors.into_iter().flatten().collect(), cost))
+        })
+        .collect()
+}
+
 /// Checks the board's output in `from` (`frame-K.rgb`, `wire-K.bin`,
 /// `board-results.txt`) against the host kernel rendering `scene_path`.
 pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
@@ -453,7 +580,8 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
             .filter(|(board, host)| board != host)
             .count())
     };
-    for (index, host) in file.render()?.into_iter().enumerate() {
+    let (host_frames, run) = file.render()?;
+    for (index, host) in host_frames.into_iter().enumerate() {
         let differing_pixels = compare(format!("frame-{index}.rgb"), &host.rgb)?;
         let from_eye_differing_pixels =
             compare(format!("frame-{index}-from-eye.rgb"), &host.from_eye_rgb)?;
@@ -491,11 +619,32 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
             atmosphere_ticks,
         });
     }
+    let mut governed = Vec::new();
+    if !results.governed.is_empty() {
+        if run.len() != results.governed.len() {
+            return Err(Error::new(format!(
+                "board-results.txt has {} governed frames, the host's run {}",
+                results.governed.len(),
+                run.len()
+            )));
+        }
+        for (index, ((camera, rgb, cost), ticks)) in
+            run.into_iter().zip(&results.governed).enumerate()
+        {
+            governed.push(GovernedCheck {
+                camera,
+                differing_pixels: compare(format!("frame-{index}-governed.rgb"), &rgb)?,
+                cost,
+                ticks: *ticks,
+            });
+        }
+    }
     Ok(BoardReport {
         image: (width, height),
         frames,
         pyramid_ticks: results.pyramid_ticks,
         instructions_per_tick: results.instructions_per_tick()?,
+        governed,
     })
 }
 
@@ -588,6 +737,8 @@ struct BoardResults {
     pyramid_ticks: u64,
     /// Kernel, displayed, from-eye and atmosphere ticks of each frame.
     frames: Vec<(u64, u64, u64, u64)>,
+    /// Ticks of each frame of the governor's run.
+    governed: Vec<u64>,
 }
 
 impl BoardResults {
@@ -613,6 +764,7 @@ fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
         calibration: None,
         pyramid_ticks: 0,
         frames: Vec::new(),
+        governed: Vec::new(),
     };
     for (number, line) in text.lines().enumerate() {
         let words: Vec<&str> = line.split_whitespace().collect();
@@ -635,6 +787,12 @@ fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
                     return Err(bad());
                 }
                 results.frames.push((int(n)?, int(m)?, int(o)?, int(a)?));
+            }
+            ["governed", k, "ticks", n] => {
+                if int(k)? != results.governed.len() as u64 {
+                    return Err(bad());
+                }
+                results.governed.push(int(n)?);
             }
             _ => return Err(bad()),
         }

@@ -1,14 +1,15 @@
 //! A flight at a steady display rate (Cohen-Or §4): frames rendered within
-//! a step budget at the rendering rate, and every display frame between
+//! a fixed budget at the rendering rate, and every display frame between
 //! them warped from the last rendered one toward the display-time camera.
 //!
 //! Time is the modeled machine's ([`Machine`]): a frame of `r` rays, `c`
 //! color fetches and `s` steps takes `r·per_ray + c·per_color + s·per_step`
 //! cycles, spread over the workers (the line pool keeps them within a few
-//! lines of each other, see `sim`). The budget is what fits the rendering
-//! period once every ray's set-up and its most shading
-//! ([`MAX_COLOR_FETCHES_A_RAY`]) are set aside; the kernel's [`Governor`]
-//! keeps every frame within it, so renders start on a fixed cadence:
+//! lines of each other, see `sim`). The budget is the rendering period's
+//! cycles on the workers, and the kernel's [`Governor`] spends it at those
+//! prices ([`Prices`]): every frame costs at most the budget and the
+//! governor fills what its base pass leaves with refined lines, so renders
+//! take the same time and start on a fixed cadence:
 //!
 //! - render `j ≥ 1` starts at `(j − 1)·T`, is done by `j·T`, and is made for
 //!   the first display time at or after `j·T`, from the path's camera then;
@@ -26,7 +27,7 @@ use crate::scene::{KernelScene, Scene};
 use crate::sim::Machine;
 use terracast::{
     control_points, with_margin, Camera, CountingProbe, FrameCost, Framebuffer, Governor,
-    PreparedAtmosphere, RenderOptions, Rgb, Sample, Surface, View, Warp, WithSticks,
+    PreparedAtmosphere, Prices, RenderOptions, Rgb, Sample, Surface, View, Warp, WithSticks,
     MAX_COLOR_FETCHES_A_RAY,
 };
 
@@ -232,8 +233,11 @@ pub struct DisplayFrame {
     pub time: f64,
     /// Rendered or warped.
     pub kind: Kind,
-    /// The render it shows: its number, steps, budget and level bias.
+    /// The render it shows: its number, cost (cycles), steps, budget
+    /// (cycles) and level bias.
     pub render: usize,
+    /// See `render`.
+    pub cost: u64,
     /// See `render`.
     pub steps: u64,
     /// See `render`.
@@ -261,7 +265,7 @@ pub struct Flight {
     pub images: Vec<Vec<Rgb>>,
     /// One record per display frame.
     pub frames: Vec<DisplayFrame>,
-    /// Steps a frame may take.
+    /// Cycles a render may take.
     pub budget: u64,
 }
 
@@ -283,6 +287,7 @@ impl Flight {
                 "time": f.time,
                 "kind": match f.kind { Kind::Rendered => "rendered", Kind::Warped => "warped" },
                 "render": f.render,
+                "cost": f.cost,
                 "steps": f.steps,
                 "budget": f.budget,
                 "level_bias": f.level_bias,
@@ -312,6 +317,7 @@ struct Render {
     done: f64,
     colors: Vec<Rgb>,
     points: [terracast::ControlPoint; 9],
+    cost: u64,
     steps: u64,
     level_bias: f64,
     coarse_lines: u32,
@@ -363,30 +369,55 @@ pub fn fly(
     let sticks = kernel.sticks()?;
     let first = path.camera(0.0, options.hfov);
     let (_, render_size) = with_margin(&first, options.size, options.margin);
-    // The budget: the rendering period's cycles on the workers, less the
-    // rays' set-up and their most shading, in steps.
+    // The budget: the rendering period's cycles on the workers, spent at
+    // the machine's prices.
     let workers = f64::from(machine.processors - 1);
     let cycles_per_s = machine.clock_mhz * 1e6 * workers;
+    let period_cycles = cycles_per_s / options.render_hz;
+    let c = &machine.cycles;
+    let price = |cycles: u64, what: &str| {
+        u32::try_from(cycles).map_err(|_| {
+            Error::new(format!(
+                "{what} of {cycles} cycles is more than a 32-bit count"
+            ))
+        })
+    };
+    let prices = Prices {
+        per_pixel: 0,
+        per_line: 0,
+        per_ray: price(c.per_ray, "per_ray")?,
+        per_step: price(c.per_step, "per_step")?,
+        per_color: price(c.per_color, "per_color")?,
+        per_hit: 0,
+        per_hit_level: 0,
+    };
+    let budget = period_cycles.floor().max(0.0) as u64;
+    let mut governor = Governor::new(budget, prices);
+    // A frame's least: every ray set up and shaded, and half a step each.
+    let first_view = View::new(
+        &with_margin(&first, options.size, options.margin).0,
+        render_size.0,
+        render_size.1,
+    )
+    .map_err(|e| Error::new(format!("bad camera at the start of the path: {e}")))?;
     let rays = u64::from(render_size.0)
         * u64::from(render_size.1)
         * u64::from(options.render.vertical_samples.count());
-    let period_cycles = cycles_per_s / options.render_hz;
-    let c = &machine.cycles;
-    let ray_cycles = (rays * (c.per_ray + u64::from(MAX_COLOR_FETCHES_A_RAY) * c.per_color)) as f64;
-    let budget = ((period_cycles - ray_cycles) / machine.cycles.per_step.max(1) as f64).floor();
-    if budget < rays as f64 * 0.5 {
+    let least = governor.least_cost(&first_view, &options.render)
+        + rays * u64::from(MAX_COLOR_FETCHES_A_RAY) * c.per_color
+        + rays * c.per_step / 2;
+    if budget < least {
         return Err(Error::new(format!(
-            "the machine cannot render {}x{} (with margins) at {} Hz: {} processors at {} MHz leave {:.2} steps a pixel; use a smaller --size, a lower --render-hz or more --processors",
+            "the machine cannot render {}x{} (with margins) at {} Hz: {} processors at {} MHz give {:.0} cycles a pixel, and a frame needs at least {:.0}; use a smaller --size, a lower --render-hz or more --processors",
             render_size.0,
             render_size.1,
             options.render_hz,
             machine.processors,
             machine.clock_mhz,
-            budget.max(0.0) / rays as f64
+            budget as f64 / rays as f64,
+            least as f64 / rays as f64,
         )));
     }
-    let budget = budget as u64;
-    let mut governor = Governor::new(budget);
     let period = 1.0 / options.render_hz;
     let slot = 1.0 / options.display_hz;
     let render = |governor: &mut Governor, time: f64, start: f64| -> Result<Render> {
@@ -410,10 +441,8 @@ pub fn fly(
             ),
             None => governed(governor, &pyramid, &view, options, &mut frame, &mut counts),
         };
-        let seconds = (rays * c.per_ray
-            + counts.color_fetches * c.per_color
-            + cost.steps * c.per_step) as f64
-            / cycles_per_s;
+        // The governor's prices are the machine's cycles.
+        let seconds = cost.cost as f64 / cycles_per_s;
         let points = control_points(&camera, size, |x, y| {
             let i = y as usize * size.0 as usize + x as usize;
             let distance = *distances.get(i)?;
@@ -430,6 +459,7 @@ pub fn fly(
             done: start + seconds,
             colors,
             points,
+            cost: cost.cost,
             steps: cost.steps,
             level_bias: cost.level_bias.to_num(),
             coarse_lines: cost.coarse_lines,
@@ -495,6 +525,7 @@ pub fn fly(
             time,
             kind,
             render: index,
+            cost: source.cost,
             steps: source.steps,
             budget,
             level_bias: source.level_bias,

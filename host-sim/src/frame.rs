@@ -53,6 +53,9 @@ pub struct LevelStats {
     /// The factor the terrain fit scaled the pixel-to-voxel ratio by, Q16
     /// (1 when it was off, or at single resolution).
     pub terrain_fit: u32,
+    /// A frame rendered within a budget (`render --budget`): what the
+    /// governor did.
+    pub governed: Option<terracast::FrameCost>,
 }
 
 /// What a render cost, for `--stats`.

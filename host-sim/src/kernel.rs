@@ -6,8 +6,8 @@ use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
-    render, render_by_footprint, Camera, Coherence, CountingProbe, PreparedAtmosphere, Probe,
-    RenderOptions, Sample, Sink, Surface, View, WithSticks,
+    render, render_by_footprint, Camera, Coherence, CountingProbe, FrameCost, Governor,
+    PreparedAtmosphere, Prices, Probe, RenderOptions, Sample, Sink, Surface, View, WithSticks,
 };
 
 /// How many rays each pixel gets.
@@ -19,11 +19,15 @@ pub enum PixelRays {
     /// One, two or four, as many as the pixel's footprint needs
     /// (`terracast::render_by_footprint`).
     ByFootprint,
+    /// One frame within a budget of this many of the board's instructions
+    /// a pixel (`terracast::Governor` at `Prices::BOARD`, from a bias of 1):
+    /// one ray a pixel, and two or four on the lines the budget refines.
+    Governed(u64),
 }
 
 impl PixelRays {
     /// Renders `view` of `surface` with the kernel entry point these rays
-    /// a pixel name.
+    /// a pixel name; a governed frame's cost.
     pub fn render<T: Surface + ?Sized, S: Sink, P: Probe>(
         self,
         surface: &T,
@@ -31,11 +35,18 @@ impl PixelRays {
         options: &RenderOptions,
         sink: &mut S,
         probe: &mut P,
-    ) {
+    ) -> Option<FrameCost> {
         match self {
             Self::Fixed => render(surface, view, options, sink, probe),
             Self::ByFootprint => render_by_footprint(surface, view, options, sink, probe),
+            Self::Governed(per_pixel) => {
+                let pixels = u64::from(view.width()) * u64::from(view.height());
+                let budget = pixels.saturating_mul(per_pixel);
+                let mut governor = Governor::new(budget, Prices::BOARD);
+                return Some(governor.render(surface, view, options, sink, probe));
+            }
         }
+        None
     }
 }
 
@@ -166,7 +177,7 @@ pub fn render_surface_in<T: Surface + ?Sized>(
     let mut buffer = SampleBuffer::new(width, height);
     let mut probe = CountingProbe::default();
     let started = Instant::now();
-    match atmosphere {
+    let governed = match atmosphere {
         Some(air) => rays.render(
             surface,
             &view,
@@ -175,7 +186,7 @@ pub fn render_surface_in<T: Surface + ?Sized>(
             &mut probe,
         ),
         None => rays.render(surface, &view, options, &mut buffer, &mut probe),
-    }
+    };
     let render_ns = started.elapsed().as_nanos() as u64;
 
     let rays = ContractCamera::new(camera, width, height);
@@ -216,6 +227,7 @@ pub fn render_surface_in<T: Surface + ?Sized>(
             color_fetches: probe.color_fetches,
             roughness: surface.roughness(),
             terrain_fit: options.fit_for(surface.roughness()),
+            governed,
         }),
     };
     Ok((frame, stats))

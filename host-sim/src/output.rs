@@ -85,6 +85,17 @@ pub fn stats_json(
         value["color_fetches"] = levels.color_fetches.into();
         value["terrain_roughness"] = (f64::from(levels.roughness) / 64.0).into();
         value["terrain_fit"] = (f64::from(levels.terrain_fit) / 65536.0).into();
+        if let Some(cost) = &levels.governed {
+            value["budget"] = serde_json::json!({
+                "budget": cost.budget,
+                "cost": cost.cost,
+                "base_cost": cost.base_cost,
+                "level_bias": cost.level_bias.to_num::<f64>(),
+                "coarse_lines": cost.coarse_lines,
+                "refined_lines": cost.refined_lines,
+                "filled_rays": cost.filled_rays,
+            });
+        }
         value["levels"] = serde_json::json!({
             "steps": &levels.steps[..levels.levels],
             "hits": &levels.hits[..levels.levels],

@@ -177,7 +177,7 @@ impl Settings {
     pub fn toggle_rays(&mut self) {
         self.rays = match self.rays {
             PixelRays::Fixed => PixelRays::ByFootprint,
-            PixelRays::ByFootprint => PixelRays::Fixed,
+            PixelRays::ByFootprint | PixelRays::Governed(_) => PixelRays::Fixed,
         };
     }
 
@@ -206,6 +206,7 @@ impl Settings {
             match self.rays {
                 PixelRays::Fixed => "1 ray",
                 PixelRays::ByFootprint => "rays by footprint",
+                PixelRays::Governed(_) => "1 ray (a budget is a whole frame's)",
             },
             coherence_name(options.coherence),
         )
@@ -430,7 +431,11 @@ fn render_one<T: Surface + ?Sized, S: Sink, P: Probe>(
     probe: &mut P,
 ) {
     match rays {
-        PixelRays::Fixed => render_line(surface, view, options, line, sink, probe),
+        // A budget is spent over a whole frame, not line by line: the
+        // window holds its time by the size it renders at instead.
+        PixelRays::Fixed | PixelRays::Governed(_) => {
+            render_line(surface, view, options, line, sink, probe)
+        }
         PixelRays::ByFootprint => {
             render_line_by_footprint(surface, view, options, line, sink, probe)
         }
@@ -558,8 +563,12 @@ pub fn render_arguments(
         match rays {
             PixelRays::ByFootprint => "footprint".to_string(),
             PixelRays::Fixed => options.vertical_samples.count().to_string(),
+            PixelRays::Governed(_) => "1".to_string(),
         }
     ));
+    if let PixelRays::Governed(per_pixel) = rays {
+        args.push(format!("--budget={per_pixel}"));
+    }
     args.push(format!(
         "--shading={}",
         match options.shading {
@@ -677,7 +686,7 @@ pub fn threads_or_cores(threads: Option<usize>) -> Result<usize> {
 mod tests {
     use super::*;
     use crate::fly::Path;
-    use terracast::{render, render_by_footprint, Framebuffer, NoProbe};
+    use terracast::{Framebuffer, NoProbe};
 
     #[test]
     fn the_pool_renders_into_window_pixels_what_render_does() {
@@ -696,12 +705,7 @@ mod tests {
         for rays in [PixelRays::Fixed, PixelRays::ByFootprint] {
             let mut colors = vec![[0u8; 3]; 80 * 50];
             let mut frame = Framebuffer::new(&mut colors, 80, 50).unwrap();
-            match rays {
-                PixelRays::Fixed => render(&pyramid, &view, &options, &mut frame, &mut NoProbe),
-                PixelRays::ByFootprint => {
-                    render_by_footprint(&pyramid, &view, &options, &mut frame, &mut NoProbe)
-                }
-            }
+            rays.render(&pyramid, &view, &options, &mut frame, &mut NoProbe);
             for threads in [1, 3] {
                 let pixels = Pixels::new(80, 50);
                 let steps = render_pool(&pyramid, &view, (&options, None), rays, threads, &pixels);

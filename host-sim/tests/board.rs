@@ -44,7 +44,7 @@ fn scene_and_board_output_with(name: &str, extra: &[&str], ticks: u32) -> (PathB
     assert!(out.contains("96x96 map, 6 views at 40x30"), "{out}");
     let board = dir.join("board");
     std::fs::create_dir_all(&board).unwrap();
-    let frames = SceneFile::read(&scene).unwrap().render().unwrap();
+    let (frames, governed) = SceneFile::read(&scene).unwrap().render().unwrap();
     assert_eq!(frames.len(), 6);
     let mut results = String::from("calibration instructions 4000 ticks 100\npyramid_ticks 7\n");
     for (k, frame) in frames.iter().enumerate() {
@@ -64,8 +64,46 @@ fn scene_and_board_output_with(name: &str, extra: &[&str], ticks: u32) -> (PathB
             "frame {k} kernel_ticks {ticks} display_ticks 1100 from_eye_ticks 3000 atmosphere_ticks 1050\n"
         );
     }
+    // The governor's run (a bare map's): each frame at 0.95 of its budget,
+    // 40 instructions a tick.
+    for (k, (_, rgb, cost)) in governed.iter().enumerate() {
+        std::fs::write(board.join(format!("frame-{k}-governed.rgb")), rgb).unwrap();
+        results += &format!("governed {k} ticks {}\n", cost.budget * 95 / 100 / 40);
+    }
     std::fs::write(board.join("board-results.txt"), results).unwrap();
     (scene, board)
+}
+
+#[test]
+fn a_governed_frame_over_its_budget_on_the_board_fails_the_check() {
+    let (scene, board) = scene_and_board_output("governed");
+    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("governed frames") && !out.contains("DIFFERENT"),
+        "{out}"
+    );
+    assert!(
+        out.contains("board instructions 0.950 to 0.950 of the budget: max/min 1.000"),
+        "{out}"
+    );
+    // One frame counted past its budget.
+    let results = std::fs::read_to_string(board.join("board-results.txt")).unwrap();
+    let over = results
+        .lines()
+        .map(|line| match line.strip_prefix("governed 3 ticks ") {
+            Some(ticks) => format!(
+                "governed 3 ticks {}",
+                ticks.parse::<u64>().unwrap() * 11 / 9
+            ),
+            None => line.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(board.join("board-results.txt"), over).unwrap();
+    let (code, _, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    assert_ne!(code, 0);
+    assert!(err.contains("a governed frame took 1.16"), "{err}");
 }
 
 #[test]
@@ -215,8 +253,8 @@ fn a_scene_with_objects_renders_them_and_is_compared_with_the_bare_map() {
     assert!(out.contains("   0       33    43  1.300x"), "{out}");
     assert!(out.contains(" all       33    43  1.300x"), "{out}");
     // The objects are in the frames.
-    let bare = SceneFile::read(&bare_scene).unwrap().render().unwrap();
-    let planted = SceneFile::read(&scene).unwrap().render().unwrap();
+    let (bare, _) = SceneFile::read(&bare_scene).unwrap().render().unwrap();
+    let (planted, _) = SceneFile::read(&scene).unwrap().render().unwrap();
     assert!(bare.iter().zip(&planted).any(|(b, p)| b.rgb != p.rgb));
 
     // A damaged objects section: one line that names it.

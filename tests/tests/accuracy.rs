@@ -19,6 +19,8 @@
 //!   [`far_views_on_tiled_maps`].
 //! * `render_by_footprint` against one ray a pixel, in
 //!   [`rays_by_footprint_are_more_accurate_where_footprints_are_long`].
+//! * A frame within a budget against one ray a pixel, in
+//!   [`a_frame_within_a_budget_against_one_ray_a_pixel`].
 
 use terracast::{Camera, Coherence, HeightFilter, RenderOptions, Resolution, U8F8};
 use terracast_sim::metrics::{median_relative_depth_error, psnr, sky_agreement};
@@ -271,5 +273,59 @@ fn rays_by_footprint_are_more_accurate_where_footprints_are_long() {
                 "pitch {pitch}: {gain:+.2} dB, {rays:.2} rays"
             );
         }
+    }
+}
+
+/// A frame within a budget (the governor at the board's prices, 3000
+/// instructions a pixel: the board check's) against one ray a pixel, on
+/// C7W/D7 at 320 × 240 from `scripts/steps-table`'s eye at its six
+/// pitches: what the budget the base pass leaves buys, spent on refined
+/// lines. The governor's third frame of each view is measured, its level
+/// bias settled.
+#[test]
+fn a_frame_within_a_budget_against_one_ray_a_pixel() {
+    use terracast::{Framebuffer, Governor, NoProbe, Prices, View};
+    use terracast_sim::kernel::{render_kernel_with, PixelRays};
+    const SMALL: (u32, u32) = (320, 240);
+    let Some(data) = data_dir("a_frame_within_a_budget_against_one_ray_a_pixel") else {
+        return;
+    };
+    let scene = comanche(&data, "7W", "7");
+    let kernel = scene.to_kernel().unwrap();
+    let pyramid = kernel.pyramid().unwrap();
+    let reference = Reference::new(&scene);
+    let options = RenderOptions::default();
+    let budget = u64::from(SMALL.0 * SMALL.1) * 3000;
+    for pitch in [2.0, 5.0, 15.0, 30.0, 60.0, 90.0] {
+        let cam = Camera::looking([300.0, 700.0, 170.0], 20.0, pitch);
+        let r = reference_view(&reference, &cam, SMALL);
+        let (one, _) =
+            render_kernel_with(&kernel, &cam, SMALL.0, SMALL.1, &options, PixelRays::Fixed)
+                .unwrap();
+        let view = View::new(&cam, SMALL.0, SMALL.1).unwrap();
+        let mut governor = Governor::new(budget, Prices::BOARD);
+        let mut colors = vec![[0u8; 3]; (SMALL.0 * SMALL.1) as usize];
+        let mut cost = None;
+        for _ in 0..3 {
+            let mut frame = Framebuffer::new(&mut colors, SMALL.0, SMALL.1).unwrap();
+            cost = Some(governor.render(&pyramid, &view, &options, &mut frame, &mut NoProbe));
+        }
+        let cost = cost.unwrap();
+        let (base, governed) = (psnr(&one.colors, &r.colors), psnr(&colors, &r.colors));
+        println!(
+            "C7W/D7 pitch {pitch}: one ray {base:.2} dB, within the budget {governed:.2} dB ({:+.2}); bias {}, {} lines refined, {:.1} % of the budget",
+            governed - base,
+            cost.level_bias,
+            cost.refined_lines,
+            100.0 * cost.cost as f64 / budget as f64
+        );
+        assert!(cost.cost <= budget);
+        // Grazing ground has the longest footprints: most to gain.
+        let least_gain = if pitch <= 5.0 { 1.0 } else { 0.0 };
+        assert!(
+            governed - base > least_gain,
+            "pitch {pitch}: {:+.2} dB",
+            governed - base
+        );
     }
 }

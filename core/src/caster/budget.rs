@@ -1,72 +1,189 @@
-//! Frames that keep a step budget.
+//! Frames that spend a fixed budget.
 //!
 //! A deterministic image generator never varies its frame time (Cosman &
-//! Grange); Cohen-Or tuned the pixel-to-voxel ratio by hand to get there.
-//! The [`Governor`] does it per frame:
+//! Grange): the frame's time is fixed and its quality adapts. Cohen-Or
+//! tuned the pixel-to-voxel ratio "as a tool to tune the quality of the
+//! image as the frame generation rate is guaranteed". The [`Governor`]
+//! does it per frame, in a budget of [`Prices`]: every pixel, line, ray,
+//! step and color fetch the frame makes has its price (a board's
+//! instructions, a modeled machine's cycles, or steps alone), so sky,
+//! shading and steps are all paid for.
 //!
-//! 1. **Prediction.** It renders with the level bias (the pixel-to-voxel
-//!    ratio of [`Resolution::Multi`]) that the frames before suggest: up
-//!    fast when a frame took more than three quarters of the budget, down
-//!    slowly when it took less than half.
-//! 2. **Correction.** Once a quarter of the frame's rays are cast, if the
-//!    steps so far project past the budget, the frame's remaining lines are
-//!    rendered at the coarsest bias: coarser, rather than late.
-//! 3. **Guarantee.** Before each ray the budget left is turned into an
-//!    allowance `n` with `4n + 2` no more than what is left (a ray cut short
-//!    is shaded where it stopped); with fewer than six steps left a pixel
-//!    repeats the ray before it on its line. So a frame never takes more
-//!    steps than its budget, whatever the terrain (tested over 10 000
-//!    frames).
+//! 1. **Base pass.** Every line at the level bias (the pixel-to-voxel
+//!    ratio of [`Resolution::Multi`]) the frames before suggest, one ray a
+//!    pixel (or `options.vertical_samples`).
+//!    - *Correction*: once half the rays are cast, if the cost so far
+//!      projects past the budget, the remaining lines are rendered at the
+//!      coarsest bias: coarser, rather than late.
+//!    - *Guarantee*: before each ray the budget left, less every later
+//!      ray's set-up and shading, is turned into an allowance `n` of at
+//!      most `4n + 2` steps (a ray cut short is shaded where it stopped);
+//!      with fewer than six steps' worth left a pixel repeats the ray
+//!      before it on its line.
+//! 2. **Refinement.** What the base pass left is spent on lines rendered
+//!    again with two rays a pixel, four where the pixel's footprint is
+//!    long ([`crate::render_by_footprint`]'s rule, at least two), in
+//!    bit-reversed line order so that the refined lines spread over the
+//!    image. A line starts only while a line's and a pixel's most cost are
+//!    left, and stops at the pixel that would not fit: its other pixels
+//!    keep the base pass's rays.
+//! 3. **Next frame.** The base pass is steered to take a half to three
+//!    quarters of the budget, which leaves the refinement room to fill it:
+//!    the next frame's bias goes coarser with the base pass's cost over
+//!    three quarters (at least twice after a frame that went coarse or ran
+//!    dry), and finer by an eighth a frame under a half.
 //!
-//! Everything is integer arithmetic on step counts: the same flight gives
-//! the same choices on every machine.
+//! A frame never costs more than its budget or [`Governor::least_cost`],
+//! whichever is more (tested over 10 000 frames of a flight that keeps
+//! changing). Everything is integer arithmetic on counts: the same flight
+//! and budget give the same images and costs on every machine.
 //!
 //! ```
-//! use terracast::{render, Camera, CountingProbe, Framebuffer, Governor, Pyramid, RenderOptions, Terrain, View};
+//! use terracast::{render, Camera, CountingProbe, Framebuffer, Governor, Prices, Pyramid, RenderOptions, Terrain, View};
 //!
 //! let heights: [u16; 64] = core::array::from_fn(|i| ((i % 8) * (i / 8)) as u16 * 8);
 //! let terrain = Terrain::new(8, 8, &heights, &[[90, 140, 60]; 64])?;
 //! let pyramid = Pyramid::flat(terrain);
 //! let view = View::new(&Camera::looking([1.0, 1.0, 40.0], 45.0, 30.0), 16, 12)?;
 //! let mut pixels = [[0u8; 3]; 16 * 12];
-//! let mut governor = Governor::new(100);
+//! let mut governor = Governor::new(200_000, Prices::BOARD);
 //! for _ in 0..3 {
 //!     let mut frame = Framebuffer::new(&mut pixels, 16, 12)?;
 //!     let cost = governor.render(&pyramid, &view, &RenderOptions::default(), &mut frame, &mut CountingProbe::default());
-//!     assert!(cost.steps <= cost.budget);
+//!     assert!(cost.cost <= cost.budget);
 //! }
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 
 use super::ray_caster::{Allowances, RayCaster};
 use super::{RenderOptions, Resolution};
-use crate::probe::Probe;
+use crate::probe::{Probe, MAX_COLOR_FETCHES_A_RAY};
 use crate::sink::Sink;
 use crate::surface::Surface;
 use crate::view::View;
 use core::cell::Cell;
 use fixed::types::U8F8;
 
+/// The price of each thing a frame does, in the budget's unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Prices {
+    /// Writing a pixel (a refined pixel is written again).
+    pub per_pixel: u32,
+    /// Setting up an image line.
+    pub per_line: u32,
+    /// Setting up a ray.
+    pub per_ray: u32,
+    /// A traversal step or a bound test ([`Probe::visit`], [`Probe::bound`]).
+    pub per_step: u32,
+    /// A color fetch ([`Probe::color`]).
+    pub per_color: u32,
+    /// A hit and its shading ([`Probe::hit`]).
+    pub per_hit: u32,
+    /// A hit's shading, more for each level above level 0 it is on.
+    pub per_hit_level: u32,
+}
+
+impl Prices {
+    /// Steps alone: a budget in steps.
+    pub const STEPS: Self = Self {
+        per_pixel: 0,
+        per_line: 0,
+        per_ray: 0,
+        per_step: 1,
+        per_color: 0,
+        per_hit: 0,
+        per_hit_level: 0,
+    };
+
+    /// The board's (Cortex-M7) instructions, for the per-ray path the
+    /// governor renders with: the least-squares fit of the counted
+    /// instructions of `scripts/board-check`'s governed frames, at budgets
+    /// of 2000 and 3000 instructions a pixel, to their work (a step's price
+    /// set: the frames take too few steps to tell it apart), off by −3.8 %
+    /// to +3.2 % on those frames; raised by 5 % so that the board's count
+    /// stays under the priced cost. A hit's price grows with its level:
+    /// the coarser a hit, the more its shading and resumption cost.
+    pub const BOARD: Self = Self {
+        per_pixel: 205,
+        per_line: 0,
+        per_ray: 474,
+        per_step: 53,
+        per_color: 0,
+        per_hit: 1460,
+        per_hit_level: 244,
+    };
+
+    /// What `work` costs at these prices.
+    pub fn of(&self, work: &FrameWork) -> u64 {
+        work.pixels * u64::from(self.per_pixel)
+            + work.lines * u64::from(self.per_line)
+            + work.rays * u64::from(self.per_ray)
+            + work.steps * u64::from(self.per_step)
+            + work.colors * u64::from(self.per_color)
+            + work.hits * u64::from(self.per_hit)
+            + work.hit_levels * u64::from(self.per_hit_level)
+    }
+
+    /// The most a ray's shading can cost on a surface whose top level is
+    /// `top`: its color fetches and its hit.
+    const fn shading_most(&self, top: u8) -> u64 {
+        MAX_COLOR_FETCHES_A_RAY as u64 * self.per_color as u64
+            + self.per_hit as u64
+            + top as u64 * self.per_hit_level as u64
+    }
+}
+
+/// What a frame did, counted as it is priced.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FrameWork {
+    /// Pixels written (a refined pixel twice).
+    pub pixels: u64,
+    /// Image lines set up (a refined line twice).
+    pub lines: u64,
+    /// Rays set up.
+    pub rays: u64,
+    /// Traversal steps and bound tests.
+    pub steps: u64,
+    /// Color fetches.
+    pub colors: u64,
+    /// Hits.
+    pub hits: u64,
+    /// The hits' levels, summed.
+    pub hit_levels: u64,
+}
+
 /// What a budgeted frame did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FrameCost {
+    /// The frame's cost at the governor's [`Prices`]: `prices.of(&work)`.
+    pub cost: u64,
+    /// What it did.
+    pub work: FrameWork,
+    /// The frame's budget; `cost` exceeds it only when the budget is
+    /// below [`Governor::least_cost`].
+    pub budget: u64,
+    /// Of `cost`, the base pass's (every line once).
+    pub base_cost: u64,
     /// Steps taken: walk steps and bound tests, as a probe counts them.
     pub steps: u64,
-    /// The frame's budget; `steps` never exceeds it.
-    pub budget: u64,
-    /// The level bias (pixel-to-voxel ratio) the frame began with.
+    /// The level bias (pixel-to-voxel ratio) the frame was rendered at.
     pub level_bias: U8F8,
     /// Lines finished at the coarsest bias ([`Governor::MAX_BIAS`])
     /// because the frame was heading past its budget.
     pub coarse_lines: u32,
+    /// Lines rendered again with more rays (some of them in part) from
+    /// what the base pass left.
+    pub refined_lines: u32,
     /// Rays that found no budget left and repeat the ray before them.
     pub filled_rays: u32,
 }
 
-/// A per-frame step budget and the level bias that keeps it.
+/// A per-frame budget, the prices it is spent at, and the level bias that
+/// keeps it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Governor {
     budget: u64,
+    prices: Prices,
     /// The level bias for the next frame, U8.8 bits.
     bias: u16,
 }
@@ -77,18 +194,24 @@ impl Governor {
     /// The coarsest: a voxel 64 pixels wide.
     pub const MAX_BIAS: U8F8 = U8F8::from_bits(64 << 8);
 
-    /// A governor for frames of at most `budget_steps` steps, starting at a
-    /// bias of 1.
-    pub const fn new(budget_steps: u64) -> Self {
+    /// A governor for frames that cost at most `budget` at `prices`,
+    /// starting at a bias of 1.
+    pub const fn new(budget: u64, prices: Prices) -> Self {
         Self {
-            budget: budget_steps,
+            budget,
+            prices,
             bias: 1 << 8,
         }
     }
 
-    /// Steps a frame may take.
+    /// What a frame may cost.
     pub fn budget(&self) -> u64 {
         self.budget
+    }
+
+    /// The prices the budget is spent at.
+    pub fn prices(&self) -> Prices {
+        self.prices
     }
 
     /// The level bias the next frame starts with.
@@ -96,9 +219,23 @@ impl Governor {
         U8F8::from_bits(self.bias)
     }
 
+    /// The least a frame of `view` costs, whatever the budget: every pixel
+    /// written, every line and every ray (`options.vertical_samples` a
+    /// pixel) set up. A budget below it is overrun by up to the
+    /// difference; one that also covers every ray's shading
+    /// ([`MAX_COLOR_FETCHES_A_RAY`]) and a few steps a ray renders every
+    /// ray.
+    pub fn least_cost(&self, view: &View, options: &RenderOptions) -> u64 {
+        let prices = &self.prices;
+        let pixels = u64::from(view.width()) * u64::from(view.height());
+        pixels * u64::from(prices.per_pixel)
+            + u64::from(view.lines()) * u64::from(prices.per_line)
+            + pixels * u64::from(options.vertical_samples.count()) * u64::from(prices.per_ray)
+    }
+
     /// Renders `view` within the budget (with `options`, its resolution
     /// replaced by the pyramid's levels at the governor's bias), then
-    /// chooses the next frame's bias from this frame's steps.
+    /// chooses the next frame's bias from this frame's base pass.
     pub fn render<T: Surface + ?Sized, S: Sink, P: Probe>(
         &mut self,
         surface: &T,
@@ -120,58 +257,92 @@ impl Governor {
             RayCaster::new(surface, view, &fine),
             RayCaster::new(surface, view, &coarse),
         );
-        let rays_total = u64::from(view.width())
-            * u64::from(view.height())
-            * u64::from(options.vertical_samples.count());
-        let meter = Meter::default();
+        let pixels = u64::from(view.width()) * u64::from(view.height());
+        let rays_total = pixels * u64::from(options.vertical_samples.count());
+        // Every pixel is written and every line set up once.
+        let meter = Meter {
+            prices: self.prices,
+            pixels: Cell::new(pixels),
+            lines: Cell::new(u64::from(view.lines())),
+            shading_most: self.prices.shading_most(surface.top()),
+            ..Meter::default()
+        };
+        let budget = self.budget;
         let mut metered = Metered {
             inner: probe,
             meter: &meter,
         };
-        let mut allowances = Budget {
+        let mut base = BaseAllowances {
             meter: &meter,
-            budget: self.budget,
+            budget,
+            rays_total,
             filled: 0,
         };
+        let fixed = meter.cost();
         let mut coarse_lines = 0;
         for line in 0..view.lines() {
             // Projected past the budget: the rest goes coarser.
-            let (rays, steps) = (meter.rays.get(), meter.steps.get());
+            let rays = meter.rays.get();
             let heading_over = coarse_lines > 0
-                || (rays >= rays_total / 4
-                    && u128::from(steps) * u128::from(rays_total)
-                        > u128::from(self.budget) * u128::from(rays));
+                || (rays >= rays_total / 2
+                    && u128::from(meter.cost() - fixed) * u128::from(rays_total)
+                        > u128::from(budget.saturating_sub(fixed)) * u128::from(rays));
             let caster = if heading_over {
                 coarse_lines += 1;
                 &coarse_caster
             } else {
                 &fine_caster
             };
-            caster.line(line, sink, &mut metered, &mut allowances);
+            caster.line(line, sink, &mut metered, &mut base);
+        }
+        let base_cost = meter.cost();
+        let mut refined_lines = 0;
+        let mut refine = RefineAllowances {
+            meter: &meter,
+            budget,
+            filled: 0,
+        };
+        if base.filled == 0 {
+            let line_most = u64::from(self.prices.per_line) + refine.pixel_most();
+            for line in BitReversed::new(view.lines()) {
+                if budget.saturating_sub(meter.cost()) < line_most {
+                    break;
+                }
+                meter.lines.set(meter.lines.get() + 1);
+                refined_lines += 1;
+                fine_caster.line_refined(line, sink, &mut metered, &mut refine);
+            }
         }
         let cost = FrameCost {
+            cost: meter.cost(),
+            work: meter.work(),
+            budget,
+            base_cost,
             steps: meter.steps.get(),
-            budget: self.budget,
             level_bias: U8F8::from_bits(bias),
             coarse_lines,
-            filled_rays: allowances.filled,
+            refined_lines,
+            filled_rays: base.filled + refine.filled,
         };
         self.bias = next_bias(bias, &cost);
         cost
     }
 }
 
-/// The next frame's bias. Over three quarters of the budget, scale it by
-/// the steps over that target (at most ×4 a frame: the steps fall about
-/// inversely with the bias); at least double it after a frame that went
-/// coarse or ran dry; under half the budget, refine it by an eighth a
-/// frame, so that a quiet stretch does not swing it back too fast.
+/// The next frame's bias, from this frame's base pass: over three
+/// quarters of the budget, scaled by its cost over that target (at most ×4
+/// a frame: the steps fall about inversely with the bias); at least
+/// doubled after a frame that went coarse or ran dry; under half the
+/// budget, refined by an eighth a frame, so that a quiet stretch does not
+/// swing it back too fast.
 fn next_bias(bias: u16, cost: &FrameCost) -> u16 {
     let target = (cost.budget - cost.budget / 4).max(1);
     let bias64 = u64::from(bias);
-    let mut next = if cost.steps > target {
-        (bias64 * cost.steps / target).min(bias64 * 4)
-    } else if cost.steps < cost.budget / 2 {
+    let base = cost.base_cost;
+    let mut next = if base > target {
+        (u128::from(bias64) * u128::from(base) / u128::from(target)).min(u128::from(bias64 * 4))
+            as u64
+    } else if base < cost.budget / 2 {
         bias64 - bias64 / 8
     } else {
         bias64
@@ -185,11 +356,65 @@ fn next_bias(bias: u16, cost: &FrameCost) -> u16 {
     ) as u16
 }
 
-/// Rays and steps so far in a frame.
+/// What a frame has done so far, and what it has cost.
 #[derive(Debug, Default)]
 struct Meter {
+    prices: Prices,
+    pixels: Cell<u64>,
+    lines: Cell<u64>,
     rays: Cell<u64>,
     steps: Cell<u64>,
+    colors: Cell<u64>,
+    hits: Cell<u64>,
+    hit_levels: Cell<u64>,
+    /// The most a ray's shading costs (see [`Prices::shading_most`]).
+    shading_most: u64,
+}
+
+impl Default for Prices {
+    /// [`Prices::STEPS`].
+    fn default() -> Self {
+        Self::STEPS
+    }
+}
+
+impl Meter {
+    fn work(&self) -> FrameWork {
+        FrameWork {
+            pixels: self.pixels.get(),
+            lines: self.lines.get(),
+            rays: self.rays.get(),
+            steps: self.steps.get(),
+            colors: self.colors.get(),
+            hits: self.hits.get(),
+            hit_levels: self.hit_levels.get(),
+        }
+    }
+
+    fn cost(&self) -> u64 {
+        self.prices.of(&self.work())
+    }
+
+    fn left(&self, budget: u64) -> u64 {
+        budget.saturating_sub(self.cost())
+    }
+
+    /// The allowance a ray gets from `left` (what is left for its steps
+    /// once its shading and every later ray are set aside): at most
+    /// `4n + 2` steps, none with fewer than six steps' worth left.
+    fn allowance(&self, left: u64, filled: &mut u32) -> u32 {
+        let per_step = u64::from(self.prices.per_step);
+        // Steps at no price: as many as the ray can take, while anything
+        // is left.
+        let steps = left
+            .checked_div(per_step)
+            .unwrap_or(if left == 0 { 0 } else { u64::MAX });
+        if steps < 6 {
+            *filled += 1;
+            return 0;
+        }
+        ((steps - 2) / 4).min(u64::from(u32::MAX - 1)) as u32
+    }
 }
 
 /// A probe that counts into a [`Meter`] and passes every event on.
@@ -211,14 +436,21 @@ impl<P: Probe> Probe for Metered<'_, P> {
     }
     #[inline(always)]
     fn color(&mut self, level: u8, voxel: usize) {
+        self.meter.colors.set(self.meter.colors.get() + 1);
         self.inner.color(level, voxel);
     }
     #[inline(always)]
     fn color_square(&mut self, level: u8, corner: usize) {
+        self.meter.colors.set(self.meter.colors.get() + 1);
         self.inner.color_square(level, corner);
     }
     #[inline(always)]
     fn hit(&mut self, level: u8) {
+        let meter = self.meter;
+        meter.hits.set(meter.hits.get() + 1);
+        meter
+            .hit_levels
+            .set(meter.hit_levels.get() + u64::from(level));
         self.inner.hit(level);
     }
     #[inline(always)]
@@ -228,22 +460,110 @@ impl<P: Probe> Probe for Metered<'_, P> {
     }
 }
 
-/// Each ray's allowance from the budget left: a ray with allowance `n`
-/// takes at most `4n + 2` steps.
-struct Budget<'a> {
+/// The base pass's allowances: each ray's from the budget left once its
+/// own shading and every later ray's set-up are set aside.
+struct BaseAllowances<'a> {
+    meter: &'a Meter,
+    budget: u64,
+    rays_total: u64,
+    filled: u32,
+}
+
+impl Allowances for BaseAllowances<'_> {
+    fn next(&mut self) -> u32 {
+        let meter = self.meter;
+        let prices = &meter.prices;
+        // This ray's set-up is counted; its shading and the later rays'
+        // set-up are not (a later ray that finds no budget is not shaded).
+        let later = self.rays_total.saturating_sub(meter.rays.get()) * u64::from(prices.per_ray)
+            + meter.shading_most;
+        meter.allowance(
+            meter.left(self.budget).saturating_sub(later),
+            &mut self.filled,
+        )
+    }
+}
+
+/// The refinement's allowances: a pixel is rendered again only while its
+/// most cost (four rays with their shading and six steps each, and its
+/// write) is left; each ray's steps from what is left once its shading
+/// and the pixel's other rays' set-up are set aside.
+struct RefineAllowances<'a> {
     meter: &'a Meter,
     budget: u64,
     filled: u32,
 }
 
-impl Allowances for Budget<'_> {
+/// The most rays a refined pixel gets.
+const REFINED_MOST_RAYS: u64 = 4;
+
+impl RefineAllowances<'_> {
+    fn pixel_most(&self) -> u64 {
+        let meter = self.meter;
+        let prices = &meter.prices;
+        REFINED_MOST_RAYS
+            * (u64::from(prices.per_ray) + meter.shading_most + 6 * u64::from(prices.per_step))
+            + u64::from(prices.per_pixel)
+    }
+}
+
+impl Allowances for RefineAllowances<'_> {
     fn next(&mut self) -> u32 {
-        let left = self.budget.saturating_sub(self.meter.steps.get());
-        if left < 6 {
-            self.filled += 1;
-            return 0;
+        let meter = self.meter;
+        let prices = &meter.prices;
+        let later = (REFINED_MOST_RAYS - 1) * u64::from(prices.per_ray) + meter.shading_most;
+        meter.allowance(
+            meter.left(self.budget).saturating_sub(later),
+            &mut self.filled,
+        )
+    }
+
+    fn pixel(&mut self) -> bool {
+        if self.meter.left(self.budget) < self.pixel_most() {
+            return false;
         }
-        ((left - 2) / 4).min(u64::from(u32::MAX - 1)) as u32
+        let meter = self.meter;
+        meter.pixels.set(meter.pixels.get() + 1);
+        true
+    }
+}
+
+/// `0..count` in bit-reversed order (0, half, a quarter, three quarters,
+/// …): every prefix spreads evenly over the range.
+struct BitReversed {
+    next: u64,
+    bits: u32,
+    count: u32,
+}
+
+impl BitReversed {
+    fn new(count: u32) -> Self {
+        Self {
+            next: 0,
+            bits: count
+                .checked_next_power_of_two()
+                .map_or(32, u32::trailing_zeros),
+            count,
+        }
+    }
+}
+
+impl Iterator for BitReversed {
+    type Item = u32;
+    fn next(&mut self) -> Option<u32> {
+        while self.next < 1u64 << self.bits {
+            let i = self.next as u32;
+            self.next += 1;
+            let reversed = if self.bits == 0 {
+                0
+            } else {
+                i.reverse_bits() >> (32 - self.bits)
+            };
+            if reversed < self.count {
+                return Some(reversed);
+            }
+        }
+        None
     }
 }
 
@@ -385,18 +705,22 @@ mod tests {
         }
     }
 
-    fn cost(steps: u64, coarse_lines: u32) -> FrameCost {
+    fn cost(base_cost: u64, coarse_lines: u32) -> FrameCost {
         FrameCost {
-            steps,
+            cost: base_cost,
+            work: FrameWork::default(),
             budget: 1000,
+            base_cost,
+            steps: 0,
             level_bias: U8F8::ONE,
             coarse_lines,
+            refined_lines: 0,
             filled_rays: 0,
         }
     }
 
     #[test]
-    fn the_bias_follows_the_steps_within_its_limits() {
+    fn the_bias_follows_the_base_pass_within_its_limits() {
         // Between half and three quarters of the budget: unchanged.
         assert_eq!(next_bias(256, &cost(750, 0)), 256);
         assert_eq!(next_bias(256, &cost(600, 0)), 256);
@@ -411,5 +735,79 @@ mod tests {
         assert_eq!(next_bias(256, &cost(750, 3)), 512);
         // Never past the coarsest.
         assert_eq!(next_bias(64 << 8, &cost(5000, 1)), 64 << 8);
+    }
+
+    #[test]
+    fn bit_reversed_order_visits_each_line_once_spread_out() {
+        for count in [0u32, 1, 2, 3, 7, 8, 9, 100, 1023, 1025] {
+            let order: vec::Vec<u32> = BitReversed::new(count).collect();
+            let mut sorted = order.clone();
+            sorted.sort_unstable();
+            assert_eq!(sorted, (0..count).collect::<vec::Vec<_>>(), "{count}");
+        }
+        let first: vec::Vec<u32> = BitReversed::new(8).take(4).collect();
+        assert_eq!(first, [0, 4, 2, 6]);
+    }
+
+    /// A flat-ish scene and a view of it, seen from `pitch`.
+    fn hills() -> (vec::Vec<u16>, vec::Vec<crate::color::Rgb>) {
+        let side = 64u32;
+        let heights = (0..side * side)
+            .map(|i| ((i % side * 5 + i / side * 3) % 40) as u16 * 16)
+            .collect();
+        let colors = (0..side * side)
+            .map(|i| [(i % 251) as u8, (i % 97) as u8, 60])
+            .collect();
+        (heights, colors)
+    }
+
+    #[test]
+    fn a_frame_spends_its_budget_and_never_more() {
+        let (heights, colors) = hills();
+        let terrain = Terrain::new(64, 64, &heights, &colors).unwrap();
+        let (h, c, b) = pyramid_storage(&terrain);
+        let pyramid = Pyramid::new(terrain, &h, &c, &b).unwrap();
+        let options = RenderOptions::default();
+        for pitch in [5.0, 30.0, 90.0] {
+            let view = View::new(&Camera::looking([3.0, 5.0, 80.0], 40.0, pitch), 32, 24).unwrap();
+            let mut probe = crate::CountingProbe::default();
+            let mut plain = Governor::new(u64::MAX / 4, Prices::BOARD);
+            let unlimited = plain.render(&pyramid, &view, &options, &mut Discard, &mut probe);
+            assert!(unlimited.filled_rays == 0 && unlimited.coarse_lines == 0);
+            for share in [1u64, 2, 3, 5, 8] {
+                // From the base pass's cost up: the refinement fills it.
+                let budget = plain.least_cost(&view, &options) + unlimited.base_cost * share / 2;
+                let mut governor = Governor::new(budget, Prices::BOARD);
+                let mut probe = crate::CountingProbe::default();
+                let cost = governor.render(&pyramid, &view, &options, &mut Discard, &mut probe);
+                assert!(cost.cost <= budget, "pitch {pitch}: {cost:?}");
+                assert!(
+                    cost.refined_lines > 0 || share == 1,
+                    "pitch {pitch}: {cost:?}"
+                );
+                assert_eq!(cost.steps, probe.steps);
+                assert_eq!(cost.cost, Prices::BOARD.of(&cost.work));
+                if cost.base_cost * 2 < budget {
+                    // Refining every line twice over costs more than this
+                    // budget: it is spent to within a refined pixel.
+                    let pixel_most = RefineAllowances {
+                        meter: &Meter {
+                            prices: Prices::BOARD,
+                            shading_most: Prices::BOARD.shading_most(pyramid.top()),
+                            ..Meter::default()
+                        },
+                        budget,
+                        filled: 0,
+                    }
+                    .pixel_most();
+                    let lines = u64::from(view.lines());
+                    assert!(
+                        cost.cost + pixel_most + u64::from(Prices::BOARD.per_line) >= budget
+                            || u64::from(cost.refined_lines) == lines,
+                        "pitch {pitch} share {share}: {cost:?}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -6,7 +6,7 @@
 //!   in either shading. A line is set up once and a ray is its slope; it
 //!   resumes where the ray before it hit.
 //! - `ray_caster.rs`: every other setting's path ([`Coherence::Off`],
-//!   [`Coherence::Exact`], several rays a pixel, a step budget). Every ray is set up in full, and may start where the ray
+//!   [`Coherence::Exact`], several rays a pixel, a frame budget). Every ray is set up in full, and may start where the ray
 //!   before it hit. [`Coherence::Exact`] casts a ray whose levels differ
 //!   from the ray before's from the eye, so the image equals the image with
 //!   every ray cast from the eye, bit for bit (tested).
@@ -31,7 +31,7 @@ mod per_line;
 mod ray_caster;
 pub(crate) mod walk;
 
-pub use budget::{FrameCost, Governor};
+pub use budget::{FrameCost, FrameWork, Governor, Prices};
 pub use options::{Coherence, RenderOptions, Resolution, Shading, VerticalSamples};
 pub use per_line::{render_level_columns, render_pixel_lines, ColumnsError};
 

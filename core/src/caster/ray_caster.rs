@@ -1,6 +1,6 @@
 //! The per-ray path: the settings the line caster does not take
 //! ([`Coherence::Off`] and [`Coherence::Exact`], several rays a pixel, a
-//! step budget) set every ray up in full: its
+//! frame budget) set every ray up in full: its
 //! direction, its clip against the map and its level schedule. The rays of
 //! a line lie in one vertical plane and share their horizontal direction
 //! bit for bit, so each ray can start at the sample where the ray before it
@@ -28,6 +28,13 @@ use crate::view::View;
 /// previous one).
 pub(crate) trait Allowances {
     fn next(&mut self) -> u32;
+    /// Whether the line's next pixel is rendered: `false` ends the line,
+    /// its remaining pixels left as the sink has them (a frame's
+    /// refinement stops where its budget does).
+    #[inline(always)]
+    fn pixel(&mut self) -> bool {
+        true
+    }
 }
 
 /// No limit: the plain render.
@@ -77,8 +84,22 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
     /// Renders image line `line` with rays by footprint, unlimited (see
     /// [`super::render_by_footprint`]).
     pub fn line_by_footprint<S: Sink, P: Probe>(&self, line: u32, sink: &mut S, probe: &mut P) {
-        let rays = RaysByFootprint::new(self.view, self.options);
+        let rays = RaysByFootprint::new(self.view, self.options, 0);
         self.line_rays(line, sink, probe, &mut Unlimited, rays);
+    }
+
+    /// Renders image line `line` again, finer: two rays a pixel, four
+    /// where its footprint is long (rays by footprint, at least two), each
+    /// within `allowances`, which may end the line early.
+    pub fn line_refined<S: Sink, P: Probe, A: Allowances>(
+        &self,
+        line: u32,
+        sink: &mut S,
+        probe: &mut P,
+        allowances: &mut A,
+    ) {
+        let rays = RaysByFootprint::new(self.view, self.options, 1);
+        self.line_rays(line, sink, probe, allowances, rays);
     }
 
     /// Renders a line with the rays a pixel `rays_per_pixel` gives.
@@ -106,6 +127,9 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
         // the rest of the line is sky, written without rays.
         let mut sky_from_here = false;
         for pixel in line.pixels(view.height()) {
+            if !allowances.pixel() {
+                return;
+            }
             if sky_from_here {
                 let sky = sky(options);
                 rays_per_pixel.rendered(&sky, pixel.s);
@@ -411,15 +435,18 @@ struct RaysByFootprint {
     focal: i64,
     /// The line's pixel spacing (`Line::pixel_spacing_q16`).
     spacing: u64,
+    /// log2 of the fewest rays a pixel gets.
+    least_log2: u32,
 }
 
 impl RaysByFootprint {
-    fn new(view: &View, options: &RenderOptions) -> Self {
+    fn new(view: &View, options: &RenderOptions, least_log2: u32) -> Self {
         Self {
             before: [(sky(options), 0); 2],
             eye_z: view.eye[2].to_bits(),
             focal: view.focal,
             spacing: 1 << 16,
+            least_log2,
         }
     }
 }
@@ -432,6 +459,7 @@ impl RaysPerPixel for RaysByFootprint {
         let [(older, older_row), (newer, newer_row)] = &self.before;
         let rows = u64::from(older_row.abs_diff(*newer_row).max(1));
         footprint_rays_log2([older, newer], self.eye_z, self.focal, self.spacing * rows)
+            .max(self.least_log2)
     }
     fn rendered(&mut self, center: &Sample, row: i32) {
         self.before = [self.before[1], (*center, row)];

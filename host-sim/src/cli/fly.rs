@@ -29,7 +29,7 @@ pub(super) struct FlyArgs {
     /// Display rate, frames a second.
     #[arg(long, default_value_t = 30.0, value_name = "HZ", value_parser = positive(0.0f64, 1000.0), allow_hyphen_values = true)]
     display_hz: f64,
-    /// Rendering rate the step budget is made for; the frames between are
+    /// Rendering rate the budget is made for; the frames between are
     /// warped.
     #[arg(long, default_value_t = 10.0, value_name = "HZ", value_parser = positive(0.0f64, 1000.0), allow_hyphen_values = true)]
     render_hz: f64,
@@ -182,7 +182,10 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
     let mean_render = render_ms.iter().sum::<f64>() / render_ms.len().max(1) as f64;
     let mut renders = std::collections::BTreeMap::new();
     for f in &flight.frames {
-        renders.insert(f.render, (f.coarse_lines, f.filled_rays, f.level_bias));
+        renders.insert(
+            f.render,
+            (f.coarse_lines, f.filled_rays, f.level_bias, f.cost),
+        );
     }
     let coarse = renders.values().filter(|r| r.0 > 0).count();
     let filled = renders.values().filter(|r| r.1 > 0).count();
@@ -195,9 +198,15 @@ pub(super) fn fly_command(args: FlyArgs) -> Result<()> {
         args.size.1,
         frames as usize - rendered,
     );
+    let shares = renders
+        .values()
+        .map(|r| r.3 as f64 / flight.budget.max(1) as f64);
+    let (least, most) = shares.fold((f64::INFINITY, 0.0f64), |(l, h), s| (l.min(s), h.max(s)));
     println!(
-        "renders: budget {} steps, mean {:.1} ms ({:.1} Hz alone), longest {:.1} ms, on {} processors at {} MHz",
+        "renders: budget {} cycles, each render {:.4} to {:.4} of it; mean {:.1} ms ({:.1} Hz alone), longest {:.1} ms, on {} processors at {} MHz",
         flight.budget,
+        least,
+        most,
         mean_render,
         1e3 / mean_render.max(1e-9),
         render_ms.iter().copied().fold(0.0, f64::max),

@@ -39,7 +39,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Fly a path at a steady display rate on the modeled machine: frames
-    /// rendered within a step budget, the ones between warped; writes an
+    /// rendered within a fixed budget, the ones between warped; writes an
     /// animated GIF and a report. The main job.
     Fly(fly::FlyArgs),
     /// Render one view to a PNG (with optional depth and stats).
@@ -428,6 +428,15 @@ struct RenderArgs {
     #[arg(long, default_value_t = 4, value_name = "N",
           value_parser = number(1u32, 16), allow_hyphen_values = true)]
     supersample: u32,
+    /// Kernel: one frame within a budget of COST of the board's
+    /// instructions a pixel (the governor at the board's prices, from a
+    /// level bias of 1): what it spends and how, on the terminal and in
+    /// --stats. The per-ray path, one ray a pixel and two or four on the
+    /// lines the budget refines; --pixel-to-voxel and --vertical-samples
+    /// are the governor's to choose
+    #[arg(long, value_name = "COST", value_parser = number(1u64, 1_000_000),
+          allow_hyphen_values = true, conflicts_with = "vertical_samples")]
+    budget: Option<u64>,
     /// Output image (8-bit RGB PNG).
     #[arg(long, value_name = "OUT.png")]
     out: PathBuf,
@@ -501,12 +510,29 @@ fn board_verify_command(args: BoardVerifyArgs) -> Result<()> {
         .filter(|f| !f.identical())
         .map(|f| f.index.to_string())
         .collect();
+    let differing: Vec<String> = differing
+        .into_iter()
+        .chain(
+            report
+                .governed
+                .iter()
+                .enumerate()
+                .filter(|(_, g)| g.differing_pixels > 0)
+                .map(|(index, _)| format!("governed {index}")),
+        )
+        .collect();
     let per_pixel = report.instructions_per_pixel();
     if !differing.is_empty() {
         println!("instructions per pixel: {per_pixel:.0}");
         return Err(Error::new(format!(
             "board and host frames differ in view(s) {}",
             differing.join(", ")
+        )));
+    }
+    let (_, most) = report.governed_shares();
+    if !report.governed.is_empty() && most > 1.0 {
+        return Err(Error::new(format!(
+            "a governed frame took {most:.3} of its budget on the board: Prices::BOARD no longer covers the kernel's cost (refit it from the `governor prices fit` line)"
         )));
     }
     if let Some(budget) = args.budget {
@@ -564,14 +590,33 @@ fn render_command(args: RenderArgs) -> Result<()> {
             check_view()?;
             let options = args.kernel.options(sky);
             let prepared = args.atmosphere.prepared(false)?;
-            render_kernel_in(
+            let rays = match args.budget {
+                Some(per_pixel) => PixelRays::Governed(per_pixel),
+                None => args.kernel.vertical_samples.1,
+            };
+            let rendered = render_kernel_in(
                 &kernel,
                 &camera,
                 (width, height),
                 &options,
-                args.kernel.vertical_samples.1,
+                rays,
                 prepared.as_ref(),
-            )?
+            )?;
+            if let Some(cost) = rendered.1.levels.and_then(|l| l.governed) {
+                let pixels = f64::from(width) * f64::from(height);
+                println!(
+                    "budget {:.0} a pixel: spent {:.0} ({:.1} %), the base pass {:.0} at a level bias of {}; {} lines refined, {} finished coarser, {} rays repeated",
+                    cost.budget as f64 / pixels,
+                    cost.cost as f64 / pixels,
+                    100.0 * cost.cost as f64 / cost.budget.max(1) as f64,
+                    cost.base_cost as f64 / pixels,
+                    cost.level_bias,
+                    cost.refined_lines,
+                    cost.coarse_lines,
+                    cost.filled_rays,
+                );
+            }
+            rendered
         }
         Method::Reference => {
             let options = ReferenceOptions {

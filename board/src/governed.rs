@@ -1,0 +1,72 @@
+//! The governor's check on the board: a run of frames, each within one
+//! budget, over the board scene's views and a sweep of pitches.
+//!
+//! The firmware renders [`cameras`] in order with one [`Governor`] from
+//! [`governor`] (so each frame's level bias comes from the frames before,
+//! as in a flight) and reports each frame's ticks; the host renders the
+//! same run with the same governor, checks the frames byte for byte, and
+//! sets each frame's counted instructions against the budget.
+
+use terracast::{Camera, Governor, Prices};
+
+/// The budget, in the board's instructions a pixel of the image.
+pub const BUDGET_INSTRUCTIONS_PER_PIXEL: u64 = 3000;
+
+/// The pitches swept from the first view's eye and heading: those of
+/// `scripts/steps-table`.
+pub const PITCHES: [f32; 6] = [2.0, 5.0, 15.0, 30.0, 60.0, 90.0];
+
+/// The most frames of a run: every view of a scene, then the sweep.
+pub const MAX_FRAMES: usize = crate::scene::MAX_VIEWS + PITCHES.len();
+
+/// The run's cameras: `views` (at most [`crate::scene::MAX_VIEWS`]), then
+/// the first view's eye and heading at each of [`PITCHES`]. The count is
+/// returned with them.
+pub fn cameras(views: &[Camera]) -> ([Camera; MAX_FRAMES], usize) {
+    let mut out = [Camera::looking([0.0; 3], 0.0, 0.0); MAX_FRAMES];
+    let mut count = 0;
+    for (slot, view) in out.iter_mut().zip(views) {
+        *slot = *view;
+        count += 1;
+    }
+    if let Some(first) = views.first() {
+        for pitch in PITCHES {
+            out[count] = Camera {
+                pitch_deg: pitch,
+                roll_deg: 0.0,
+                ..*first
+            };
+            count += 1;
+        }
+    }
+    (out, count)
+}
+
+/// The run's governor for `width × height` frames: the budget at the
+/// board's prices.
+pub fn governor(width: u32, height: u32) -> Governor {
+    Governor::new(
+        u64::from(width) * u64::from(height) * BUDGET_INSTRUCTIONS_PER_PIXEL,
+        Prices::BOARD,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_run_is_the_views_then_the_sweep_from_the_first() {
+        let a = Camera::looking([1.0, 2.0, 3.0], 40.0, 12.0);
+        let b = Camera::looking([5.0, 6.0, 7.0], 80.0, 45.0);
+        let (run, count) = cameras(&[a, b]);
+        assert_eq!(count, 2 + PITCHES.len());
+        assert_eq!(run[..2], [a, b]);
+        for (camera, pitch) in run[2..count].iter().zip(PITCHES) {
+            assert_eq!(camera.eye, a.eye);
+            assert_eq!(camera.yaw_deg, a.yaw_deg);
+            assert_eq!(camera.pitch_deg, pitch);
+        }
+        assert_eq!(cameras(&[]).1, 0);
+    }
+}
