@@ -460,7 +460,7 @@ pub fn fly(
             colors,
             points,
             cost: cost.cost,
-            steps: cost.steps,
+            steps: cost.work.steps,
             level_bias: cost.level_bias.to_num(),
             coarse_lines: cost.coarse_lines,
             filled_rays: cost.filled_rays,

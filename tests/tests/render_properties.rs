@@ -345,7 +345,7 @@ fn check_terrain(
         if cost.cost > budget.max(governor.least_cost(&view, &RenderOptions::default())) {
             return Err(context(
                 "governor",
-                format!("{} steps over a budget of {budget}", cost.steps),
+                format!("cost {} over a budget of {budget}", cost.cost),
             ));
         }
         *rendered += 2;

@@ -96,9 +96,11 @@ impl Prices {
     };
 
     /// The board's (Cortex-M7) instructions, for the per-ray path the
-    /// governor renders with: the least-squares fit of the counted
-    /// instructions of `scripts/board-check`'s governed frames, at budgets
-    /// of 2000 and 3000 instructions a pixel, to their work (a step's price
+    /// governor renders with: a least-squares fit, made by hand outside
+    /// the repository, of the counted instructions of
+    /// `scripts/board-check`'s governed frames (the work `board verify`
+    /// prints), at budgets of 2000 and 3000 instructions a pixel, to their
+    /// work (a step's price
     /// set: the frames take too few steps to tell it apart), off by −3.8 %
     /// to +3.2 % on those frames; raised by 5 % so that the board's count
     /// stays under the priced cost. A hit's price grows with its level:
@@ -164,8 +166,6 @@ pub struct FrameCost {
     pub budget: u64,
     /// Of `cost`, the base pass's (every line once).
     pub base_cost: u64,
-    /// Steps taken: walk steps and bound tests, as a probe counts them.
-    pub steps: u64,
     /// The level bias (pixel-to-voxel ratio) the frame was rendered at.
     pub level_bias: U8F8,
     /// Lines finished at the coarsest bias ([`Governor::MAX_BIAS`])
@@ -318,7 +318,6 @@ impl Governor {
             work: meter.work(),
             budget,
             base_cost,
-            steps: meter.steps.get(),
             level_bias: U8F8::from_bits(bias),
             coarse_lines,
             refined_lines,
@@ -711,7 +710,6 @@ mod tests {
             work: FrameWork::default(),
             budget: 1000,
             base_cost,
-            steps: 0,
             level_bias: U8F8::ONE,
             coarse_lines,
             refined_lines: 0,
@@ -785,7 +783,7 @@ mod tests {
                     cost.refined_lines > 0 || share == 1,
                     "pitch {pitch}: {cost:?}"
                 );
-                assert_eq!(cost.steps, probe.steps);
+                assert_eq!(cost.work.steps, probe.steps);
                 assert_eq!(cost.cost, Prices::BOARD.of(&cost.work));
                 if cost.base_cost * 2 < budget {
                     // Refining every line twice over costs more than this
