@@ -13,8 +13,9 @@
 //! `Checked::top`; a frame the governor starves shades its cut rays where
 //! they stopped); a budgeted frame takes no more steps than its budget.
 //!
-//! Seeded (ChaCha from a fixed seed; each terrain's cameras from its own
-//! seed), so a failure repeats; `PROPTEST_CASES` sets the number of
+//! Seeded (ChaCha from a fixed seed for each of [`SHARDS`] shards, which
+//! run on all the cores; each terrain's cameras from its own seed), so a
+//! failure repeats on any machine; `PROPTEST_CASES` sets the number of
 //! terrains (800 by default) for a longer or shorter run. Each terrain is
 //! rendered from [`CAMERAS_A_CASE`] cameras with every setting on the
 //! pyramid and on level 0 alone, with rays by footprint and with the
@@ -353,34 +354,76 @@ fn check_terrain(
     Ok(())
 }
 
+/// The run's terrains are drawn in this many shards, each from its own
+/// seed, so that the shards run on all the cores while the terrains drawn
+/// stay the same on every machine.
+const SHARDS: u8 = 4;
+
 #[test]
 fn every_render_writes_every_pixel_once_and_keeps_its_budget() {
-    let cases = std::env::var("PROPTEST_CASES")
+    let cases: u32 = std::env::var("PROPTEST_CASES")
         .ok()
         .and_then(|n| n.parse().ok())
         .unwrap_or(CASES);
+    let started = std::time::Instant::now();
+    let next_shard = std::sync::atomic::AtomicU8::new(0);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // Each thread takes the next shard until none is left; every shard
+    // reports its views and its first failure.
+    let outcomes: Vec<(u64, Option<String>)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads.min(usize::from(SHARDS)))
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut outcomes = Vec::new();
+                    loop {
+                        let shard = next_shard.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        if shard >= SHARDS {
+                            return outcomes;
+                        }
+                        // The cases split as evenly as they go.
+                        let shard_cases =
+                            (cases + u32::from(SHARDS - 1 - shard)) / u32::from(SHARDS);
+                        outcomes.push(run_shard(shard, shard_cases));
+                    }
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|worker| worker.join().expect("a shard's thread panicked"))
+            .collect()
+    });
+    let rendered: u64 = outcomes.iter().map(|(views, _)| views).sum();
+    println!(
+        "{rendered} views rendered over {cases} terrains in {:.1} s",
+        started.elapsed().as_secs_f64()
+    );
+    let failures: Vec<&String> = outcomes.iter().filter_map(|(_, e)| e.as_ref()).collect();
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Draws `cases` terrains from shard `shard`'s seed and checks each: the
+/// views rendered and the first failure (proptest's shrunk case).
+fn run_shard(shard: u8, cases: u32) -> (u64, Option<String>) {
     let config = Config {
         cases,
         failure_persistence: None,
         rng_algorithm: RngAlgorithm::ChaCha,
         ..Config::default()
     };
-    let mut runner =
-        TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &[7; 32]));
+    let mut runner = TestRunner::new_with_rng(
+        config,
+        TestRng::from_seed(RngAlgorithm::ChaCha, &[7 + shard; 32]),
+    );
     let rendered = std::cell::Cell::new(0u64);
-    let started = std::time::Instant::now();
     let result = runner.run(&terrain(), |case| {
         let mut count = rendered.get();
         let outcome = check_terrain(case, &mut count);
         rendered.set(count);
         outcome.map_err(TestCaseError::fail)
     });
-    println!(
-        "{} views rendered over {cases} terrains in {:.1} s",
+    (
         rendered.get(),
-        started.elapsed().as_secs_f64()
-    );
-    if let Err(e) = result {
-        panic!("{e}");
-    }
+        result.err().map(|e| format!("shard {shard}: {e}")),
+    )
 }
