@@ -3,20 +3,30 @@
 //!
 //! The firmware renders [`cameras`] in order with one [`Governor`] from
 //! [`governor`] (so each frame's level bias comes from the frames before,
-//! as in a flight) and reports each frame's ticks; the host renders the
-//! same run with the same governor, checks the frames byte for byte, and
-//! sets each frame's counted instructions against the budget.
+//! as in a flight), once for each of [`BUDGETS`], and reports each
+//! frame's ticks; the host renders the same runs with the same governors,
+//! checks the frames byte for byte, and sets each frame's counted
+//! instructions against its budget. The check's bars are on the first
+//! budget's run; the second, leaner run is there for the fit of the
+//! prices (`board verify` prints it): at it the per-ray path repeats rays
+//! (a ray with no hit of its own), which tells a ray's price apart from
+//! its hit's.
 
 use terracast::{Camera, Governor, Prices};
 
-/// The budget, in the board's instructions a pixel of the image.
+/// The check's budget, in the board's instructions a pixel of the image.
 pub const BUDGET_INSTRUCTIONS_PER_PIXEL: u64 = 3000;
+
+/// The budgets the run is rendered at, in order, in the board's
+/// instructions a pixel: the check's, then a leaner one for the price fit.
+pub const BUDGETS: [u64; 2] = [BUDGET_INSTRUCTIONS_PER_PIXEL, 2000];
 
 /// The pitches swept from the first view's eye and heading: those of
 /// `scripts/steps-table`.
 pub const PITCHES: [f32; 6] = [2.0, 5.0, 15.0, 30.0, 60.0, 90.0];
 
-/// The most frames of a run: every view of a scene, then the sweep.
+/// The most frames of a run at one budget: every view of a scene, then
+/// the sweep.
 pub const MAX_FRAMES: usize = crate::scene::MAX_VIEWS + PITCHES.len();
 
 /// The run's cameras: `views` (at most [`crate::scene::MAX_VIEWS`]), then
@@ -42,11 +52,11 @@ pub fn cameras(views: &[Camera]) -> ([Camera; MAX_FRAMES], usize) {
     (out, count)
 }
 
-/// The run's governor for `width × height` frames: the budget at the
-/// board's prices.
-pub fn governor(width: u32, height: u32) -> Governor {
+/// A run's governor for `width × height` frames: `per_pixel` (one of
+/// [`BUDGETS`]) instructions a pixel at the board's prices.
+pub fn governor(width: u32, height: u32, per_pixel: u64) -> Governor {
     Governor::new(
-        u64::from(width) * u64::from(height) * BUDGET_INSTRUCTIONS_PER_PIXEL,
+        u64::from(width) * u64::from(height) * per_pixel,
         Prices::BOARD,
     )
 }

@@ -361,8 +361,8 @@ fn run() -> Result<(), &'static str> {
 }
 
 /// The governor's check (`terracast_board::governed`): its cameras in
-/// order, each frame within the one budget, its ticks to `results` and its
-/// frame to the host.
+/// order at each of its budgets, each frame within its run's budget, its
+/// ticks to `results` and its frame to the host.
 fn governed_run<T: Surface>(
     surface: &T,
     views: &[Camera],
@@ -370,21 +370,30 @@ fn governed_run<T: Surface>(
     frame: &mut [Rgb; PIXELS],
     results: &mut heapless::String<2048>,
 ) -> Result<(), &'static str> {
-    let mut governor = governed::governor(IMAGE_WIDTH, IMAGE_HEIGHT);
     let (cameras, count) = governed::cameras(views);
-    for (index, camera) in cameras[..count].iter().enumerate() {
-        let view = View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
-        let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
-            .map_err(|_| "framebuffer too small")?;
-        let start = ticks();
-        governor.render(surface, &view, options, &mut framebuffer, &mut NoProbe);
-        let governed_ticks = ticks() - start;
-        let mut name: heapless::String<32> = heapless::String::new();
-        let _ = write!(name, "frame-{index}-governed.rgb\0");
-        write_host_file(&name, frame.as_flattened())?;
-        let _ = writeln!(results, "governed {index} ticks {governed_ticks}");
+    let mut index = 0;
+    for per_pixel in governed::BUDGETS {
+        let mut governor = governed::governor(IMAGE_WIDTH, IMAGE_HEIGHT, per_pixel);
+        for camera in &cameras[..count] {
+            let view =
+                View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+            let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+                .map_err(|_| "framebuffer too small")?;
+            let start = ticks();
+            governor.render(surface, &view, options, &mut framebuffer, &mut NoProbe);
+            let governed_ticks = ticks() - start;
+            let mut name: heapless::String<32> = heapless::String::new();
+            let _ = write!(name, "frame-{index}-governed.rgb\0");
+            write_host_file(&name, frame.as_flattened())?;
+            let _ = writeln!(results, "governed {index} ticks {governed_ticks}");
+            index += 1;
+        }
     }
-    hprintln!("terracast-firmware: {} frames within one budget", count);
+    hprintln!(
+        "terracast-firmware: {} frames within one budget, at {} budgets",
+        count,
+        governed::BUDGETS.len()
+    );
     Ok(())
 }
 

@@ -24,11 +24,19 @@
 //!   with the flight's sky, sun and fog (`Atmosphere::FLIGHT`), each
 //!   frame's time against the one without.
 //!
+//! * `governed`: one budget for all, the board's governed run's (3000 of
+//!   the board's instructions a pixel at `Prices::BOARD`), at pitch 2° to
+//!   90° from the same eye; each pitch's governor first settles over
+//!   [`SETTLE_FRAMES`] frames of its view, then every timed frame starts
+//!   from that state. The table gives each frame's priced cost against
+//!   the budget and its time against the fastest pitch's: the host's
+//!   frame-time ratio (max/min) across pitches for one budget.
+//!
 //! * `objects` (a table only): the built-in scene with its wood and village
 //!   (`--objects`) against the same scene bare, four views, each frame's
 //!   time against the bare one's.
 //!
-//! The `roll`, `atmosphere` and `objects` tables are timed apart from criterion: the
+//! The `roll`, `atmosphere`, `governed` and `objects` tables are timed apart from criterion: the
 //! renders a table compares take turns, 25 rounds, and each keeps its
 //! best, so that a change in the shared machine's load falls on all alike.
 //!
@@ -40,9 +48,10 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
 use terracast::{
-    render, render_level_columns, Atmosphere, Camera, Coherence, CountingProbe, NoProbe,
+    render, render_level_columns, Atmosphere, Camera, Coherence, CountingProbe, Governor, NoProbe,
     PreparedAtmosphere, RenderOptions, Resolution, View,
 };
+use terracast_board::governed;
 use terracast_sim::baselines::{voxel_space, VoxelSpaceOptions};
 use terracast_sim::kernel::SampleBuffer;
 use terracast_sim::metrics::psnr;
@@ -53,6 +62,9 @@ const SIZE: (u32, u32) = (640, 480);
 const PITCHES: [f32; 6] = [2.0, 5.0, 15.0, 30.0, 60.0, 90.0];
 const ROLLS: [f32; 5] = [0.0, 15.0, 30.0, 45.0, 90.0];
 const ATMOSPHERE_PITCHES: [f32; 3] = [2.0, 15.0, 45.0];
+/// Frames a governor renders of its view before it is timed: its level
+/// bias settles within them (it moves by at most an eighth a frame finer).
+const SETTLE_FRAMES: usize = 40;
 
 /// The `atmosphere` group's settings: none, fog without the sun, and the
 /// flight's.
@@ -341,6 +353,30 @@ fn main() {
         }
         group.finish();
     }
+    let governed = settled_governors(&levels_for(&RenderOptions::default()));
+    {
+        let mut group = criterion.benchmark_group("governed");
+        group.throughput(Throughput::Elements(pixels));
+        group.sample_size(10);
+        let levels = levels_for(&RenderOptions::default());
+        let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+        for (pitch, governor, view) in &governed {
+            group.bench_function(BenchmarkId::from_parameter(pitch), |b| {
+                b.iter(|| {
+                    // From the settled state each time: the same frame.
+                    let mut governor = *governor;
+                    governor.render(
+                        &levels,
+                        view,
+                        &RenderOptions::default(),
+                        &mut buffer,
+                        &mut NoProbe,
+                    )
+                })
+            });
+        }
+        group.finish();
+    }
     criterion.final_summary();
 
     let mean_ns =
@@ -448,6 +484,7 @@ fn main() {
     }
 
     atmosphere_table(&levels_for(&RenderOptions::default()), pixels);
+    governed_table(&levels_for(&RenderOptions::default()), &governed, pixels);
     objects_table(pixels);
 
     println!("\n| roll (pitch 10) | steps/pixel | ns/pixel | time against roll 0 |");
@@ -491,6 +528,70 @@ fn best_in_turns(count: usize, mut render: impl FnMut(usize)) -> Vec<f64> {
         }
     }
     best
+}
+
+/// For each of [`PITCHES`], the board's governed run's governor settled
+/// on that pitch's view ([`SETTLE_FRAMES`] frames), and the view.
+fn settled_governors(levels: &terracast::Pyramid<'_>) -> Vec<(f32, Governor, View)> {
+    let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+    PITCHES
+        .iter()
+        .map(|&pitch| {
+            let view = View::new(&camera(pitch), SIZE.0, SIZE.1).expect("view");
+            let mut governor =
+                governed::governor(SIZE.0, SIZE.1, governed::BUDGET_INSTRUCTIONS_PER_PIXEL);
+            for _ in 0..SETTLE_FRAMES {
+                governor.render(
+                    levels,
+                    &view,
+                    &RenderOptions::default(),
+                    &mut buffer,
+                    &mut NoProbe,
+                );
+            }
+            (pitch, governor, view)
+        })
+        .collect()
+}
+
+/// The `governed` group as a table: each pitch's frame from its settled
+/// governor, its priced cost against the budget and its time against
+/// the fastest pitch's ([`best_in_turns`]), and the max/min of the times.
+fn governed_table(
+    levels: &terracast::Pyramid<'_>,
+    governed: &[(f32, Governor, View)],
+    pixels: u64,
+) {
+    let default = RenderOptions::default();
+    let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+    let best = best_in_turns(governed.len(), |i| {
+        let (_, governor, view) = &governed[i];
+        let mut governor = *governor;
+        governor.render(levels, view, &default, &mut buffer, &mut NoProbe);
+    });
+    let fastest = best.iter().copied().fold(f64::MAX, f64::min);
+    let slowest = best.iter().copied().fold(0.0, f64::max);
+    println!(
+        "\n| pitch (governed, {} board instructions a pixel) | level bias | refined lines | cost / budget | ns/pixel | time against the fastest |",
+        governed::BUDGET_INSTRUCTIONS_PER_PIXEL
+    );
+    println!("|---|---|---|---|---|---|");
+    for (&(pitch, mut governor, ref view), ns) in governed.iter().zip(&best) {
+        let cost = governor.render(levels, view, &default, &mut buffer, &mut NoProbe);
+        println!(
+            "| {pitch} | {:.2} | {} of {} | {:.3} | {:.1} | {:.2}x |",
+            cost.level_bias.to_num::<f64>(),
+            cost.refined_lines,
+            view.lines(),
+            cost.cost as f64 / cost.budget as f64,
+            ns / pixels as f64,
+            ns / fastest
+        );
+    }
+    println!(
+        "governed: frame time max/min across pitches = {:.2}",
+        slowest / fastest
+    );
 }
 
 /// The `atmosphere` group as a table: ns a pixel, and the time against

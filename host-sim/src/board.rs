@@ -10,8 +10,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 use terracast::{
     pyramid_cells, pyramid_points, render, Atmosphere, Camera, Coherence, CountingProbe, FrameCost,
-    Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid, RenderOptions, Stick, Surface,
-    View, WithSticks,
+    Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Prices, Pyramid, RenderOptions, Stick,
+    Surface, View, WithSticks,
 };
 use terracast_board::governed;
 use terracast_board::scene::{self, BoardScene, Header};
@@ -311,7 +311,7 @@ impl BoardReport {
     /// prices fitted to the counts.
     fn governed_table(&self) -> String {
         let mut out = String::from(
-            "\ngoverned frames (one budget, Prices::BOARD); work a pixel of the image\nframe  pitch  frame      bias  coarse lines  filled rays  refined lines  pixels  lines  rays  steps  colors  hits  levels  base/px  priced/budget  board/budget  board/priced\n",
+            "\ngoverned frames (a run at each budget, Prices::BOARD); work a pixel of the image\nframe  budget/px  pitch  frame      bias  coarse lines  filled rays  refined lines  pixels  lines  rays  steps  colors  hits  levels  base/px  priced/budget  board/budget  board/priced\n",
         );
         let image = f64::from(self.image.0) * f64::from(self.image.1);
         for (index, g) in self.governed.iter().enumerate() {
@@ -320,8 +320,9 @@ impl BoardReport {
             let w = &g.cost.work;
             let _ = writeln!(
                 out,
-                "{:>5}  {:>5.0}  {:<9}  {:>4.2}  {:>12}  {:>11}  {:>13}  {:>6.3}  {:>5.4}  {:>4.2}  {:>5.2}  {:>6.2}  {:>4.2}  {:>6.2}  {:>7.0}  {:>13.3}  {:>12.3}  {:>12.3}",
+                "{:>5}  {:>9}  {:>5.0}  {:<9}  {:>4.2}  {:>12}  {:>11}  {:>13}  {:>6.3}  {:>5.4}  {:>4.2}  {:>5.2}  {:>6.2}  {:>4.2}  {:>6.2}  {:>7.0}  {:>13.3}  {:>12.3}  {:>12.3}",
                 index,
+                g.cost.budget / (u64::from(self.image.0) * u64::from(self.image.1)).max(1),
                 g.camera.pitch_deg,
                 if g.differing_pixels == 0 {
                     "identical"
@@ -348,7 +349,8 @@ impl BoardReport {
         let (least, most) = self.governed_shares();
         let _ = writeln!(
             out,
-            "board instructions {least:.3} to {most:.3} of the budget: max/min {:.3}",
+            "the check's run ({} a pixel): board instructions {least:.3} to {most:.3} of the budget: max/min {:.3}",
+            governed::BUDGET_INSTRUCTIONS_PER_PIXEL,
             most / least.max(1e-12)
         );
         let (least, most) = self
@@ -358,18 +360,85 @@ impl BoardReport {
             .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r), h.max(r)));
         let _ = writeln!(
             out,
-            "board instructions {least:.3} to {most:.3} of the priced cost (Prices::BOARD must stay above the count)"
+            "every run: board instructions {least:.3} to {most:.3} of the priced cost (Prices::BOARD must stay above the count)"
         );
+        out.push_str(&self.governed_price_fit());
         out
     }
 
-    /// The least and the most of the governed frames' board instructions,
+    /// The prices that fit this run's governed frames best: the
+    /// least-squares fit of each frame's board instructions to its work
+    /// (pixels written, rays, hits, hit levels), the step's price held at
+    /// `Prices::BOARD`'s (these frames take a few steps a pixel, too few to
+    /// tell it apart), and how far that fit and `Prices::BOARD` are from
+    /// the counts.
+    fn governed_price_fit(&self) -> String {
+        let step = f64::from(Prices::BOARD.per_step);
+        let rows: Vec<([f64; 4], f64)> = self
+            .governed
+            .iter()
+            .map(|g| {
+                let w = &g.cost.work;
+                let board = self.governed_instructions(g);
+                (
+                    [w.pixels, w.rays, w.hits, w.hit_levels].map(|n| n as f64),
+                    board - step * w.steps as f64,
+                )
+            })
+            .collect();
+        let Some(fit) = least_squares_through_origin(&rows) else {
+            return String::from(
+                "prices fitted to these frames: the frames do not tell them apart\n",
+            );
+        };
+        let (low, high) = self
+            .governed
+            .iter()
+            .zip(&rows)
+            .map(|(g, (x, _))| {
+                let w = &g.cost.work;
+                let priced: f64 =
+                    x.iter().zip(fit).map(|(n, p)| n * p).sum::<f64>() + step * w.steps as f64;
+                priced / self.governed_instructions(g) - 1.0
+            })
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), e| {
+                (l.min(e), h.max(e))
+            });
+        let board = Prices::BOARD;
+        format!(
+            "prices fitted to these frames (least squares, a step's price held at {step:.0}): {:.0} a pixel written, {:.0} a ray, {:.0} a hit, {:.0} a hit level; off the counts by {:+.1} % to {:+.1} % (Prices::BOARD: {}, {}, {}, {})\n",
+            fit[0],
+            fit[1],
+            fit[2],
+            fit[3],
+            100.0 * low,
+            100.0 * high,
+            board.per_pixel,
+            board.per_ray,
+            board.per_hit,
+            board.per_hit_level,
+        )
+    }
+
+    /// The least and the most of the check's governed frames' board
+    /// instructions (the run at `governed::BUDGET_INSTRUCTIONS_PER_PIXEL`),
     /// as shares of their budget.
     pub fn governed_shares(&self) -> (f64, f64) {
+        let image = u64::from(self.image.0) * u64::from(self.image.1);
+        self.governed
+            .iter()
+            .filter(|g| g.cost.budget == image * governed::BUDGET_INSTRUCTIONS_PER_PIXEL)
+            .map(|g| self.governed_instructions(g) / g.cost.budget.max(1) as f64)
+            .fold((f64::INFINITY, 0.0f64), |(l, h), s| (l.min(s), h.max(s)))
+    }
+
+    /// The most any governed frame's board instructions take of its
+    /// budget, over the runs at every budget (0 with none).
+    pub fn governed_most_share(&self) -> f64 {
         self.governed
             .iter()
             .map(|g| self.governed_instructions(g) / g.cost.budget.max(1) as f64)
-            .fold((f64::INFINITY, 0.0f64), |(l, h), s| (l.min(s), h.max(s)))
+            .fold(0.0, f64::max)
     }
 }
 
@@ -529,15 +598,16 @@ impl SceneFile {
 /// and cost.
 pub type GovernedFrame = (Camera, Vec<u8>, FrameCost);
 
-/// The governor's run (`terracast_board::governed`) over `surface`, as the
-/// firmware renders it (a bare map's only).
+/// The governor's runs (`terracast_board::governed`, one at each of its
+/// budgets) over `surface`, as the firmware renders them (a bare map's
+/// only).
 fn governed_run<T: Surface>(surface: &T, header: &Header) -> Result<Vec<GovernedFrame>> {
     let (width, height) = (header.image_width, header.image_height);
-    let mut governor = governed::governor(width, height);
     let (cameras, count) = governed::cameras(header.views());
-    cameras[..count]
-        .iter()
-        .map(|camera| {
+    let mut frames = Vec::new();
+    for per_pixel in governed::BUDGETS {
+        let mut governor = governed::governor(width, height, per_pixel);
+        for camera in &cameras[..count] {
             let view = View::new(camera, width, height)
                 .map_err(|e| Error::new(format!("bad governed view: {e}")))?;
             let mut colors = vec![[0u8; 3]; width as usize * height as usize];
@@ -550,9 +620,10 @@ fn governed_run<T: Surface>(surface: &T, header: &Header) -> Result<Vec<Governed
                 &mut framebuffer,
                 &mut NoProbe,
             );
-            Ok((*camera, colors.into_iter().flatten().collect(), cost))
-        })
-        .collect()
+            frames.push((*camera, colors.into_iter().flatten().collect(), cost));
+        }
+    }
+    Ok(frames)
 }
 
 /// Checks the board's output in `from` (`frame-K.rgb`, `wire-K.bin`,
@@ -800,6 +871,54 @@ fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
     Ok(results)
 }
 
+/// The least-squares weights `w` of `y ≈ Σ wᵢ·xᵢ` (no constant term)
+/// over `rows`, from the normal equations by Gaussian elimination with
+/// partial pivoting; `None` where the columns do not tell the weights
+/// apart (fewer rows than weights, or a column a blend of the others).
+pub(crate) fn least_squares_through_origin<const N: usize>(
+    rows: &[([f64; N], f64)],
+) -> Option<[f64; N]> {
+    // [XᵀX | Xᵀy], row by row.
+    let mut system = [[0.0f64; N]; N];
+    let mut right = [0.0f64; N];
+    for (x, y) in rows {
+        for i in 0..N {
+            for j in 0..N {
+                system[i][j] += x[i] * x[j];
+            }
+            right[i] += x[i] * y;
+        }
+    }
+    let scale = system
+        .iter()
+        .enumerate()
+        .map(|(i, row)| row[i])
+        .fold(0.0f64, f64::max);
+    for column in 0..N {
+        let pivot = (column..N)
+            .max_by(|&a, &b| system[a][column].abs().total_cmp(&system[b][column].abs()))?;
+        if system[pivot][column].abs() <= 1e-12 * scale.max(1e-300) {
+            return None;
+        }
+        system.swap(column, pivot);
+        right.swap(column, pivot);
+        let (pivot_row, pivot_right) = (system[column], right[column]);
+        for (row, right) in system.iter_mut().zip(&mut right).skip(column + 1) {
+            let factor = row[column] / pivot_row[column];
+            for (value, pivot) in row.iter_mut().zip(pivot_row).skip(column) {
+                *value -= factor * pivot;
+            }
+            *right -= factor * pivot_right;
+        }
+    }
+    let mut weights = [0.0f64; N];
+    for row in (0..N).rev() {
+        let known: f64 = (row + 1..N).map(|j| system[row][j] * weights[j]).sum();
+        weights[row] = (right[row] - known) / system[row][row];
+    }
+    Some(weights)
+}
+
 /// The least-squares line `y = a + b·x` through `points`, as `(a, b)`.
 /// The least-squares fit `y = a + b·x₀ + c·x₁` through `points`, as
 /// `[a, b, c]`. Where `x₀` does not vary apart from `x₁` (nothing tells the
@@ -863,6 +982,26 @@ mod tests {
         let line = [([2.0, 1.0], 3.0), ([2.0, 2.0], 5.0), ([2.0, 4.0], 9.0)];
         let fit = least_squares(&line);
         assert!(close(fit, [1.0, 0.0, 2.0]), "{fit:?}");
+    }
+
+    #[test]
+    fn prices_through_the_origin_are_the_least_squares_ones() {
+        let close =
+            |got: [f64; 2], want: [f64; 2]| got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-9);
+        // Exactly on y = 2·x₀ + 5·x₁.
+        let exact: Vec<_> = [[1.0, 0.0], [1.0, 1.0], [2.0, 3.0]]
+            .into_iter()
+            .map(|x| (x, 2.0 * x[0] + 5.0 * x[1]))
+            .collect();
+        let fit = least_squares_through_origin(&exact).unwrap();
+        assert!(close(fit, [2.0, 5.0]), "{fit:?}");
+        // y = 1 and y = 3 at x = 1: the weight is their mean.
+        let fit = least_squares_through_origin(&[([1.0], 1.0), ([1.0], 3.0)]).unwrap();
+        assert!((fit[0] - 2.0).abs() < 1e-12, "{fit:?}");
+        // One column twice the other: nothing tells them apart.
+        let twins = [([1.0, 2.0], 3.0), ([2.0, 4.0], 5.0), ([3.0, 6.0], 8.0)];
+        assert_eq!(least_squares_through_origin(&twins), None);
+        assert_eq!(least_squares_through_origin::<2>(&[]), None);
     }
 
     #[test]

@@ -84,7 +84,7 @@ fn a_governed_frame_over_its_budget_on_the_board_fails_the_check() {
         "{out}"
     );
     assert!(
-        out.contains("board instructions 0.950 to 0.950 of the budget: max/min 1.000"),
+        out.contains("the check's run (3000 a pixel): board instructions 0.950 to 0.950 of the budget: max/min 1.000"),
         "{out}"
     );
     // One frame counted past its budget.

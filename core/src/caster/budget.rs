@@ -96,23 +96,22 @@ impl Prices {
     };
 
     /// The board's (Cortex-M7) instructions, for the per-ray path the
-    /// governor renders with: a least-squares fit, made by hand outside
-    /// the repository, of the counted instructions of
-    /// `scripts/board-check`'s governed frames (the work `board verify`
-    /// prints), at budgets of 2000 and 3000 instructions a pixel, to their
-    /// work (a step's price
-    /// set: the frames take too few steps to tell it apart), off by −3.8 %
-    /// to +3.2 % on those frames; raised by 5 % so that the board's count
-    /// stays under the priced cost. A hit's price grows with its level:
-    /// the coarser a hit, the more its shading and resumption cost.
+    /// governor renders with: the least-squares prices that
+    /// `scripts/board-check` prints for its governed frames (`prices fitted
+    /// to these frames`: the board's counts of its runs at 3000 and 2000
+    /// instructions a pixel against their work, a step's price held at 53,
+    /// as these frames take too few steps to tell it apart), raised by 5 %
+    /// so that the board's count stays under the priced cost. A hit's
+    /// price grows with its level: the coarser a hit, the more its shading
+    /// and resumption cost.
     pub const BOARD: Self = Self {
-        per_pixel: 205,
+        per_pixel: 146,
         per_line: 0,
-        per_ray: 474,
+        per_ray: 466,
         per_step: 53,
         per_color: 0,
-        per_hit: 1460,
-        per_hit_level: 244,
+        per_hit: 1477,
+        per_hit_level: 252,
     };
 
     /// What `work` costs at these prices.

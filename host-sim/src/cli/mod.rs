@@ -529,10 +529,10 @@ fn board_verify_command(args: BoardVerifyArgs) -> Result<()> {
             differing.join(", ")
         )));
     }
-    let (_, most) = report.governed_shares();
-    if !report.governed.is_empty() && most > 1.0 {
+    let most = report.governed_most_share();
+    if most > 1.0 {
         return Err(Error::new(format!(
-            "a governed frame took {most:.3} of its budget on the board: Prices::BOARD no longer covers the kernel's cost (refit it from the `governor prices fit` line)"
+            "a governed frame took {most:.3} of its budget on the board: Prices::BOARD no longer covers the kernel's cost (refit it: `prices fitted to these frames`)"
         )));
     }
     if let Some(budget) = args.budget {
