@@ -259,13 +259,9 @@ impl Governor {
         let pixels = u64::from(view.width()) * u64::from(view.height());
         let rays_total = pixels * u64::from(options.vertical_samples.count());
         // Every pixel is written and every line set up once.
-        let meter = Meter {
-            prices: self.prices,
-            pixels: Cell::new(pixels),
-            lines: Cell::new(u64::from(view.lines())),
-            shading_most: self.prices.shading_most(surface.top()),
-            ..Meter::default()
-        };
+        let meter = Meter::new(self.prices, surface.top());
+        meter.pixels.set(pixels);
+        meter.lines.set(u64::from(view.lines()));
         let budget = self.budget;
         let mut metered = Metered {
             inner: probe,
@@ -355,7 +351,7 @@ fn next_bias(bias: u16, cost: &FrameCost) -> u16 {
 }
 
 /// What a frame has done so far, and what it has cost.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 struct Meter {
     prices: Prices,
     pixels: Cell<u64>,
@@ -369,14 +365,23 @@ struct Meter {
     shading_most: u64,
 }
 
-impl Default for Prices {
-    /// [`Prices::STEPS`].
-    fn default() -> Self {
-        Self::STEPS
-    }
-}
-
 impl Meter {
+    /// A meter at `prices` with nothing counted, for a frame over a
+    /// surface whose top level is `top`.
+    fn new(prices: Prices, top: u8) -> Self {
+        Self {
+            prices,
+            pixels: Cell::new(0),
+            lines: Cell::new(0),
+            rays: Cell::new(0),
+            steps: Cell::new(0),
+            colors: Cell::new(0),
+            hits: Cell::new(0),
+            hit_levels: Cell::new(0),
+            shading_most: prices.shading_most(top),
+        }
+    }
+
     fn work(&self) -> FrameWork {
         FrameWork {
             pixels: self.pixels.get(),
@@ -788,11 +793,7 @@ mod tests {
                     // Refining every line twice over costs more than this
                     // budget: it is spent to within a refined pixel.
                     let pixel_most = RefineAllowances {
-                        meter: &Meter {
-                            prices: Prices::BOARD,
-                            shading_most: Prices::BOARD.shading_most(pyramid.top()),
-                            ..Meter::default()
-                        },
+                        meter: &Meter::new(Prices::BOARD, pyramid.top()),
                         budget,
                         filled: 0,
                     }
