@@ -223,14 +223,34 @@ impl<'s> Reference<'s> {
         height: u32,
         options: &ReferenceOptions,
     ) -> (Frame, RenderStats) {
+        let (mut frames, stats) =
+            self.render_each(camera, width, height, options.supersample, &[*options]);
+        (frames.remove(0), stats)
+    }
+
+    /// Renders a view once for each of `colorings` (their sky and
+    /// atmosphere; `supersample` rays a pixel side for all), finding each
+    /// ray's hit once for all of them: the frames are each
+    /// [`Reference::render`]'s with that coloring, and the stats are one
+    /// render's.
+    pub fn render_each(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        supersample: u32,
+        colorings: &[ReferenceOptions],
+    ) -> (Vec<Frame>, RenderStats) {
         let rays = ContractCamera::new(camera, width, height);
-        let n = options.supersample.max(1);
+        let n = supersample.max(1);
         let visits = AtomicU64::new(0);
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
             .min(height as usize);
         let started = Instant::now();
-        let mut rows: Vec<(u32, Vec<Rgb>, Vec<f32>)> = std::thread::scope(|scope| {
+        // Each row: its index, its colors under each coloring, its depths.
+        type Row = (u32, Vec<Vec<Rgb>>, Vec<f32>);
+        let mut rows: Vec<Row> = std::thread::scope(|scope| {
             let workers: Vec<_> = (0..threads)
                 .map(|worker| {
                     let visits = &visits;
@@ -238,10 +258,11 @@ impl<'s> Reference<'s> {
                         let mut done = Vec::new();
                         let mut count = 0u64;
                         for py in (worker as u32..height).step_by(threads) {
-                            let mut colors = Vec::with_capacity(width as usize);
+                            let mut colors =
+                                vec![Vec::with_capacity(width as usize); colorings.len()];
                             let mut depths = Vec::with_capacity(width as usize);
                             for px in 0..width {
-                                let mut sum = [0.0f64; 3];
+                                let mut sums = vec![[0.0f64; 3]; colorings.len()];
                                 for sy in 0..n {
                                     for sx in 0..n {
                                         let dir = rays.direction(
@@ -249,35 +270,18 @@ impl<'s> Reference<'s> {
                                             f64::from(py) + (f64::from(sy) + 0.5) / f64::from(n),
                                         );
                                         let hit = self.intersect(rays.eye, dir, &mut count);
-                                        let c = match (hit, &options.atmosphere) {
-                                            (Some(hit), None) => self.scene.color_at_height(
-                                                hit.x,
-                                                hit.y,
-                                                rays.eye[2] + hit.t * dir[2],
-                                            ),
-                                            (None, None) => options.sky.map(f64::from),
-                                            (hit, Some(air)) => {
-                                                let eye = rays.eye[2];
-                                                let at = hit.map(|hit| {
-                                                    (hit.t * length(dir), eye + hit.t * dir[2])
-                                                });
-                                                let color = hit.map_or([0.0; 3], |hit| {
-                                                    self.scene.color_at_height(
-                                                        hit.x,
-                                                        hit.y,
-                                                        eye + hit.t * dir[2],
-                                                    )
-                                                });
-                                                air.exact(dir, eye, at, color)
-                                            }
-                                        };
-                                        (0..3).for_each(|k| sum[k] += c[k]);
+                                        for (sum, coloring) in sums.iter_mut().zip(colorings) {
+                                            let c = self.ray_color(rays.eye[2], dir, hit, coloring);
+                                            (0..3).for_each(|k| sum[k] += c[k]);
+                                        }
                                     }
                                 }
                                 let samples = f64::from(n * n);
-                                colors.push(
-                                    sum.map(|s| (s / samples).round().clamp(0.0, 255.0) as u8),
-                                );
+                                for (colors, sum) in colors.iter_mut().zip(&sums) {
+                                    colors.push(
+                                        sum.map(|s| (s / samples).round().clamp(0.0, 255.0) as u8),
+                                    );
+                                }
                                 let center =
                                     rays.direction(f64::from(px) + 0.5, f64::from(py) + 0.5);
                                 let depth = self
@@ -299,11 +303,13 @@ impl<'s> Reference<'s> {
         });
         let render_ns = started.elapsed().as_nanos() as u64;
         rows.sort_by_key(|r| r.0);
-        let mut frame = Frame::new(width, height);
+        let mut frames = vec![Frame::new(width, height); colorings.len()];
         for (py, colors, depths) in rows {
             let at = py as usize * width as usize;
-            frame.colors[at..at + width as usize].copy_from_slice(&colors);
-            frame.depth[at..at + width as usize].copy_from_slice(&depths);
+            for (frame, colors) in frames.iter_mut().zip(colors) {
+                frame.colors[at..at + width as usize].copy_from_slice(&colors);
+                frame.depth[at..at + width as usize].copy_from_slice(&depths);
+            }
         }
         let pixels = u64::from(width) * u64::from(height);
         let stats = RenderStats {
@@ -318,7 +324,30 @@ impl<'s> Reference<'s> {
             render_ns,
             levels: None,
         };
-        (frame, stats)
+        (frames, stats)
+    }
+
+    /// What a ray from an eye at height `eye_z` along `dir` that meets the
+    /// surface at `hit` (or nowhere) shows under `coloring`'s sky and
+    /// atmosphere.
+    fn ray_color(
+        &self,
+        eye_z: f64,
+        dir: [f64; 3],
+        hit: Option<SurfaceHit>,
+        coloring: &ReferenceOptions,
+    ) -> [f64; 3] {
+        let hit_color = |hit: SurfaceHit| {
+            self.scene
+                .color_at_height(hit.x, hit.y, eye_z + hit.t * dir[2])
+        };
+        match &coloring.atmosphere {
+            None => hit.map_or(coloring.sky.map(f64::from), hit_color),
+            Some(air) => {
+                let at = hit.map(|hit| (hit.t * length(dir), eye_z + hit.t * dir[2]));
+                air.exact(dir, eye_z, at, hit.map_or([0.0; 3], hit_color))
+            }
+        }
     }
 }
 
@@ -350,5 +379,28 @@ mod tests {
         assert_eq!(smallest_root_in(1.0, -4.0, 3.0, 0.5), None);
         assert_eq!(smallest_root_in(0.0, -2.0, 1.0, 1.0), Some(0.5));
         assert_eq!(smallest_root_in(1.0, 0.0, 1.0, 10.0), None);
+    }
+
+    #[test]
+    fn one_pass_for_several_colorings_renders_each_as_alone() {
+        let scene = crate::scene::procedural(64, 2);
+        let reference = Reference::new(&scene);
+        let camera = Camera::looking([8.0, 8.0, scene.max_height() + 6.0], 45.0, 4.0);
+        let clear = ReferenceOptions {
+            supersample: 2,
+            sky: [10, 20, 30],
+            ..ReferenceOptions::default()
+        };
+        let hazy = ReferenceOptions {
+            atmosphere: Some(Atmosphere::FLIGHT),
+            ..clear
+        };
+        let (frames, _) = reference.render_each(&camera, 24, 16, 2, &[clear, hazy]);
+        assert_eq!(frames.len(), 2);
+        assert_ne!(frames[0].colors, frames[1].colors);
+        for (frame, options) in frames.iter().zip([clear, hazy]) {
+            let (alone, _) = reference.render(&camera, 24, 16, &options);
+            assert_eq!(frame, &alone);
+        }
     }
 }

@@ -19,12 +19,11 @@ use terracast_sim::scene::{procedural, Scene};
 use terracast_sim::tiles::{footprint_beyond, ProceduralSource};
 use terracast_tests::{comanche, data_dir};
 
-/// The kernel's and the reference's frames of `camera`, with `air` or
-/// without.
-fn both(scene: &Scene, camera: &Camera, size: (u32, u32), air: Option<Atmosphere>) -> [Frame; 2] {
+/// The kernel's frame of `camera`, with `air` or without.
+fn kernel(scene: &Scene, camera: &Camera, size: (u32, u32), air: Option<Atmosphere>) -> Frame {
     let prepared = air.map(|air| air.prepare().unwrap());
     let kernel = scene.to_kernel().unwrap();
-    let (k, _) = render_kernel_in(
+    render_kernel_in(
         &kernel,
         camera,
         size,
@@ -32,13 +31,27 @@ fn both(scene: &Scene, camera: &Camera, size: (u32, u32), air: Option<Atmosphere
         PixelRays::Fixed,
         prepared.as_ref(),
     )
-    .unwrap();
-    let options = ReferenceOptions {
-        atmosphere: air,
-        ..ReferenceOptions::default()
+    .unwrap()
+    .0
+}
+
+/// The reference's frames of `camera` without the atmosphere and with
+/// `air`, from one pass over the rays (`Reference::render_each`).
+fn references(scene: &Scene, camera: &Camera, size: (u32, u32), air: Atmosphere) -> [Frame; 2] {
+    let clear = ReferenceOptions::default();
+    let hazy = ReferenceOptions {
+        atmosphere: Some(air),
+        ..clear
     };
-    let (r, _) = Reference::new(scene).render(camera, size.0, size.1, &options);
-    [k, r]
+    let (frames, _) = Reference::new(scene).render_each(
+        camera,
+        size.0,
+        size.1,
+        clear.supersample,
+        &[clear, hazy],
+    );
+    let [r, fr]: [Frame; 2] = frames.try_into().unwrap();
+    [r, fr]
 }
 
 /// PSNR with the atmosphere and without, and the sky agreement with it;
@@ -51,8 +64,11 @@ fn compare(
     air: Atmosphere,
     failures: &mut Vec<String>,
 ) -> f64 {
-    let [k, r] = both(scene, camera, size, None);
-    let [fk, fr] = both(scene, camera, size, Some(air));
+    let (k, fk) = (
+        kernel(scene, camera, size, None),
+        kernel(scene, camera, size, Some(air)),
+    );
+    let [r, fr] = references(scene, camera, size, air);
     let (clear, hazy) = (psnr(&k.colors, &r.colors), psnr(&fk.colors, &fr.colors));
     let agree = sky_agreement(&fk.depth, &fr.depth);
     println!(
