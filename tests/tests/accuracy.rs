@@ -21,10 +21,21 @@
 //!   [`rays_by_footprint_are_more_accurate_where_footprints_are_long`].
 //! * A frame within a budget against one ray a pixel, in
 //!   [`a_frame_within_a_budget_against_one_ray_a_pixel`].
+//! * The same views under the flight's sky, sun and fog
+//!   (`Atmosphere::FLIGHT`), each against the reference rendered the same
+//!   way: within 0.5 dB of the view without it, and sky where it saw sky
+//!   (agreement ≥ 99.5 %). Checked in
+//!   [`kernel_matches_reference_on_comanche_maps`], whose reference frames
+//!   it shares (`Reference::render_each`: one pass of rays, colored with
+//!   and without the atmosphere); `tests/atmosphere.rs` has the rest of
+//!   the atmosphere's checks.
 
-use terracast::{Camera, Coherence, HeightFilter, RenderOptions, Resolution, U8F8};
+use terracast::{Atmosphere, Camera, Coherence, HeightFilter, RenderOptions, Resolution, U8F8};
+use terracast_sim::frame::Frame;
+use terracast_sim::kernel::{render_kernel_in, PixelRays};
 use terracast_sim::metrics::{median_relative_depth_error, psnr, sky_agreement};
-use terracast_sim::reference::Reference;
+use terracast_sim::reference::{Reference, ReferenceOptions};
+use terracast_sim::scene::KernelScene;
 use terracast_sim::scene::Scene;
 use terracast_tests::{comanche, data_dir, kernel_render, kernel_view, reference_view};
 
@@ -63,12 +74,37 @@ const GRAZING: [([f32; 3], f32, f32); 3] = [
     ([500.0, 1000.0, 130.0], 265.0, 5.0),
 ];
 
+/// The kernel's default frame of `camera`, under `air` or without it.
+fn kernel_under(
+    kernel: &KernelScene,
+    camera: &Camera,
+    air: Option<&terracast::PreparedAtmosphere>,
+) -> Frame {
+    render_kernel_in(
+        kernel,
+        camera,
+        SIZE,
+        &RenderOptions::default(),
+        PixelRays::Fixed,
+        air,
+    )
+    .unwrap()
+    .0
+}
+
 #[test]
 fn kernel_matches_reference_on_comanche_maps() {
     let Some(data) = data_dir("kernel_matches_reference_on_comanche_maps") else {
         return;
     };
     let mut failures = Vec::new();
+    let flight = Atmosphere::FLIGHT.prepare().unwrap();
+    let clear = ReferenceOptions::default();
+    let hazy = ReferenceOptions {
+        atmosphere: Some(Atmosphere::FLIGHT),
+        ..clear
+    };
+    let (mut air_failures, mut air_changes) = (Vec::new(), Vec::new());
     for (color, height) in [("1W", "1"), ("7W", "7"), ("14", "14")] {
         let scene = comanche(&data, color, height);
         let kernel = scene.to_kernel().unwrap();
@@ -81,7 +117,9 @@ fn kernel_matches_reference_on_comanche_maps() {
         for (eye, yaw, pitch) in VIEWS.iter().chain(&GRAZING) {
             let grazing = GRAZING.iter().any(|v| v.0 == *eye);
             let cam = Camera::looking(*eye, *yaw, *pitch);
-            let r = reference_view(&reference, &cam, SIZE);
+            let (frames, _) =
+                reference.render_each(&cam, SIZE.0, SIZE.1, clear.supersample, &[clear, hazy]);
+            let [r, hazy_r]: [Frame; 2] = frames.try_into().unwrap();
             let mut scores = Vec::new();
             let mut steps = Vec::new();
             for (name, resolution) in [
@@ -151,11 +189,44 @@ fn kernel_matches_reference_on_comanche_maps() {
                     "grazing C{color}/D{height} yaw {yaw}: pyramid {pyramid:.3} dB not above single {single:.3} dB"
                 ));
             }
+            // Under the atmosphere, against the reference under it.
+            let name = format!("C{color}/D{height} yaw {yaw:>5} pitch {pitch:>4}");
+            let (k, fk) = (
+                kernel_under(&kernel, &cam, None),
+                kernel_under(&kernel, &cam, Some(&flight)),
+            );
+            let (without, with) = (psnr(&k.colors, &r.colors), psnr(&fk.colors, &hazy_r.colors));
+            let agree = sky_agreement(&fk.depth, &hazy_r.depth);
+            println!(
+                "  {name}: PSNR {without:6.2} dB without the atmosphere, {with:6.2} dB with it ({:+.2} dB), sky agreement {:.3} %",
+                with - without,
+                agree * 100.0
+            );
+            assert_ne!(k.colors, fk.colors, "{name}: the atmosphere shows");
+            if with < without - 0.5 || agree < 0.995 {
+                air_failures.push(format!(
+                    "{name}: {with:.2} dB with it, {without:.2} dB without, sky agreement {agree}"
+                ));
+            }
+            air_changes.push(with - without);
         }
     }
+    let (low, high) = air_changes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &c| {
+            (l.min(c), h.max(c))
+        });
+    println!(
+        "with the atmosphere: {low:+.2} to {high:+.2} dB over {} views",
+        air_changes.len()
+    );
     assert!(
         failures.is_empty(),
         "views below the accuracy bar: {failures:?}"
+    );
+    assert!(
+        air_failures.is_empty(),
+        "views the atmosphere costs more than 0.5 dB or sky: {air_failures:?}"
     );
 }
 
