@@ -400,3 +400,102 @@ fn a_frame_within_a_budget_against_one_ray_a_pixel() {
         );
     }
 }
+
+/// What each way of spending more buys, in decibels a unit of the
+/// governor's cost: on C7W/D7 at 320 × 240 from `scripts/steps-table`'s
+/// eye at its six pitches, each option against one ray a pixel at a bias
+/// of 1, its work priced at `Prices::BOARD` (the per-ray path's prices,
+/// the path the governor's refinement renders on; the line caster's own
+/// rays are cheaper, so the finer bias's cost is overstated). The
+/// governor's refinement spends on more rays (two a pixel, four where the
+/// footprint is long), not on a finer bias; the test holds that choice to
+/// the measurement: on the grazing views, where it refines most, rays by
+/// footprint buy more a unit of cost than two rays everywhere, and the
+/// finer bias buys nothing (on these 1024² maps the terrain fit keeps
+/// the heights on level 0 at this size, so a finer ratio changes little
+/// but the far colors).
+#[test]
+fn what_each_way_of_spending_buys_a_unit_of_cost() {
+    use terracast::{
+        render, render_by_footprint, CountingProbe, FrameWork, Framebuffer, Prices,
+        VerticalSamples, View,
+    };
+    const SMALL: (u32, u32) = (320, 240);
+    let Some(data) = data_dir("what_each_way_of_spending_buys_a_unit_of_cost") else {
+        return;
+    };
+    let scene = comanche(&data, "7W", "7");
+    let kernel = scene.to_kernel().unwrap();
+    let pyramid = kernel.pyramid().unwrap();
+    let reference = Reference::new(&scene);
+    let pixels = u64::from(SMALL.0 * SMALL.1);
+    let base = RenderOptions::default();
+    let two = RenderOptions {
+        vertical_samples: VerticalSamples::Two,
+        ..base
+    };
+    let finer = RenderOptions {
+        resolution: HALF,
+        ..base
+    };
+    // (name, options, rays by footprint)
+    let ways = [
+        ("one ray a pixel, bias 1", base, false),
+        ("finer levels (bias 0.5)", finer, false),
+        ("two rays a pixel", two, false),
+        ("rays by footprint", base, true),
+    ];
+    println!("| pitch | way | PSNR dB | gain dB | priced cost a pixel | more a pixel | dB a 1000 a pixel |");
+    println!("|---|---|---|---|---|---|---|");
+    for pitch in [2.0, 5.0, 15.0, 30.0, 60.0, 90.0] {
+        let cam = Camera::looking([300.0, 700.0, 170.0], 20.0, pitch);
+        let r = reference_view(&reference, &cam, SMALL);
+        let view = View::new(&cam, SMALL.0, SMALL.1).unwrap();
+        let mut measured = Vec::new();
+        for (name, options, by_footprint) in ways {
+            let mut colors = vec![[0u8; 3]; pixels as usize];
+            let mut frame = Framebuffer::new(&mut colors, SMALL.0, SMALL.1).unwrap();
+            let mut probe = CountingProbe::default();
+            if by_footprint {
+                render_by_footprint(&pyramid, &view, &options, &mut frame, &mut probe);
+            } else {
+                render(&pyramid, &view, &options, &mut frame, &mut probe);
+            }
+            let work = FrameWork {
+                pixels,
+                lines: u64::from(view.lines()),
+                rays: probe.rays,
+                steps: probe.steps,
+                colors: probe.color_fetches,
+                hits: probe.hits_by_level.iter().sum(),
+                hit_levels: (0u64..)
+                    .zip(probe.hits_by_level)
+                    .map(|(level, hits)| level * hits)
+                    .sum(),
+            };
+            let cost = Prices::BOARD.of(&work) as f64 / pixels as f64;
+            measured.push((name, psnr(&colors, &r.colors), cost));
+        }
+        let (_, base_db, base_cost) = measured[0];
+        let mut per_cost = Vec::new();
+        for &(name, db, cost) in &measured {
+            let (gain, more) = (db - base_db, cost - base_cost);
+            // Under one instruction a pixel more: no cost to speak of.
+            let rate = (more >= 1.0).then(|| 1000.0 * gain / more);
+            per_cost.push(rate.unwrap_or(0.0));
+            println!(
+                "| {pitch}° | {name} | {db:.2} | {gain:+.2} | {cost:.0} | {more:+.0} | {} |",
+                rate.map_or("–".into(), |rate| format!("{rate:.2}"))
+            );
+        }
+        if pitch <= 5.0 {
+            let [_, finer, two, by_footprint] = per_cost[..] else {
+                unreachable!()
+            };
+            assert!(
+                by_footprint > two && by_footprint > finer,
+                "pitch {pitch}: rays by footprint {by_footprint:.3} dB a 1000 a pixel, two rays {two:.3}, finer levels {finer:.3}"
+            );
+        }
+    }
+}
