@@ -77,6 +77,28 @@ pub fn reference_view(reference: &Reference<'_>, cam: &Camera, size: (u32, u32))
         .0
 }
 
+/// The kernel's frames without and with an atmosphere (`[k, fk]`) against
+/// the reference's rendered the same ways (`[r, fr]`): the PSNR without it,
+/// the PSNR with it and the sky agreement with it, printed as one line
+/// after `name`. Panics when the atmosphere left the kernel's frame as it
+/// was.
+pub fn atmosphere_against_reference(
+    name: &str,
+    [k, fk]: [&Frame; 2],
+    [r, fr]: [&Frame; 2],
+) -> (f64, f64, f64) {
+    use terracast_sim::metrics::{psnr, sky_agreement};
+    let (without, with) = (psnr(&k.colors, &r.colors), psnr(&fk.colors, &fr.colors));
+    let agree = sky_agreement(&fk.depth, &fr.depth);
+    println!(
+        "{name}: PSNR {without:6.2} dB without the atmosphere, {with:6.2} dB with it ({:+.2} dB), sky agreement {:.3} %",
+        with - without,
+        agree * 100.0
+    );
+    assert_ne!(k.colors, fk.colors, "{name}: the atmosphere shows");
+    (without, with, agree)
+}
+
 /// Where a [`georeferenced_tiff`] lies: its top-left corner (ModelTiepoint)
 /// and its pixel size (ModelPixelScale), in degrees when `geographic` (a
 /// GeoKeyDirectory says so), else in meters.

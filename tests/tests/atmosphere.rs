@@ -13,10 +13,10 @@ use terracast::tiles::TileSource;
 use terracast::{Atmosphere, Camera, Fog, RenderOptions, Sun};
 use terracast_sim::frame::Frame;
 use terracast_sim::kernel::{render_kernel_in, PixelRays};
-use terracast_sim::metrics::{psnr, sky_agreement};
 use terracast_sim::reference::{Reference, ReferenceOptions};
 use terracast_sim::scene::{procedural, Scene};
 use terracast_sim::tiles::{footprint_beyond, ProceduralSource};
+use terracast_tests::atmosphere_against_reference;
 
 /// The kernel's frame of `camera`, with `air` or without.
 fn kernel(scene: &Scene, camera: &Camera, size: (u32, u32), air: Option<Atmosphere>) -> Frame {
@@ -68,14 +68,7 @@ fn compare(
         kernel(scene, camera, size, Some(air)),
     );
     let [r, fr] = references(scene, camera, size, air);
-    let (clear, hazy) = (psnr(&k.colors, &r.colors), psnr(&fk.colors, &fr.colors));
-    let agree = sky_agreement(&fk.depth, &fr.depth);
-    println!(
-        "{name}: PSNR {clear:6.2} dB without the atmosphere, {hazy:6.2} dB with it ({:+.2} dB), sky agreement {:.3} %",
-        hazy - clear,
-        agree * 100.0
-    );
-    assert_ne!(k.colors, fk.colors, "{name}: the atmosphere shows");
+    let (clear, hazy, agree) = atmosphere_against_reference(name, [&k, &fk], [&r, &fr]);
     if hazy < clear - 0.5 {
         failures.push(format!(
             "{name}: {hazy:.2} dB with it, {clear:.2} dB without"
