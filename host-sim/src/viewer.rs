@@ -8,10 +8,15 @@
 use crate::error::{Error, Result};
 use crate::fly::Key;
 use crate::kernel::PixelRays;
+#[cfg(feature = "window")]
 use embedded_graphics::mono_font::{ascii::FONT_6X10, MonoTextStyle};
+#[cfg(feature = "window")]
 use embedded_graphics::pixelcolor::Rgb888;
+#[cfg(feature = "window")]
 use embedded_graphics::prelude::*;
+#[cfg(feature = "window")]
 use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
+#[cfg(feature = "window")]
 use embedded_graphics::text::{Baseline, Text};
 use std::sync::atomic::{AtomicU32, Ordering};
 use terracast::config::{MAX_EYE_HEIGHT, PITCH_RANGE_DEG};
@@ -444,6 +449,7 @@ fn render_one<T: Surface + ?Sized, S: Sink, P: Probe>(
 
 /// Draws `text` on a dark band across the top of `frame` (row-major
 /// `0x00RRGGBB`, `width` wide).
+#[cfg(feature = "window")]
 pub fn draw_line_of_text(frame: &mut [u32], width: u32, text: &str) {
     let height = (frame.len() / width.max(1) as usize) as u32;
     let mut target = Framebuffer32 {
@@ -461,21 +467,25 @@ pub fn draw_line_of_text(frame: &mut [u32], width: u32, text: &str) {
 }
 
 /// Rows the on-screen line covers.
+#[cfg(feature = "window")]
 pub const OVERLAY_ROWS: u32 = 12;
 
 /// Window pixels as an embedded-graphics target.
+#[cfg(feature = "window")]
 struct Framebuffer32<'a> {
     words: &'a mut [u32],
     width: u32,
     height: u32,
 }
 
+#[cfg(feature = "window")]
 impl OriginDimensions for Framebuffer32<'_> {
     fn size(&self) -> Size {
         Size::new(self.width, self.height)
     }
 }
 
+#[cfg(feature = "window")]
 impl DrawTarget for Framebuffer32<'_> {
     type Color = Rgb888;
     type Error = core::convert::Infallible;

@@ -122,6 +122,7 @@ impl AtmosphereArgs {
 
     /// [`AtmosphereArgs::settings`] in fixed point, for a window that
     /// turns them on and off.
+    #[cfg(feature = "window")]
     pub(super) fn prepared_settings(&self) -> Result<PreparedAtmosphere> {
         self.settings()
             .prepare()
@@ -181,6 +182,7 @@ impl AtmosphereArgs {
     /// resolved for a command whose default is `default`, on a scene with
     /// or without a `photo`: for a `render` command line that draws the
     /// same frame.
+    #[cfg(any(feature = "window", test))]
     pub(super) fn arguments(&self, on: bool, default: bool, photo: bool) -> Vec<String> {
         let mut flags = Vec::new();
         match on.then(|| self.settings()) {

@@ -7,6 +7,7 @@ mod fly;
 mod paging;
 mod sim;
 mod values;
+#[cfg(feature = "window")]
 mod view;
 
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
@@ -66,6 +67,7 @@ enum Command {
     Page(paging::PageArgs),
     /// Fly over a terrain yourself, in a window: keys and mouse, the line
     /// pool on the host's cores, the governor holding the frame time.
+    #[cfg(feature = "window")]
     View(view::ViewArgs),
 }
 
@@ -459,6 +461,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bench(args) => bench::bench_command(args),
         Command::Pack(args) => paging::pack_command(args),
         Command::Page(args) => paging::page_command(args),
+        #[cfg(feature = "window")]
         Command::View(args) => view::view_command(args),
     }
 }
