@@ -32,6 +32,12 @@
 //!   the budget and its time against the fastest pitch's: the host's
 //!   frame-time ratio (max/min) across pitches for one budget.
 //!
+//!   A second table does the same at this machine's prices, fitted in the
+//!   same run ([`terracast_sim::kernel::fitted_prices`]) to the timed
+//!   governed frames of three budgets at the six pitches, and one budget
+//!   in picoseconds: what the board's 3000 a pixel costs here, averaged
+//!   over the pitches.
+//!
 //! * `objects` (a table only): the built-in scene with its wood and village
 //!   (`--objects`) against the same scene bare, four views, each frame's
 //!   time against the bare one's.
@@ -53,7 +59,7 @@ use terracast::{
 };
 use terracast_board::governed;
 use terracast_sim::baselines::{voxel_space, VoxelSpaceOptions};
-use terracast_sim::kernel::SampleBuffer;
+use terracast_sim::kernel::{fitted_prices, SampleBuffer};
 use terracast_sim::metrics::psnr;
 use terracast_sim::reference::{Reference, ReferenceOptions};
 use terracast_sim::scene::{load_pair, procedural, Scene};
@@ -65,6 +71,12 @@ const ATMOSPHERE_PITCHES: [f32; 3] = [2.0, 15.0, 45.0];
 /// Frames a governor renders of its view before it is timed: its level
 /// bias settles within them (it moves by at most an eighth a frame finer).
 const SETTLE_FRAMES: usize = 40;
+/// The budgets (the board's instructions a pixel) whose governed frames,
+/// at the six pitches, this machine's prices are fitted to.
+const FIT_BUDGETS: [u64; 3] = [1500, 3000, 6000];
+/// Frames a governor renders before its frame is timed for the fit: the
+/// fit needs frames that vary, not settled ones.
+const FIT_SETTLE_FRAMES: usize = 8;
 
 /// The `atmosphere` group's settings: none, fog without the sun, and the
 /// flight's.
@@ -485,6 +497,7 @@ fn main() {
 
     atmosphere_table(&levels_for(&RenderOptions::default()), pixels);
     governed_table(&levels_for(&RenderOptions::default()), &governed, pixels);
+    host_priced_table(&levels_for(&RenderOptions::default()), pixels);
     objects_table(pixels);
 
     println!("\n| roll (pitch 10) | steps/pixel | ns/pixel | time against roll 0 |");
@@ -562,6 +575,28 @@ fn governed_table(
     governed: &[(f32, Governor, View)],
     pixels: u64,
 ) {
+    print_governed(
+        levels,
+        governed,
+        pixels,
+        &format!(
+            "{} board instructions a pixel",
+            governed::BUDGET_INSTRUCTIONS_PER_PIXEL
+        ),
+        "governed",
+    );
+}
+
+/// Times each settled governor's frame in turns and prints them as a
+/// table (`budget` says what the budget is), then the frame time's
+/// max/min (`name`: the line's label).
+fn print_governed(
+    levels: &terracast::Pyramid<'_>,
+    governed: &[(f32, Governor, View)],
+    pixels: u64,
+    budget: &str,
+    name: &str,
+) {
     let default = RenderOptions::default();
     let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
     let best = best_in_turns(governed.len(), |i| {
@@ -572,8 +607,7 @@ fn governed_table(
     let fastest = best.iter().copied().fold(f64::MAX, f64::min);
     let slowest = best.iter().copied().fold(0.0, f64::max);
     println!(
-        "\n| pitch (governed, {} board instructions a pixel) | level bias | refined lines | cost / budget | ns/pixel | time against the fastest |",
-        governed::BUDGET_INSTRUCTIONS_PER_PIXEL
+        "\n| pitch (governed, {budget}) | level bias | refined line renders | cost / budget | ns/pixel | time against the fastest |"
     );
     println!("|---|---|---|---|---|---|");
     for (&(pitch, mut governor, ref view), ns) in governed.iter().zip(&best) {
@@ -589,8 +623,93 @@ fn governed_table(
         );
     }
     println!(
-        "governed: frame time max/min across pitches = {:.2}",
+        "{name}: frame time max/min across pitches = {:.2}",
         slowest / fastest
+    );
+}
+
+/// The governed frames at this machine's prices: fitted to the timed
+/// frames of [`FIT_BUDGETS`] at the six pitches (at `Prices::BOARD`), then
+/// one budget for all, the board run's frames' cost at these prices
+/// averaged over the pitches; each pitch's governor settled, the frames
+/// timed in turns.
+fn host_priced_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
+    let default = RenderOptions::default();
+    let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+    let views = PITCHES.map(|pitch| View::new(&camera(pitch), SIZE.0, SIZE.1).expect("view"));
+    let mut fit_frames: Vec<(u64, Governor, &View)> = Vec::new();
+    for per_pixel in FIT_BUDGETS {
+        for view in &views {
+            let mut governor = governed::governor(SIZE.0, SIZE.1, per_pixel);
+            for _ in 0..FIT_SETTLE_FRAMES {
+                governor.render(levels, view, &default, &mut buffer, &mut NoProbe);
+            }
+            fit_frames.push((per_pixel, governor, view));
+        }
+    }
+    let times = best_in_turns(fit_frames.len(), |i| {
+        let (_, mut governor, view) = fit_frames[i];
+        governor.render(levels, view, &default, &mut buffer, &mut NoProbe);
+    });
+    let timed: Vec<_> = fit_frames
+        .iter()
+        .zip(&times)
+        .map(|(&(_, mut governor, view), &ns)| {
+            let cost = governor.render(levels, view, &default, &mut buffer, &mut NoProbe);
+            (cost.work, ns)
+        })
+        .collect();
+    let fitted = match fitted_prices(&timed, pixels) {
+        Ok(fitted) => fitted,
+        Err(error) => {
+            println!("\ngoverned at this machine's prices: {error}");
+            return;
+        }
+    };
+    let prices = fitted.prices;
+    let off: Vec<f64> = timed
+        .iter()
+        .map(|(work, ns)| fitted.time_ns(work) / ns - 1.0)
+        .collect();
+    println!(
+        "\nthis machine's prices (ps), fitted to {} governed frames: {} a pixel's first write, {} a refined pixel, {} a ray, {} a step, {} a hit, {} a hit level; off the frames' times by {:+.1} % to {:+.1} %",
+        timed.len(),
+        fitted.first_write,
+        prices.per_pixel,
+        prices.per_ray,
+        prices.per_step,
+        prices.per_hit,
+        prices.per_hit_level,
+        100.0 * off.iter().copied().fold(f64::MAX, f64::min),
+        100.0 * off.iter().copied().fold(f64::MIN, f64::max),
+    );
+    let board_run: Vec<u64> = fit_frames
+        .iter()
+        .zip(&timed)
+        .filter(|((per_pixel, _, _), _)| *per_pixel == governed::BUDGET_INSTRUCTIONS_PER_PIXEL)
+        .map(|(_, (work, _))| prices.of(work))
+        .collect();
+    let budget = board_run.iter().sum::<u64>() / board_run.len().max(1) as u64;
+    let settled: Vec<(f32, Governor, View)> = PITCHES
+        .iter()
+        .zip(&views)
+        .map(|(&pitch, view)| {
+            let mut governor = Governor::new(budget, prices);
+            for _ in 0..SETTLE_FRAMES {
+                governor.render(levels, view, &default, &mut buffer, &mut NoProbe);
+            }
+            (pitch, governor, *view)
+        })
+        .collect();
+    let frame_ms = (budget as f64
+        + (f64::from(fitted.first_write) - f64::from(prices.per_pixel)) * pixels as f64)
+        / 1e9;
+    print_governed(
+        levels,
+        &settled,
+        pixels,
+        &format!("a budget of {frame_ms:.1} ms a frame at this machine's prices"),
+        "governed at this machine's prices",
     );
 }
 

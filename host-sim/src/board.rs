@@ -5,6 +5,7 @@
 //! the firmware build, QEMU, `terracast-sim board verify`.
 
 use crate::error::{Error, Result};
+use crate::fit::least_squares_through_origin;
 use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -871,54 +872,6 @@ fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
     Ok(results)
 }
 
-/// The least-squares weights `w` of `y ≈ Σ wᵢ·xᵢ` (no constant term)
-/// over `rows`, from the normal equations by Gaussian elimination with
-/// partial pivoting; `None` where the columns do not tell the weights
-/// apart (fewer rows than weights, or a column a blend of the others).
-pub(crate) fn least_squares_through_origin<const N: usize>(
-    rows: &[([f64; N], f64)],
-) -> Option<[f64; N]> {
-    // [XᵀX | Xᵀy], row by row.
-    let mut system = [[0.0f64; N]; N];
-    let mut right = [0.0f64; N];
-    for (x, y) in rows {
-        for i in 0..N {
-            for j in 0..N {
-                system[i][j] += x[i] * x[j];
-            }
-            right[i] += x[i] * y;
-        }
-    }
-    let scale = system
-        .iter()
-        .enumerate()
-        .map(|(i, row)| row[i])
-        .fold(0.0f64, f64::max);
-    for column in 0..N {
-        let pivot = (column..N)
-            .max_by(|&a, &b| system[a][column].abs().total_cmp(&system[b][column].abs()))?;
-        if system[pivot][column].abs() <= 1e-12 * scale.max(1e-300) {
-            return None;
-        }
-        system.swap(column, pivot);
-        right.swap(column, pivot);
-        let (pivot_row, pivot_right) = (system[column], right[column]);
-        for (row, right) in system.iter_mut().zip(&mut right).skip(column + 1) {
-            let factor = row[column] / pivot_row[column];
-            for (value, pivot) in row.iter_mut().zip(pivot_row).skip(column) {
-                *value -= factor * pivot;
-            }
-            *right -= factor * pivot_right;
-        }
-    }
-    let mut weights = [0.0f64; N];
-    for row in (0..N).rev() {
-        let known: f64 = (row + 1..N).map(|j| system[row][j] * weights[j]).sum();
-        weights[row] = (right[row] - known) / system[row][row];
-    }
-    Some(weights)
-}
-
 /// The least-squares line `y = a + b·x` through `points`, as `(a, b)`.
 /// The least-squares fit `y = a + b·x₀ + c·x₁` through `points`, as
 /// `[a, b, c]`. Where `x₀` does not vary apart from `x₁` (nothing tells the
@@ -982,26 +935,6 @@ mod tests {
         let line = [([2.0, 1.0], 3.0), ([2.0, 2.0], 5.0), ([2.0, 4.0], 9.0)];
         let fit = least_squares(&line);
         assert!(close(fit, [1.0, 0.0, 2.0]), "{fit:?}");
-    }
-
-    #[test]
-    fn prices_through_the_origin_are_the_least_squares_ones() {
-        let close =
-            |got: [f64; 2], want: [f64; 2]| got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-9);
-        // Exactly on y = 2·x₀ + 5·x₁.
-        let exact: Vec<_> = [[1.0, 0.0], [1.0, 1.0], [2.0, 3.0]]
-            .into_iter()
-            .map(|x| (x, 2.0 * x[0] + 5.0 * x[1]))
-            .collect();
-        let fit = least_squares_through_origin(&exact).unwrap();
-        assert!(close(fit, [2.0, 5.0]), "{fit:?}");
-        // y = 1 and y = 3 at x = 1: the weight is their mean.
-        let fit = least_squares_through_origin(&[([1.0], 1.0), ([1.0], 3.0)]).unwrap();
-        assert!((fit[0] - 2.0).abs() < 1e-12, "{fit:?}");
-        // One column twice the other: nothing tells them apart.
-        let twins = [([1.0, 2.0], 3.0), ([2.0, 4.0], 5.0), ([3.0, 6.0], 8.0)];
-        assert_eq!(least_squares_through_origin(&twins), None);
-        assert_eq!(least_squares_through_origin::<2>(&[]), None);
     }
 
     #[test]

@@ -6,7 +6,7 @@ use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
-    render, render_by_footprint, Camera, Coherence, CountingProbe, FrameCost, Governor,
+    render, render_by_footprint, Camera, Coherence, CountingProbe, FrameCost, FrameWork, Governor,
     PreparedAtmosphere, Prices, Probe, RenderOptions, Sample, Sink, Surface, View, WithSticks,
 };
 
@@ -47,6 +47,82 @@ impl PixelRays {
             }
         }
         None
+    }
+}
+
+/// This machine's prices for the [`Governor`], in picoseconds: the
+/// least-squares fit, no price below 0, of `frames`' measured times (ns)
+/// to their work, for images of `image_pixels` pixels. Fitted are a pixel
+/// rendered again by the refinement (its rays' blend), a ray, a step, a
+/// hit and a hit level, and apart from them every pixel's first write, a
+/// constant of the image's size that no choice of the governor's changes.
+/// `per_pixel` is the refined pixel's price, so the frames' priced costs
+/// all carry the same constant beside their time. A line's and a color
+/// fetch's costs go with the rays' and the hits' (a line's rays are set up
+/// with it; a hit fetches its colors): their prices are 0. The frames
+/// should span the work the governor will spend on (several budgets and
+/// views): the board's prices count instructions, and this machine's
+/// caches and branch predictors do not price the same things alike.
+pub fn fitted_prices(frames: &[(FrameWork, f64)], image_pixels: u64) -> Result<FittedPrices> {
+    let rows: Vec<([f64; 6], f64)> = frames
+        .iter()
+        .map(|(w, ns)| {
+            (
+                [
+                    image_pixels,
+                    w.pixels.saturating_sub(image_pixels),
+                    w.rays,
+                    w.steps,
+                    w.hits,
+                    w.hit_levels,
+                ]
+                .map(|n| n as f64),
+                ns * 1000.0,
+            )
+        })
+        .collect();
+    let fit = crate::fit::non_negative_least_squares(&rows).ok_or_else(|| {
+        Error::new(format!(
+            "the {} timed frames do not tell a pixel's, a ray's, a step's and a hit's costs apart: time frames of more views and budgets",
+            frames.len()
+        ))
+    })?;
+    let [first_write, per_pixel, per_ray, per_step, per_hit, per_hit_level] =
+        fit.map(|p| p.round().clamp(0.0, f64::from(u32::MAX)) as u32);
+    Ok(FittedPrices {
+        prices: Prices {
+            per_pixel,
+            per_line: 0,
+            per_ray,
+            per_step,
+            per_color: 0,
+            per_hit,
+            per_hit_level,
+        },
+        first_write,
+        image_pixels,
+    })
+}
+
+/// Prices fitted to this machine's times ([`fitted_prices`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FittedPrices {
+    /// The governor's prices (ps).
+    pub prices: Prices,
+    /// A pixel's first write (ps), outside the governor's prices.
+    pub first_write: u32,
+    /// The image size the prices were fitted for.
+    pub image_pixels: u64,
+}
+
+impl FittedPrices {
+    /// The time (ns) these prices predict for a frame that did `work`.
+    pub fn time_ns(&self, work: &FrameWork) -> f64 {
+        let first_writes = self.image_pixels;
+        let priced = self.prices.of(work) as f64
+            - f64::from(self.prices.per_pixel) * first_writes as f64
+            + f64::from(self.first_write) * first_writes as f64;
+        priced / 1000.0
     }
 }
 
@@ -231,4 +307,71 @@ pub fn render_surface_in<T: Surface + ?Sized>(
         }),
     };
     Ok((frame, stats))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn work(pixels: u64, rays: u64, steps: u64, hits: u64, hit_levels: u64) -> FrameWork {
+        FrameWork {
+            pixels,
+            lines: 600,
+            rays,
+            steps,
+            colors: 2 * hits,
+            hits,
+            hit_levels,
+        }
+    }
+
+    #[test]
+    fn prices_fitted_to_timed_frames_are_the_ones_that_timed_them() {
+        // Frames of 1000 pixels timed at 3 ns a pixel's first write, 9 a
+        // refined pixel, 40 a ray, 2.5 a step, 60 a hit and 15 a hit
+        // level: the fit finds those prices in picoseconds.
+        let frames: Vec<_> = [
+            work(1000, 1000, 9000, 900, 100),
+            work(1000, 2000, 15000, 1900, 900),
+            work(2000, 2000, 30000, 1000, 0),
+            work(2000, 4000, 11000, 3900, 2000),
+            work(1500, 1500, 20000, 1500, 700),
+            work(3000, 5000, 41000, 4000, 1500),
+            work(1200, 2500, 12000, 2400, 300),
+        ]
+        .into_iter()
+        .map(|w| {
+            let ns = 3.0 * 1000.0
+                + 9.0 * (w.pixels - 1000) as f64
+                + 40.0 * w.rays as f64
+                + 2.5 * w.steps as f64
+                + 60.0 * w.hits as f64
+                + 15.0 * w.hit_levels as f64;
+            (w, ns)
+        })
+        .collect();
+        let fitted = fitted_prices(&frames, 1000).unwrap();
+        let prices = fitted.prices;
+        assert_eq!(fitted.first_write, 3000);
+        for (work, ns) in &frames {
+            assert!((fitted.time_ns(work) - ns).abs() < 1e-6, "{work:?}");
+        }
+        assert_eq!(
+            [
+                prices.per_pixel,
+                prices.per_ray,
+                prices.per_step,
+                prices.per_hit,
+                prices.per_hit_level
+            ],
+            [9000, 40000, 2500, 60000, 15000]
+        );
+        assert_eq!((prices.per_line, prices.per_color), (0, 0));
+        // One frame cannot tell five prices apart: a one-line error.
+        let error = fitted_prices(&frames[..1], 1000).unwrap_err().to_string();
+        assert!(
+            error.contains("do not tell") && !error.contains('\n'),
+            "{error}"
+        );
+    }
 }

@@ -13,6 +13,7 @@ pub mod camera;
 pub mod chart;
 pub mod cli;
 pub mod error;
+pub mod fit;
 pub mod fly;
 pub mod frame;
 pub mod kernel;

@@ -55,8 +55,8 @@ struct Checked {
     /// The sky's color, where a pixel is one ray (more rays blend a
     /// pixel that is mostly sky toward the terrain's color).
     sky: Option<Rgb>,
-    /// The most times a pixel may be written: once, or twice where a
-    /// budget's refinement renders lines again.
+    /// The most times a pixel may be written: once, or three times where
+    /// a budget's refinement renders lines again (in its two rounds).
     most_writes: u8,
 }
 
@@ -328,9 +328,9 @@ fn check_terrain(
         let mut governor = Governor::new(budget, Prices::BOARD);
         // A ray the budget cuts short is shaded where it stopped, in the
         // air: no height check here.
-        // Refined lines are written again, with two or four rays a pixel.
+        // Refined lines are written again, with two to eight rays a pixel.
         let mut sink = Checked {
-            most_writes: 2,
+            most_writes: 3,
             ..Checked::new(w, h, (u16::MAX, f32::MAX), false)
         };
         let mut probe = CountingProbe::default();

@@ -26,7 +26,10 @@
 //!    bit-reversed line order so that the refined lines spread over the
 //!    image. A line starts only while a line's and a pixel's most cost are
 //!    left, and stops at the pixel that would not fit: its other pixels
-//!    keep the base pass's rays.
+//!    keep the rays they had. When every line is refined and budget is
+//!    left (views of mostly sky, where a refined line is cheap), a second
+//!    round renders the lines again with each pixel's rays doubled (4 or
+//!    8).
 //! 3. **Next frame.** The base pass is steered to take a half to three
 //!    quarters of the budget, which leaves the refinement room to fill it:
 //!    the next frame's bias goes coarser with the base pass's cost over
@@ -55,7 +58,7 @@
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 
-use super::ray_caster::{Allowances, RayCaster};
+use super::ray_caster::{Allowances, RayCaster, REFINED_MOST_LOG2};
 use super::{RenderOptions, Resolution};
 use crate::probe::{Probe, MAX_COLOR_FETCHES_A_RAY};
 use crate::sink::Sink;
@@ -105,13 +108,13 @@ impl Prices {
     /// price grows with its level: the coarser a hit, the more its shading
     /// and resumption cost.
     pub const BOARD: Self = Self {
-        per_pixel: 146,
+        per_pixel: 173,
         per_line: 0,
-        per_ray: 466,
+        per_ray: 431,
         per_step: 53,
         per_color: 0,
-        per_hit: 1477,
-        per_hit_level: 252,
+        per_hit: 1507,
+        per_hit_level: 244,
     };
 
     /// What `work` costs at these prices.
@@ -171,7 +174,8 @@ pub struct FrameCost {
     /// because the frame was heading past its budget.
     pub coarse_lines: u32,
     /// Lines rendered again with more rays (some of them in part) from
-    /// what the base pass left.
+    /// what the base pass left; a line the second round renders again
+    /// counts twice.
     pub refined_lines: u32,
     /// Rays that found no budget left and repeat the ray before them.
     pub filled_rays: u32,
@@ -296,16 +300,20 @@ impl Governor {
             meter: &meter,
             budget,
             filled: 0,
+            most_rays: 0,
         };
         if base.filled == 0 {
-            let line_most = u64::from(self.prices.per_line) + refine.pixel_most();
-            for line in BitReversed::new(view.lines()) {
-                if budget.saturating_sub(meter.cost()) < line_most {
-                    break;
+            'rounds: for round in 1..=REFINE_ROUNDS {
+                refine.most_rays = 1 << (round + 1).min(REFINED_MOST_LOG2);
+                let line_most = u64::from(self.prices.per_line) + refine.pixel_most();
+                for line in BitReversed::new(view.lines()) {
+                    if budget.saturating_sub(meter.cost()) < line_most {
+                        break 'rounds;
+                    }
+                    meter.lines.set(meter.lines.get() + 1);
+                    refined_lines += 1;
+                    fine_caster.line_refined(line, round, sink, &mut metered, &mut refine);
                 }
-                meter.lines.set(meter.lines.get() + 1);
-                refined_lines += 1;
-                fine_caster.line_refined(line, sink, &mut metered, &mut refine);
             }
         }
         let cost = FrameCost {
@@ -488,23 +496,28 @@ impl Allowances for BaseAllowances<'_> {
 }
 
 /// The refinement's allowances: a pixel is rendered again only while its
-/// most cost (four rays with their shading and six steps each, and its
-/// write) is left; each ray's steps from what is left once its shading
-/// and the pixel's other rays' set-up are set aside.
+/// most cost (the round's most rays with their shading and six steps
+/// each, and its write) is left; each ray's steps from what is left once
+/// its shading and the pixel's other rays' set-up are set aside.
 struct RefineAllowances<'a> {
     meter: &'a Meter,
     budget: u64,
     filled: u32,
+    /// The most rays a pixel of this round gets.
+    most_rays: u64,
 }
 
-/// The most rays a refined pixel gets.
-const REFINED_MOST_RAYS: u64 = 4;
+/// Refinement rounds: every line with rays by footprint (2 or 4 a
+/// pixel), then every line again with them doubled (4 or 8), while the
+/// budget lasts. The second round spends what the first leaves on views
+/// whose lines are cheap to refine (mostly sky, few steps a ray).
+const REFINE_ROUNDS: u32 = 2;
 
 impl RefineAllowances<'_> {
     fn pixel_most(&self) -> u64 {
         let meter = self.meter;
         let prices = &meter.prices;
-        REFINED_MOST_RAYS
+        self.most_rays
             * (u64::from(prices.per_ray) + meter.shading_most + 6 * u64::from(prices.per_step))
             + u64::from(prices.per_pixel)
     }
@@ -514,7 +527,7 @@ impl Allowances for RefineAllowances<'_> {
     fn next(&mut self) -> u32 {
         let meter = self.meter;
         let prices = &meter.prices;
-        let later = (REFINED_MOST_RAYS - 1) * u64::from(prices.per_ray) + meter.shading_most;
+        let later = (self.most_rays - 1) * u64::from(prices.per_ray) + meter.shading_most;
         meter.allowance(
             meter.left(self.budget).saturating_sub(later),
             &mut self.filled,
@@ -776,6 +789,9 @@ mod tests {
             let mut plain = Governor::new(u64::MAX / 4, Prices::BOARD);
             let unlimited = plain.render(&pyramid, &view, &options, &mut Discard, &mut probe);
             assert!(unlimited.filled_rays == 0 && unlimited.coarse_lines == 0);
+            // Without a limit, both rounds refine every line.
+            assert_eq!(unlimited.refined_lines, 2 * view.lines(), "pitch {pitch}");
+            let mut refined_twice = false;
             for share in [1u64, 2, 3, 5, 8] {
                 // From the base pass's cost up: the refinement fills it.
                 let budget = plain.least_cost(&view, &options) + unlimited.base_cost * share / 2;
@@ -789,23 +805,31 @@ mod tests {
                 );
                 assert_eq!(cost.work.steps, probe.steps);
                 assert_eq!(cost.cost, Prices::BOARD.of(&cost.work));
+                let lines = u64::from(view.lines());
                 if cost.base_cost * 2 < budget {
-                    // Refining every line twice over costs more than this
-                    // budget: it is spent to within a refined pixel.
+                    // Unless both rounds refined every line, the budget is
+                    // spent to within a line's and a pixel's most cost of
+                    // the round it stopped in.
+                    let refined = u64::from(cost.refined_lines);
                     let pixel_most = RefineAllowances {
                         meter: &Meter::new(Prices::BOARD, pyramid.top()),
                         budget,
                         filled: 0,
+                        most_rays: if refined >= lines { 8 } else { 4 },
                     }
                     .pixel_most();
-                    let lines = u64::from(view.lines());
                     assert!(
                         cost.cost + pixel_most + u64::from(Prices::BOARD.per_line) >= budget
-                            || u64::from(cost.refined_lines) == lines,
+                            || refined == 2 * lines,
                         "pitch {pitch} share {share}: {cost:?}"
                     );
                 }
+                refined_twice |= u64::from(cost.refined_lines) > lines;
             }
+            assert!(
+                refined_twice,
+                "pitch {pitch}: no budget reached the second round"
+            );
         }
     }
 }

@@ -88,17 +88,24 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
         self.line_rays(line, sink, probe, &mut Unlimited, rays);
     }
 
-    /// Renders image line `line` again, finer: two rays a pixel, four
-    /// where its footprint is long (rays by footprint, at least two), each
-    /// within `allowances`, which may end the line early.
+    /// Renders image line `line` again, finer, each ray within
+    /// `allowances`, which may end the line early. Round 1: rays by
+    /// footprint, at least two a pixel (2 or 4); round 2 and later: the
+    /// same doubled `round − 1` times (round 2: 4 or 8 rays), at most
+    /// [`REFINED_MOST_LOG2`].
     pub fn line_refined<S: Sink, P: Probe, A: Allowances>(
         &self,
         line: u32,
+        round: u32,
         sink: &mut S,
         probe: &mut P,
         allowances: &mut A,
     ) {
-        let rays = RaysByFootprint::new(self.view, self.options, 1);
+        let doubled = round
+            .saturating_sub(1)
+            .min(REFINED_MOST_LOG2 - FOOTPRINT_MOST_LOG2);
+        let mut rays = RaysByFootprint::new(self.view, self.options, 1 + doubled);
+        rays.doubled = doubled;
         self.line_rays(line, sink, probe, allowances, rays);
     }
 
@@ -437,6 +444,9 @@ struct RaysByFootprint {
     spacing: u64,
     /// log2 of the fewest rays a pixel gets.
     least_log2: u32,
+    /// Added to the footprint's log2: each pixel's rays doubled this many
+    /// times (the governor's later refinement rounds).
+    doubled: u32,
 }
 
 impl RaysByFootprint {
@@ -447,6 +457,7 @@ impl RaysByFootprint {
             focal: view.focal,
             spacing: 1 << 16,
             least_log2,
+            doubled: 0,
         }
     }
 }
@@ -458,7 +469,8 @@ impl RaysPerPixel for RaysByFootprint {
     fn log2(&self) -> u32 {
         let [(older, older_row), (newer, newer_row)] = &self.before;
         let rows = u64::from(older_row.abs_diff(*newer_row).max(1));
-        footprint_rays_log2([older, newer], self.eye_z, self.focal, self.spacing * rows)
+        (footprint_rays_log2([older, newer], self.eye_z, self.focal, self.spacing * rows)
+            + self.doubled)
             .max(self.least_log2)
     }
     fn rendered(&mut self, center: &Sample, row: i32) {
@@ -468,6 +480,9 @@ impl RaysPerPixel for RaysByFootprint {
 
 /// log2 of the most rays [`super::render_by_footprint`] gives a pixel.
 const FOOTPRINT_MOST_LOG2: u32 = 2;
+
+/// log2 of the most rays a refined pixel gets ([`RayCaster::line_refined`]).
+pub(super) const REFINED_MOST_LOG2: u32 = 3;
 
 /// log2 of the rays [`super::render_by_footprint`] gives a pixel, from the hits
 /// of the two pixels before it on its line, `older` first, seen from eye
