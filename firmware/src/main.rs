@@ -390,7 +390,7 @@ fn governed_run<T: Surface>(
         }
     }
     hprintln!(
-        "terracast-firmware: {} frames within one budget, at {} budgets",
+        "terracast-firmware: {} frames at each of {} budgets",
         count,
         governed::BUDGETS.len()
     );

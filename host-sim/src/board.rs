@@ -174,6 +174,8 @@ pub struct BoardReport {
 /// One frame of the governor's run on the board.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GovernedCheck {
+    /// Its run's budget, the board's instructions a pixel.
+    pub per_pixel: u64,
     /// The camera it was rendered from.
     pub camera: Camera,
     /// Pixels that differ between board and host.
@@ -323,7 +325,7 @@ impl BoardReport {
                 out,
                 "{:>5}  {:>9}  {:>5.0}  {:<9}  {:>4.2}  {:>12}  {:>11}  {:>13}  {:>6.3}  {:>5.4}  {:>4.2}  {:>5.2}  {:>6.2}  {:>4.2}  {:>6.2}  {:>7.0}  {:>13.3}  {:>12.3}  {:>12.3}",
                 index,
-                g.cost.budget / (u64::from(self.image.0) * u64::from(self.image.1)).max(1),
+                g.per_pixel,
                 g.camera.pitch_deg,
                 if g.differing_pixels == 0 {
                     "identical"
@@ -425,10 +427,9 @@ impl BoardReport {
     /// instructions (the run at `governed::BUDGET_INSTRUCTIONS_PER_PIXEL`),
     /// as shares of their budget.
     pub fn governed_shares(&self) -> (f64, f64) {
-        let image = u64::from(self.image.0) * u64::from(self.image.1);
         self.governed
             .iter()
-            .filter(|g| g.cost.budget == image * governed::BUDGET_INSTRUCTIONS_PER_PIXEL)
+            .filter(|g| g.per_pixel == governed::BUDGET_INSTRUCTIONS_PER_PIXEL)
             .map(|g| self.governed_instructions(g) / g.cost.budget.max(1) as f64)
             .fold((f64::INFINITY, 0.0f64), |(l, h), s| (l.min(s), h.max(s)))
     }
@@ -595,9 +596,9 @@ impl SceneFile {
     }
 }
 
-/// A frame of the governor's run on the host: its camera, RGB888 bytes
-/// and cost.
-pub type GovernedFrame = (Camera, Vec<u8>, FrameCost);
+/// A frame of the governor's runs on the host: its run's budget (the
+/// board's instructions a pixel), its camera, RGB888 bytes and cost.
+pub type GovernedFrame = (u64, Camera, Vec<u8>, FrameCost);
 
 /// The governor's runs (`terracast_board::governed`, one at each of its
 /// budgets) over `surface`, as the firmware renders them (a bare map's
@@ -621,7 +622,12 @@ fn governed_run<T: Surface>(surface: &T, header: &Header) -> Result<Vec<Governed
                 &mut framebuffer,
                 &mut NoProbe,
             );
-            frames.push((*camera, colors.into_iter().flatten().collect(), cost));
+            frames.push((
+                per_pixel,
+                *camera,
+                colors.into_iter().flatten().collect(),
+                cost,
+            ));
         }
     }
     Ok(frames)
@@ -700,10 +706,11 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
                 run.len()
             )));
         }
-        for (index, ((camera, rgb, cost), ticks)) in
+        for (index, ((per_pixel, camera, rgb, cost), ticks)) in
             run.into_iter().zip(&results.governed).enumerate()
         {
             governed.push(GovernedCheck {
+                per_pixel,
                 camera,
                 differing_pixels: compare(format!("frame-{index}-governed.rgb"), &rgb)?,
                 cost,

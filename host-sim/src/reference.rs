@@ -63,6 +63,28 @@ impl Default for ReferenceOptions {
     }
 }
 
+impl ReferenceOptions {
+    /// How these options color a ray: their sky and atmosphere.
+    pub fn coloring(&self) -> ReferenceColoring {
+        ReferenceColoring {
+            sky: self.sky,
+            atmosphere: self.atmosphere,
+        }
+    }
+}
+
+/// How the reference colors a ray it has found the hit of (see
+/// [`Reference::render_each`]): the part of [`ReferenceOptions`] that does
+/// not change which rays are cast.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReferenceColoring {
+    /// Color of rays that miss.
+    pub sky: Rgb,
+    /// Sky, sun and fog, exact, over every ray's color; `sky` is unused
+    /// with it.
+    pub atmosphere: Option<Atmosphere>,
+}
+
 impl<'s> Reference<'s> {
     /// Builds the max-height mipmap.
     pub fn new(scene: &'s Scene) -> Self {
@@ -223,13 +245,18 @@ impl<'s> Reference<'s> {
         height: u32,
         options: &ReferenceOptions,
     ) -> (Frame, RenderStats) {
-        let (mut frames, stats) =
-            self.render_each(camera, width, height, options.supersample, &[*options]);
+        let (mut frames, stats) = self.render_each(
+            camera,
+            width,
+            height,
+            options.supersample,
+            &[options.coloring()],
+        );
         (frames.remove(0), stats)
     }
 
-    /// Renders a view once for each of `colorings` (their sky and
-    /// atmosphere; `supersample` rays a pixel side for all), finding each
+    /// Renders a view once for each of `colorings` (`supersample` rays a
+    /// pixel side for all), finding each
     /// ray's hit once for all of them: the frames are each
     /// [`Reference::render`]'s with that coloring, and the stats are one
     /// render's.
@@ -239,7 +266,7 @@ impl<'s> Reference<'s> {
         width: u32,
         height: u32,
         supersample: u32,
-        colorings: &[ReferenceOptions],
+        colorings: &[ReferenceColoring],
     ) -> (Vec<Frame>, RenderStats) {
         let rays = ContractCamera::new(camera, width, height);
         let n = supersample.max(1);
@@ -335,7 +362,7 @@ impl<'s> Reference<'s> {
         eye_z: f64,
         dir: [f64; 3],
         hit: Option<SurfaceHit>,
-        coloring: &ReferenceOptions,
+        coloring: &ReferenceColoring,
     ) -> [f64; 3] {
         let hit_color = |hit: SurfaceHit| {
             self.scene
@@ -395,7 +422,8 @@ mod tests {
             atmosphere: Some(Atmosphere::FLIGHT),
             ..clear
         };
-        let (frames, _) = reference.render_each(&camera, 24, 16, 2, &[clear, hazy]);
+        let (frames, _) =
+            reference.render_each(&camera, 24, 16, 2, &[clear.coloring(), hazy.coloring()]);
         assert_eq!(frames.len(), 2);
         assert_ne!(frames[0].colors, frames[1].colors);
         for (frame, options) in frames.iter().zip([clear, hazy]) {

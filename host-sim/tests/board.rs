@@ -66,7 +66,7 @@ fn scene_and_board_output_with(name: &str, extra: &[&str], ticks: u32) -> (PathB
     }
     // The governor's run (a bare map's): each frame at 0.95 of its budget,
     // 40 instructions a tick.
-    for (k, (_, rgb, cost)) in governed.iter().enumerate() {
+    for (k, (_, _, rgb, cost)) in governed.iter().enumerate() {
         std::fs::write(board.join(format!("frame-{k}-governed.rgb")), rgb).unwrap();
         results += &format!("governed {k} ticks {}\n", cost.budget * 95 / 100 / 40);
     }

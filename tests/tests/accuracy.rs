@@ -119,8 +119,13 @@ fn kernel_matches_reference_on_comanche_maps() {
         for (eye, yaw, pitch) in VIEWS.iter().chain(&GRAZING) {
             let grazing = GRAZING.iter().any(|v| v.0 == *eye);
             let cam = Camera::looking(*eye, *yaw, *pitch);
-            let (frames, _) =
-                reference.render_each(&cam, SIZE.0, SIZE.1, clear.supersample, &[clear, hazy]);
+            let (frames, _) = reference.render_each(
+                &cam,
+                SIZE.0,
+                SIZE.1,
+                clear.supersample,
+                &[clear.coloring(), hazy.coloring()],
+            );
             let [r, hazy_r]: [Frame; 2] = frames.try_into().unwrap();
             let mut scores = Vec::new();
             let mut steps = Vec::new();
@@ -457,18 +462,7 @@ fn what_each_way_of_spending_buys_a_unit_of_cost() {
             } else {
                 render(&pyramid, &view, &options, &mut frame, &mut probe);
             }
-            let work = FrameWork {
-                pixels,
-                lines: u64::from(view.lines()),
-                rays: probe.rays,
-                steps: probe.steps,
-                colors: probe.color_fetches,
-                hits: probe.hits_by_level.iter().sum(),
-                hit_levels: (0u64..)
-                    .zip(probe.hits_by_level)
-                    .map(|(level, hits)| level * hits)
-                    .sum(),
-            };
+            let work = FrameWork::counted(&probe, pixels, u64::from(view.lines()));
             let cost = Prices::BOARD.of(&work) as f64 / pixels as f64;
             measured.push((name, psnr(&colors, &r.colors), cost));
         }

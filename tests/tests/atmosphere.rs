@@ -47,7 +47,7 @@ fn references(scene: &Scene, camera: &Camera, size: (u32, u32), air: Atmosphere)
         size.0,
         size.1,
         clear.supersample,
-        &[clear, hazy],
+        &[clear.coloring(), hazy.coloring()],
     );
     let [r, fr]: [Frame; 2] = frames.try_into().unwrap();
     [r, fr]

@@ -60,7 +60,7 @@
 
 use super::ray_caster::{Allowances, RayCaster, REFINED_MOST_LOG2};
 use super::{RenderOptions, Resolution};
-use crate::probe::{Probe, MAX_COLOR_FETCHES_A_RAY};
+use crate::probe::{CountingProbe, Probe, MAX_COLOR_FETCHES_A_RAY};
 use crate::sink::Sink;
 use crate::surface::Surface;
 use crate::view::View;
@@ -154,6 +154,26 @@ pub struct FrameWork {
     pub hits: u64,
     /// The hits' levels, summed.
     pub hit_levels: u64,
+}
+
+impl FrameWork {
+    /// What a frame of `pixels` pixels, each written once, and `lines`
+    /// image lines did, as `probe` counted it: its rays, steps, color
+    /// fetches and hits (the probe counts each level's hits apart).
+    pub fn counted(probe: &CountingProbe, pixels: u64, lines: u64) -> Self {
+        Self {
+            pixels,
+            lines,
+            rays: probe.rays,
+            steps: probe.steps,
+            colors: probe.color_fetches,
+            hits: probe.hits_by_level.iter().sum(),
+            hit_levels: (0u64..)
+                .zip(probe.hits_by_level)
+                .map(|(level, hits)| level * hits)
+                .sum(),
+        }
+    }
 }
 
 /// What a budgeted frame did.
@@ -805,6 +825,14 @@ mod tests {
                 );
                 assert_eq!(cost.work.steps, probe.steps);
                 assert_eq!(cost.cost, Prices::BOARD.of(&cost.work));
+                // The meter counts what the probe does; a refined pixel
+                // is written and a refined line set up again.
+                let counted = FrameWork::counted(
+                    &probe,
+                    cost.work.pixels,
+                    u64::from(view.lines()) + u64::from(cost.refined_lines),
+                );
+                assert_eq!(counted, cost.work, "pitch {pitch} share {share}");
                 let lines = u64::from(view.lines());
                 if cost.base_cost * 2 < budget {
                     // Unless both rounds refined every line, the budget is
