@@ -84,9 +84,65 @@ fn least_squares_over<const N: usize>(
     Some(weights)
 }
 
+/// The least-squares fit `y = a + b·x₀ + c·x₁` through `points`, as
+/// `[a, b, c]`. Where `x₀` does not vary apart from `x₁` (nothing tells the
+/// two apart), `b` is 0 and `c` is the least-squares line's slope.
+pub fn least_squares(points: &[([f64; 2], f64)]) -> [f64; 3] {
+    let n = points.len().max(1) as f64;
+    let (m0, m1, my) = points.iter().fold((0.0, 0.0, 0.0), |(a, b, y), p| {
+        (a + p.0[0] / n, b + p.0[1] / n, y + p.1 / n)
+    });
+    // Sums of products about the means: the normal equations of b and c.
+    let sum = |f: &dyn Fn(f64, f64, f64) -> f64| -> f64 {
+        points
+            .iter()
+            .map(|p| f(p.0[0] - m0, p.0[1] - m1, p.1 - my))
+            .sum()
+    };
+    let (s00, s01, s11) = (
+        sum(&|a, _, _| a * a),
+        sum(&|a, b, _| a * b),
+        sum(&|_, b, _| b * b),
+    );
+    let (s0y, s1y) = (sum(&|a, _, y| a * y), sum(&|_, b, y| b * y));
+    let det = s00 * s11 - s01 * s01;
+    let (b, c) = if det.abs() > 1e-9 * (s00 * s11).max(1e-12) {
+        ((s0y * s11 - s1y * s01) / det, (s1y * s00 - s0y * s01) / det)
+    } else {
+        (0.0, s1y / s11.max(1e-12))
+    };
+    [my - b * m0 - c * m1, b, c]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_cost_fit_is_the_least_squares_plane() {
+        let close =
+            |got: [f64; 3], want: [f64; 3]| got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-9);
+        // Exactly on y = 1 + 2·x₀ + 3·x₁.
+        let exact: Vec<_> = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [2.0, 5.0]]
+            .into_iter()
+            .map(|x| (x, 1.0 + 2.0 * x[0] + 3.0 * x[1]))
+            .collect();
+        let fit = least_squares(&exact);
+        assert!(close(fit, [1.0, 2.0, 3.0]), "{fit:?}");
+        // Off any plane by ±0.5 in a pattern the regressors cannot follow.
+        let noisy = [
+            ([0.0, 0.0], 1.0),
+            ([1.0, 0.0], 0.0),
+            ([0.0, 1.0], 0.0),
+            ([1.0, 1.0], 1.0),
+        ];
+        let fit = least_squares(&noisy);
+        assert!(close(fit, [0.5, 0.0, 0.0]), "{fit:?}");
+        // x₀ constant: nothing tells it from the intercept, so it gets 0.
+        let line = [([2.0, 1.0], 3.0), ([2.0, 2.0], 5.0), ([2.0, 4.0], 9.0)];
+        let fit = least_squares(&line);
+        assert!(close(fit, [1.0, 0.0, 2.0]), "{fit:?}");
+    }
 
     #[test]
     fn prices_through_the_origin_are_the_least_squares_ones() {

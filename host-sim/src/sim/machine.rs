@@ -378,7 +378,7 @@ mod tests {
             (2.00, 13.69, 5356.0),
         ];
         let points: Vec<_> = board.iter().map(|&(c, s, i)| ([c, s], i)).collect();
-        let [per_ray, per_color, per_step] = crate::board::least_squares(&points);
+        let [per_ray, per_color, per_step] = crate::fit::least_squares(&points);
         let cycles = Machine::default().cycles;
         // The table's figures are rounded (to 0.01 a pixel, up to 3
         // instructions of color fetches and 1.3 of steps); the board fits
