@@ -55,6 +55,21 @@ where
         .draw()
 }
 
+/// Draws a chart of `size` pixels with `draw` into an RGB buffer and
+/// writes it to `path` as a PNG (with the host's own PNG encoder:
+/// plotters' file backend would pull a second version of `image` into
+/// the build).
+fn png_chart(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<()>,
+) -> Result<()> {
+    let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
+    draw(BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area())?;
+    image::save_buffer(path, &rgb, size.0, size.1, image::ExtendedColorType::Rgb8)
+        .map_err(|e| Error::new(format!("cannot write the chart {}: {e}", path.display())))
+}
+
 /// Draws `table` to a PNG: frames a second (log scale) against processors,
 /// one line per pitch, Cohen-Or's PVS figures beside ours as lighter lines
 /// of the same colors.
@@ -63,67 +78,70 @@ pub fn draw_table(path: &Path, table: &Table) -> Result<()> {
     let failed = |e: &dyn std::fmt::Display| {
         Error::new(format!("cannot draw the chart {}: {e}", path.display()))
     };
-    let root = BitMapBackend::new(path, (800, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| failed(&e))?;
-    let mut all: Vec<f64> = table.fps.iter().flatten().copied().collect();
-    all.extend(COHEN_OR_TABLE_1.iter().flatten());
-    let lo = all.iter().copied().fold(f64::MAX, f64::min).max(1e-3) * 0.7;
-    let hi = all.iter().copied().fold(0.0, f64::max).max(lo * 2.0) * 1.4;
-    let max_p = f64::from(*table.processors.iter().max().unwrap_or(&32)) + 2.0;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "Frames a second by processors (simulated, and Cohen-Or's PVS)",
-            ("sans-serif", 20),
-        )
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f64..max_p, (lo..hi).log_scale())
-        .map_err(|e| failed(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("processors (one of them the master)")
-        .x_label_formatter(&|v| format!("{v:.0}"))
-        .y_desc("frames a second")
-        .label_style(("sans-serif", 14))
-        .draw()
-        .map_err(|e| failed(&e))?;
-    let colors = [RED, BLUE, GREEN, MAGENTA, CYAN];
-    for (row, (fps, pitch)) in table.fps.iter().zip(&table.pitch).enumerate() {
-        let color = colors[row % colors.len()];
-        let ours: Vec<(f64, f64)> = table
-            .processors
-            .iter()
-            .zip(fps)
-            .map(|(&p, &f)| (f64::from(p), f.max(lo)))
-            .collect();
-        chart
-            .draw_series(LineSeries::new(ours.clone(), color.stroke_width(2)))
-            .map_err(|e| failed(&e))?
-            .label(format!("terracast, pitch {pitch}°"))
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
-        chart
-            .draw_series(ours.iter().map(|&p| Circle::new(p, 4, color.filled())))
+    png_chart(path, (800, 560), |root| {
+        root.fill(&WHITE).map_err(|e| failed(&e))?;
+        let mut all: Vec<f64> = table.fps.iter().flatten().copied().collect();
+        all.extend(COHEN_OR_TABLE_1.iter().flatten());
+        let lo = all.iter().copied().fold(f64::MAX, f64::min).max(1e-3) * 0.7;
+        let hi = all.iter().copied().fold(0.0, f64::max).max(lo * 2.0) * 1.4;
+        let max_p = f64::from(*table.processors.iter().max().unwrap_or(&32)) + 2.0;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "Frames a second by processors (simulated, and Cohen-Or's PVS)",
+                ("sans-serif", 20),
+            )
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0f64..max_p, (lo..hi).log_scale())
             .map_err(|e| failed(&e))?;
-        if let Some(i) = TABLE_PITCH.iter().position(|p| p == pitch) {
-            let theirs: Vec<(f64, f64)> = TABLE_PROCESSORS
+        chart
+            .configure_mesh()
+            .x_desc("processors (one of them the master)")
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_desc("frames a second")
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(|e| failed(&e))?;
+        let colors = [RED, BLUE, GREEN, MAGENTA, CYAN];
+        for (row, (fps, pitch)) in table.fps.iter().zip(&table.pitch).enumerate() {
+            let color = colors[row % colors.len()];
+            let ours: Vec<(f64, f64)> = table
+                .processors
                 .iter()
-                .zip(COHEN_OR_TABLE_1[i])
-                .map(|(&p, f)| (f64::from(p), f))
+                .zip(fps)
+                .map(|(&p, &f)| (f64::from(p), f.max(lo)))
                 .collect();
-            let light = color.mix(0.4);
             chart
-                .draw_series(LineSeries::new(theirs, light.stroke_width(2)))
+                .draw_series(LineSeries::new(ours.clone(), color.stroke_width(2)))
                 .map_err(|e| failed(&e))?
-                .label(format!("Cohen-Or PVS, pitch {pitch}°"))
+                .label(format!("terracast, pitch {pitch}°"))
                 .legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 20, y)], light.stroke_width(2))
+                    PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
                 });
+            chart
+                .draw_series(ours.iter().map(|&p| Circle::new(p, 4, color.filled())))
+                .map_err(|e| failed(&e))?;
+            if let Some(i) = TABLE_PITCH.iter().position(|p| p == pitch) {
+                let theirs: Vec<(f64, f64)> = TABLE_PROCESSORS
+                    .iter()
+                    .zip(COHEN_OR_TABLE_1[i])
+                    .map(|(&p, f)| (f64::from(p), f))
+                    .collect();
+                let light = color.mix(0.4);
+                chart
+                    .draw_series(LineSeries::new(theirs, light.stroke_width(2)))
+                    .map_err(|e| failed(&e))?
+                    .label(format!("Cohen-Or PVS, pitch {pitch}°"))
+                    .legend(move |(x, y)| {
+                        PathElement::new([(x, y), (x + 20, y)], light.stroke_width(2))
+                    });
+            }
         }
-    }
-    legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(|e| failed(&e))?;
-    root.present().map_err(|e| failed(&e))?;
-    Ok(())
+        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(|e| failed(&e))?;
+        root.present().map_err(|e| failed(&e))?;
+        Ok(())
+    })
 }
 
 /// How far right of its point a label beside it begins, pixels.
@@ -177,87 +195,90 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
     let failed = |e: &dyn std::fmt::Display| {
         Error::new(format!("cannot draw the chart {}: {e}", path.display()))
     };
-    let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| failed(&e))?;
-    let speeds = summaries.iter().map(|s| s.mpx_per_s);
-    let lo_x = speeds.clone().fold(f64::MAX, f64::min).max(1e-3) / 2.0;
-    // Room on the right for the fastest setting's label.
-    let hi_x = speeds.fold(0.0, f64::max).max(lo_x * 4.0) * 8.0;
-    let qualities = summaries.iter().map(|s| s.psnr);
-    let lo_y = qualities.clone().fold(f64::MAX, f64::min) - 2.0;
-    let hi_y = qualities.fold(f64::MIN, f64::max) + 2.0;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "Speed against accuracy (bench suite, single thread)",
-            ("sans-serif", 20),
-        )
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(60)
-        .build_cartesian_2d((lo_x..hi_x).log_scale(), lo_y..hi_y)
-        .map_err(|e| failed(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("Mpx/s (one thread)")
-        .y_desc("mean PSNR against the reference, dB")
-        .label_style(("sans-serif", 14))
-        .draw()
-        .map_err(|e| failed(&e))?;
-    let mut front: Vec<(f64, f64)> = summaries
-        .iter()
-        .filter(|s| s.pareto)
-        .map(|s| (s.mpx_per_s, s.psnr))
-        .collect();
-    front.sort_by(|a, b| a.0.total_cmp(&b.0));
-    chart
-        .draw_series(LineSeries::new(front, BLACK.mix(0.5).stroke_width(2)))
-        .map_err(|e| failed(&e))?
-        .label("Pareto front")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.mix(0.5).stroke_width(2)));
-    let color_of = |setting: &str| {
-        if setting.starts_with("kernel") {
-            RED
-        } else if setting.starts_with("voxelspace") {
-            BLUE
-        } else if setting.starts_with("march") {
-            GREEN
-        } else {
-            MAGENTA
-        }
-    };
-    let points: Vec<(i32, i32)> = summaries
-        .iter()
-        .map(|s| chart.backend_coord(&(s.mpx_per_s, s.psnr)))
-        .collect();
-    let sizes: Vec<(i32, i32)> = summaries
-        .iter()
-        .map(|s| (7 * s.setting.chars().count() as i32, LABEL_HEIGHT))
-        .collect();
-    let places = place_labels(&points, &sizes);
-    for (s, (dx, dy)) in summaries.iter().zip(places) {
-        let point = (s.mpx_per_s, s.psnr);
-        // A label moved up or down is tied to its point by a thin line.
-        let leader = if dx == LABEL_GAP {
-            Vec::new()
-        } else {
-            vec![(0, 0), (dx - 2, dy + LABEL_HEIGHT / 2)]
-        };
-        chart
-            .draw_series([EmptyElement::at(point)
-                + Circle::new((0, 0), 5, color_of(s.setting).filled())
-                + PathElement::new(leader, color_of(s.setting).mix(0.6))
-                + Text::new(
-                    s.setting.to_string(),
-                    (dx, dy),
-                    ("sans-serif", 13).into_font(),
-                )])
+    png_chart(path, (900, 600), |root| {
+        root.fill(&WHITE).map_err(|e| failed(&e))?;
+        let speeds = summaries.iter().map(|s| s.mpx_per_s);
+        let lo_x = speeds.clone().fold(f64::MAX, f64::min).max(1e-3) / 2.0;
+        // Room on the right for the fastest setting's label.
+        let hi_x = speeds.fold(0.0, f64::max).max(lo_x * 4.0) * 8.0;
+        let qualities = summaries.iter().map(|s| s.psnr);
+        let lo_y = qualities.clone().fold(f64::MAX, f64::min) - 2.0;
+        let hi_y = qualities.fold(f64::MIN, f64::max) + 2.0;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "Speed against accuracy (bench suite, single thread)",
+                ("sans-serif", 20),
+            )
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
+            .build_cartesian_2d((lo_x..hi_x).log_scale(), lo_y..hi_y)
             .map_err(|e| failed(&e))?;
-    }
-    // The upper right is empty: speed and accuracy trade against each
-    // other, so no setting is both fast and accurate.
-    legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(|e| failed(&e))?;
-    root.present().map_err(|e| failed(&e))?;
-    Ok(())
+        chart
+            .configure_mesh()
+            .x_desc("Mpx/s (one thread)")
+            .y_desc("mean PSNR against the reference, dB")
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(|e| failed(&e))?;
+        let mut front: Vec<(f64, f64)> = summaries
+            .iter()
+            .filter(|s| s.pareto)
+            .map(|s| (s.mpx_per_s, s.psnr))
+            .collect();
+        front.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart
+            .draw_series(LineSeries::new(front, BLACK.mix(0.5).stroke_width(2)))
+            .map_err(|e| failed(&e))?
+            .label("Pareto front")
+            .legend(|(x, y)| {
+                PathElement::new([(x, y), (x + 20, y)], BLACK.mix(0.5).stroke_width(2))
+            });
+        let color_of = |setting: &str| {
+            if setting.starts_with("kernel") {
+                RED
+            } else if setting.starts_with("voxelspace") {
+                BLUE
+            } else if setting.starts_with("march") {
+                GREEN
+            } else {
+                MAGENTA
+            }
+        };
+        let points: Vec<(i32, i32)> = summaries
+            .iter()
+            .map(|s| chart.backend_coord(&(s.mpx_per_s, s.psnr)))
+            .collect();
+        let sizes: Vec<(i32, i32)> = summaries
+            .iter()
+            .map(|s| (7 * s.setting.chars().count() as i32, LABEL_HEIGHT))
+            .collect();
+        let places = place_labels(&points, &sizes);
+        for (s, (dx, dy)) in summaries.iter().zip(places) {
+            let point = (s.mpx_per_s, s.psnr);
+            // A label moved up or down is tied to its point by a thin line.
+            let leader = if dx == LABEL_GAP {
+                Vec::new()
+            } else {
+                vec![(0, 0), (dx - 2, dy + LABEL_HEIGHT / 2)]
+            };
+            chart
+                .draw_series([EmptyElement::at(point)
+                    + Circle::new((0, 0), 5, color_of(s.setting).filled())
+                    + PathElement::new(leader, color_of(s.setting).mix(0.6))
+                    + Text::new(
+                        s.setting.to_string(),
+                        (dx, dy),
+                        ("sans-serif", 13).into_font(),
+                    )])
+                .map_err(|e| failed(&e))?;
+        }
+        // The upper right is empty: speed and accuracy trade against each
+        // other, so no setting is both fast and accurate.
+        legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(|e| failed(&e))?;
+        root.present().map_err(|e| failed(&e))?;
+        Ok(())
+    })
 }
 
 #[cfg(test)]
