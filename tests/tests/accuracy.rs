@@ -385,7 +385,7 @@ fn a_frame_within_a_budget_against_one_ray_a_pixel() {
         let cost = cost.unwrap();
         let (base, governed) = (psnr(&one.colors, &r.colors), psnr(&colors, &r.colors));
         println!(
-            "C7W/D7 pitch {pitch}: one ray {base:.2} dB, within the budget {governed:.2} dB ({:+.2}); bias {}, {} lines refined, {:.1} % of the budget",
+            "C7W/D7 pitch {pitch}: one ray {base:.2} dB, within the budget {governed:.2} dB ({:+.2}); bias {}, {} refined line renders, {:.1} % of the budget",
             governed - base,
             cost.level_bias,
             cost.refined_lines,

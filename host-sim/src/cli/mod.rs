@@ -608,7 +608,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
             if let Some(cost) = rendered.1.levels.and_then(|l| l.governed) {
                 let pixels = f64::from(width) * f64::from(height);
                 println!(
-                    "budget {:.0} a pixel: spent {:.0} ({:.1} %), the base pass {:.0} at a level bias of {}; {} lines refined, {} finished coarser, {} rays repeated",
+                    "budget {:.0} a pixel: spent {:.0} ({:.1} %), the base pass {:.0} at a level bias of {}; {} refined line renders (a line the second round refines counts twice), {} finished coarser, {} rays repeated",
                     cost.budget as f64 / pixels,
                     cost.cost as f64 / pixels,
                     100.0 * cost.cost as f64 / cost.budget.max(1) as f64,
