@@ -7,19 +7,20 @@
 //! frame's ticks; the host renders the same runs with the same governors,
 //! checks the frames byte for byte, and sets each frame's counted
 //! instructions against its budget. The check's bars are on the first
-//! budget's run; the second, leaner run is there for the fit of the
-//! prices (`board verify` prints it): at it the per-ray path repeats rays
-//! (a ray with no hit of its own), which tells a ray's price apart from
-//! its hit's.
+//! budget's run; the leaner runs are there for the fit of the prices
+//! (`board verify` prints it): the base pass (the line caster) and the
+//! refinement (the per-ray path) take different shares of a frame at
+//! each budget, which tells their prices apart (at the leanest the base
+//! pass is most of a frame).
 
-use terracast::{Camera, Governor, Prices};
+use terracast::{Camera, Governor};
 
 /// The check's budget, in the board's instructions a pixel of the image.
 pub const BUDGET_INSTRUCTIONS_PER_PIXEL: u64 = 3000;
 
 /// The budgets the run is rendered at, in order, in the board's
-/// instructions a pixel: the check's, then a leaner one for the price fit.
-pub const BUDGETS: [u64; 2] = [BUDGET_INSTRUCTIONS_PER_PIXEL, 2000];
+/// instructions a pixel: the check's, then leaner ones for the price fit.
+pub const BUDGETS: [u64; 3] = [BUDGET_INSTRUCTIONS_PER_PIXEL, 2000, 1200];
 
 /// The pitches swept from the first view's eye and heading: those of
 /// `scripts/steps-table`.
@@ -53,12 +54,10 @@ pub fn cameras(views: &[Camera]) -> ([Camera; MAX_FRAMES], usize) {
 }
 
 /// A run's governor for `width × height` frames: `per_pixel` (one of
-/// [`BUDGETS`]) instructions a pixel at the board's prices.
+/// [`BUDGETS`]) instructions a pixel at the board's prices
+/// ([`Governor::on_board`]).
 pub fn governor(width: u32, height: u32, per_pixel: u64) -> Governor {
-    Governor::new(
-        u64::from(width) * u64::from(height) * per_pixel,
-        Prices::BOARD,
-    )
+    Governor::on_board(u64::from(width) * u64::from(height) * per_pixel)
 }
 
 #[cfg(test)]

@@ -45,6 +45,16 @@ pub trait Probe {
     /// A ray was set up (one per pixel, or per vertical subsample).
     #[inline(always)]
     fn ray(&mut self) {}
+    /// A frame's render starts image line `index`: the events up to the
+    /// next call are that line's. [`crate::render`],
+    /// [`crate::render_by_footprint`] and [`crate::Governor::render`]
+    /// report each line they render, the governor's refinement rounds
+    /// each line again; a one-line render ([`crate::render_line`]) does
+    /// not.
+    #[inline(always)]
+    fn line(&mut self, index: u32) {
+        let _ = index;
+    }
 }
 
 /// The most color fetches ([`Probe::color`], [`Probe::color_square`]) the

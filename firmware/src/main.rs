@@ -350,6 +350,10 @@ fn run() -> Result<(), &'static str> {
             capture,
             &mut results,
         )?,
+        // scripts/board-profile GOVERNED=1 profiles the governor's run alone.
+        None if option_env!("TERRACAST_BOARD_GOVERNED_ONLY").is_some() => {
+            governed_run(&pyramid, views, &options, frame, &mut results)?;
+        }
         None => {
             renders.all(&pyramid, views, frame, capture, &mut results)?;
             if option_env!("TERRACAST_BOARD_DEFAULT_ONLY").is_none() {

@@ -25,7 +25,7 @@
 //!   frame's time against the one without.
 //!
 //! * `governed`: one budget for all, the board's governed run's (3000 of
-//!   the board's instructions a pixel at `Prices::BOARD`), at pitch 2° to
+//!   the board's instructions a pixel at `Governor::on_board`), at pitch 2° to
 //!   90° from the same eye; each pitch's governor first settles over
 //!   [`SETTLE_FRAMES`] frames of its view, then every timed frame starts
 //!   from that state. The table gives each frame's priced cost against
@@ -629,7 +629,7 @@ fn print_governed(
 }
 
 /// The governed frames at this machine's prices: fitted to the timed
-/// frames of [`FIT_BUDGETS`] at the six pitches (at `Prices::BOARD`), then
+/// frames of [`FIT_BUDGETS`] at the six pitches (at the board's prices), then
 /// one budget for all, the board run's frames' cost at these prices
 /// averaged over the pitches; each pitch's governor settled, the frames
 /// timed in turns.
@@ -656,7 +656,7 @@ fn host_priced_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
         .zip(&times)
         .map(|(&(_, mut governor, view), &ns)| {
             let cost = governor.render(levels, view, &default, &mut buffer, &mut NoProbe);
-            (cost.work, ns)
+            (cost, ns)
         })
         .collect();
     let fitted = match fitted_prices(&timed, pixels) {
@@ -666,44 +666,45 @@ fn host_priced_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
             return;
         }
     };
-    let prices = fitted.prices;
+    let (base, prices) = (fitted.base, fitted.prices);
     let off: Vec<f64> = timed
         .iter()
-        .map(|(work, ns)| fitted.time_ns(work) / ns - 1.0)
+        .map(|(cost, ns)| fitted.time_ns(cost) / ns - 1.0)
         .collect();
     println!(
-        "\nthis machine's prices (ps), fitted to {} governed frames: {} a pixel's first write, {} a refined pixel, {} a ray, {} a step, {} a hit, {} a hit level; off the frames' times by {:+.1} % to {:+.1} %",
+        "\nthis machine's prices (ps), fitted to {} governed frames: {} a pixel's first write, {} a step; base pass {} a line, {} a ray, {} a hit level; refinement {} a pixel, {} a ray, {} a hit, {} a hit level; off the frames' times by {:+.1} % to {:+.1} %",
         timed.len(),
         fitted.first_write,
+        prices.per_step,
+        base.per_line,
+        base.per_ray,
+        base.per_hit_level,
         prices.per_pixel,
         prices.per_ray,
-        prices.per_step,
         prices.per_hit,
         prices.per_hit_level,
         100.0 * off.iter().copied().fold(f64::MAX, f64::min),
         100.0 * off.iter().copied().fold(f64::MIN, f64::max),
     );
-    let board_run: Vec<u64> = fit_frames
+    let board_run: Vec<f64> = fit_frames
         .iter()
         .zip(&timed)
         .filter(|((per_pixel, _, _), _)| *per_pixel == governed::BUDGET_INSTRUCTIONS_PER_PIXEL)
-        .map(|(_, (work, _))| prices.of(work))
+        .map(|(_, (cost, _))| fitted.time_ns(cost))
         .collect();
-    let budget = board_run.iter().sum::<u64>() / board_run.len().max(1) as u64;
+    let frame_ns = board_run.iter().sum::<f64>() / board_run.len().max(1) as f64;
     let settled: Vec<(f32, Governor, View)> = PITCHES
         .iter()
         .zip(&views)
         .map(|(&pitch, view)| {
-            let mut governor = Governor::new(budget, prices);
+            let mut governor = fitted.governor(frame_ns);
             for _ in 0..SETTLE_FRAMES {
                 governor.render(levels, view, &default, &mut buffer, &mut NoProbe);
             }
             (pitch, governor, *view)
         })
         .collect();
-    let frame_ms = (budget as f64
-        + (f64::from(fitted.first_write) - f64::from(prices.per_pixel)) * pixels as f64)
-        / 1e9;
+    let frame_ms = frame_ns / 1e6;
     print_governed(
         levels,
         &settled,

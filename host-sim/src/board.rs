@@ -5,7 +5,7 @@
 //! the firmware build, QEMU, `terracast-sim board verify`.
 
 use crate::error::{Error, Result};
-use crate::fit::{least_squares, least_squares_through_origin};
+use crate::fit::{least_squares, non_negative_least_squares};
 use crate::scene::Scene;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -314,7 +314,7 @@ impl BoardReport {
     /// prices fitted to the counts.
     fn governed_table(&self) -> String {
         let mut out = String::from(
-            "\ngoverned frames (a run at each budget, Prices::BOARD); work a pixel of the image\nframe  budget/px  pitch  frame      bias  coarse lines  filled rays  refined lines  pixels  lines  rays  steps  colors  hits  levels  base/px  priced/budget  board/budget  board/priced\n",
+            "\ngoverned frames (a run at each budget, Governor::on_board); work a pixel of the image\nframe  budget/px  pitch  frame      bias  coarse lines  filled rays  refined lines  pixels  lines  rays  steps  colors  hits  levels  base/px  priced/budget  board/budget  board/priced\n",
         );
         let image = f64::from(self.image.0) * f64::from(self.image.1);
         for (index, g) in self.governed.iter().enumerate() {
@@ -363,33 +363,45 @@ impl BoardReport {
             .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r), h.max(r)));
         let _ = writeln!(
             out,
-            "every run: board instructions {least:.3} to {most:.3} of the priced cost (Prices::BOARD must stay above the count)"
+            "every run: board instructions {least:.3} to {most:.3} of the priced cost (the prices must stay above the count)"
         );
         out.push_str(&self.governed_price_fit());
         out
     }
 
     /// The prices that fit this run's governed frames best: the
-    /// least-squares fit of each frame's board instructions to its work
-    /// (pixels written, rays, hits, hit levels), the step's price held at
-    /// `Prices::BOARD`'s (these frames take a few steps a pixel, too few to
-    /// tell it apart), and how far that fit and `Prices::BOARD` are from
-    /// the counts.
+    /// non-negative least-squares fit of each frame's board instructions to
+    /// its work, the base pass's (lines, rays, hit levels) and the
+    /// refinement's (rays, hits, hit levels) apart, a written pixel's price
+    /// shared and a step's held at `Prices::BOARD`'s in both (these frames
+    /// take a few steps a pixel, too few to tell it apart); and how far the
+    /// fit is from the counts. The line caster casts no ray into the sky
+    /// but the one a line leaves the terrain with, so a base pass ray is a
+    /// hit: its price is both.
     fn governed_price_fit(&self) -> String {
         let step = f64::from(Prices::BOARD.per_step);
-        let rows: Vec<([f64; 4], f64)> = self
+        let rows: Vec<([f64; 7], f64)> = self
             .governed
             .iter()
             .map(|g| {
-                let w = &g.cost.work;
+                let (base, refined, all) = (&g.cost.base_work, g.cost.refined_work(), &g.cost.work);
                 let board = self.governed_instructions(g);
                 (
-                    [w.pixels, w.rays, w.hits, w.hit_levels].map(|n| n as f64),
-                    board - step * w.steps as f64,
+                    [
+                        all.pixels,
+                        base.lines,
+                        base.rays,
+                        base.hit_levels,
+                        refined.rays,
+                        refined.hits,
+                        refined.hit_levels,
+                    ]
+                    .map(|n| n as f64),
+                    board - step * all.steps as f64,
                 )
             })
             .collect();
-        let Some(fit) = least_squares_through_origin(&rows) else {
+        let Some(fit) = non_negative_least_squares(&rows) else {
             return String::from(
                 "prices fitted to these frames: the frames do not tell them apart\n",
             );
@@ -399,27 +411,33 @@ impl BoardReport {
             .iter()
             .zip(&rows)
             .map(|(g, (x, _))| {
-                let w = &g.cost.work;
-                let priced: f64 =
-                    x.iter().zip(fit).map(|(n, p)| n * p).sum::<f64>() + step * w.steps as f64;
+                let priced: f64 = x.iter().zip(fit).map(|(n, p)| n * p).sum::<f64>()
+                    + step * g.cost.work.steps as f64;
                 priced / self.governed_instructions(g) - 1.0
             })
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), e| {
                 (l.min(e), h.max(e))
             });
-        let board = Prices::BOARD;
+        let (lines, board) = (Prices::BOARD_LINES, Prices::BOARD);
         format!(
-            "prices fitted to these frames (least squares, a step's price held at {step:.0}): {:.0} a pixel written, {:.0} a ray, {:.0} a hit, {:.0} a hit level; off the counts by {:+.1} % to {:+.1} % (Prices::BOARD: {}, {}, {}, {})\n",
+            "prices fitted to these frames (non-negative least squares, a step's price held at {step:.0}): {:.0} a pixel written; base pass {:.0} a line, {:.0} a ray, {:.0} a hit level (Prices::BOARD_LINES: {}, {}, {}, {}); refinement {:.0} a ray, {:.0} a hit, {:.0} a hit level (Prices::BOARD: {}, {}, {}, {}); off the counts by {:+.1} % to {:+.1} %\n",
             fit[0],
             fit[1],
             fit[2],
             fit[3],
-            100.0 * low,
-            100.0 * high,
+            lines.per_pixel,
+            lines.per_line,
+            lines.per_ray,
+            lines.per_hit_level,
+            fit[4],
+            fit[5],
+            fit[6],
             board.per_pixel,
             board.per_ray,
             board.per_hit,
             board.per_hit_level,
+            100.0 * low,
+            100.0 * high,
         )
     }
 

@@ -7,18 +7,26 @@
 /// partial pivoting; `None` where the columns do not tell the weights
 /// apart (fewer rows than weights, or a column a blend of the others).
 pub fn least_squares_through_origin<const N: usize>(rows: &[([f64; N], f64)]) -> Option<[f64; N]> {
-    least_squares_over(rows, [true; N])
+    least_squares_over(rows, [true; N]).ok()
 }
 
 /// [`least_squares_through_origin`] with no weight below 0: a column whose
 /// weight comes out negative (a price that noise or a near-blend of the
 /// other columns pushed below zero) is held at 0, the most negative first,
-/// and the others fitted again (the active-set way). `None` where the
-/// columns left do not tell their weights apart.
+/// and the others fitted again (the active-set way). A column the others
+/// already explain (all zero, or a blend of them: frames that never tell
+/// its count apart) is held at 0 too. `None` where no column is left.
 pub fn non_negative_least_squares<const N: usize>(rows: &[([f64; N], f64)]) -> Option<[f64; N]> {
     let mut kept = [true; N];
     loop {
-        let weights = least_squares_over(rows, kept)?;
+        let weights = match least_squares_over(rows, kept) {
+            Ok(weights) => weights,
+            Err(Some(blend)) => {
+                kept[blend] = false;
+                continue;
+            }
+            Err(None) => return None,
+        };
         let most_negative = (0..N)
             .filter(|&i| kept[i] && weights[i] < 0.0)
             .min_by(|&a, &b| weights[a].total_cmp(&weights[b]));
@@ -30,14 +38,16 @@ pub fn non_negative_least_squares<const N: usize>(rows: &[([f64; N], f64)]) -> O
 }
 
 /// The least-squares weights of the `kept` columns; the others are 0.
+/// `Err(Some(c))` where column `c` is a blend of the ones before it (the
+/// rows do not tell its weight apart), `Err(None)` where no column is kept.
 fn least_squares_over<const N: usize>(
     rows: &[([f64; N], f64)],
     kept: [bool; N],
-) -> Option<[f64; N]> {
+) -> Result<[f64; N], Option<usize>> {
     let columns: Vec<usize> = (0..N).filter(|&i| kept[i]).collect();
     let n = columns.len();
     if n == 0 {
-        return None;
+        return Err(None);
     }
     // [XᵀX | Xᵀy], row by row.
     let mut system = vec![vec![0.0f64; n]; n];
@@ -57,9 +67,10 @@ fn least_squares_over<const N: usize>(
         .fold(0.0f64, f64::max);
     for column in 0..n {
         let pivot = (column..n)
-            .max_by(|&a, &b| system[a][column].abs().total_cmp(&system[b][column].abs()))?;
+            .max_by(|&a, &b| system[a][column].abs().total_cmp(&system[b][column].abs()))
+            .ok_or(None)?;
         if system[pivot][column].abs() <= 1e-12 * scale.max(1e-300) {
-            return None;
+            return Err(Some(columns[column]));
         }
         system.swap(column, pivot);
         right.swap(column, pivot);
@@ -81,7 +92,7 @@ fn least_squares_over<const N: usize>(
     for (&c, w) in columns.iter().zip(solved) {
         weights[c] = w;
     }
-    Some(weights)
+    Ok(weights)
 }
 
 /// The least-squares fit `y = a + b·x₀ + c·x₁` through `points`, as
@@ -183,6 +194,18 @@ mod tests {
         assert!(
             (held[0] - alone[0]).abs() < 1e-12,
             "{held:?} against {alone:?}"
+        );
+        // A column of zeros, and one the first explains twice over: held
+        // at 0, where the plain fit cannot tell them apart.
+        let blends: Vec<_> = rows
+            .iter()
+            .map(|(x, _)| ([x[0], 0.0, 2.0 * x[0], x[1]], 3.0 * x[0] + x[1]))
+            .collect();
+        assert_eq!(least_squares_through_origin(&blends), None);
+        let fit = non_negative_least_squares(&blends).unwrap();
+        assert!(
+            (fit[0] - 3.0).abs() < 1e-9 && fit[1..3] == [0.0, 0.0] && (fit[3] - 1.0).abs() < 1e-9,
+            "{fit:?}"
         );
         // Nothing negative: the same as the plain fit.
         let positive: Vec<_> = rows.iter().map(|(x, _)| (*x, x[0] + 2.0 * x[1])).collect();

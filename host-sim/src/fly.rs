@@ -7,7 +7,7 @@
 //! cycles, spread over the workers (the line pool keeps them within a few
 //! lines of each other, see `sim`). The budget is the rendering period's
 //! cycles on the workers, and the kernel's [`Governor`] spends it at those
-//! prices ([`Prices`]): every frame costs at most the budget and the
+//! prices ([`terracast::Prices`]): every frame costs at most the budget and the
 //! governor fills what its base pass leaves with refined lines, so renders
 //! take the same time and start on a fixed cadence:
 //!
@@ -27,8 +27,7 @@ use crate::scene::{KernelScene, Scene};
 use crate::sim::Machine;
 use terracast::{
     control_points, with_margin, Camera, CountingProbe, FrameCost, Framebuffer, Governor,
-    PreparedAtmosphere, Prices, RenderOptions, Rgb, Sample, Surface, View, Warp, WithSticks,
-    MAX_COLOR_FETCHES_A_RAY,
+    PreparedAtmosphere, RenderOptions, Rgb, Sample, Surface, View, Warp, WithSticks,
 };
 
 /// A camera path: keyframes in time, linearly interpolated.
@@ -371,41 +370,19 @@ pub fn fly(
     let (_, render_size) = with_margin(&first, options.size, options.margin);
     // The budget: the rendering period's cycles on the workers, spent at
     // the machine's prices.
-    let workers = f64::from(machine.processors - 1);
-    let cycles_per_s = machine.clock_mhz * 1e6 * workers;
+    let cycles_per_s = machine.worker_cycles(1.0);
     let period_cycles = cycles_per_s / options.render_hz;
-    let c = &machine.cycles;
-    let price = |cycles: u64, what: &str| {
-        u32::try_from(cycles).map_err(|_| {
-            Error::new(format!(
-                "{what} of {cycles} cycles is more than a 32-bit count"
-            ))
-        })
-    };
-    let prices = Prices {
-        per_pixel: 0,
-        per_line: 0,
-        per_ray: price(c.per_ray, "per_ray")?,
-        per_step: price(c.per_step, "per_step")?,
-        per_color: price(c.per_color, "per_color")?,
-        per_hit: 0,
-        per_hit_level: 0,
-    };
+    let prices = machine.compute_prices()?;
     let budget = period_cycles.floor().max(0.0) as u64;
     let mut governor = Governor::new(budget, prices);
-    // A frame's least: every ray set up and shaded, and half a step each.
     let first_view = View::new(
         &with_margin(&first, options.size, options.margin).0,
         render_size.0,
         render_size.1,
     )
     .map_err(|e| Error::new(format!("bad camera at the start of the path: {e}")))?;
-    let rays = u64::from(render_size.0)
-        * u64::from(render_size.1)
-        * u64::from(options.render.vertical_samples.count());
-    let least = governor.least_cost(&first_view, &options.render)
-        + rays * u64::from(MAX_COLOR_FETCHES_A_RAY) * c.per_color
-        + rays * c.per_step / 2;
+    let rays = u64::from(render_size.0) * u64::from(render_size.1);
+    let least = crate::sim::least_frame_cost(&governor, &first_view, &options.render);
     if budget < least {
         return Err(Error::new(format!(
             "the machine cannot render {}x{} (with margins) at {} Hz: {} processors at {} MHz give {:.0} cycles a pixel, and a frame needs at least {:.0}; use a smaller --size, a lower --render-hz or more --processors",
@@ -662,7 +639,8 @@ mod tests {
                 terracast::render(&pyramid, &view, &options, &mut frame, &mut counts);
                 let per_ray = counts.color_fetches as f64 / counts.rays as f64;
                 assert!(
-                    counts.color_fetches <= u64::from(MAX_COLOR_FETCHES_A_RAY) * counts.rays,
+                    counts.color_fetches
+                        <= u64::from(terracast::MAX_COLOR_FETCHES_A_RAY) * counts.rays,
                     "{options:?} {eye:?}: {per_ray} a ray"
                 );
                 most = most.max(per_ray);

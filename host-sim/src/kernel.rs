@@ -6,7 +6,7 @@ use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
-    render, render_by_footprint, Camera, Coherence, CountingProbe, FrameCost, FrameWork, Governor,
+    render, render_by_footprint, Camera, Coherence, CountingProbe, FrameCost, Governor,
     PreparedAtmosphere, Prices, Probe, RenderOptions, Sample, Sink, Surface, View, WithSticks,
 };
 
@@ -20,7 +20,7 @@ pub enum PixelRays {
     /// (`terracast::render_by_footprint`).
     ByFootprint,
     /// One frame within a budget of this many of the board's instructions
-    /// a pixel (`terracast::Governor` at `Prices::BOARD`, from a bias of 1):
+    /// a pixel (`terracast::Governor::on_board`, from a bias of 1):
     /// one ray a pixel, and two or four on the lines the budget refines.
     Governed(u64),
 }
@@ -42,7 +42,7 @@ impl PixelRays {
             Self::Governed(per_pixel) => {
                 let pixels = u64::from(view.width()) * u64::from(view.height());
                 let budget = pixels.saturating_mul(per_pixel);
-                let mut governor = Governor::new(budget, Prices::BOARD);
+                let mut governor = Governor::on_board(budget);
                 return Some(governor.render(surface, view, options, sink, probe));
             }
         }
@@ -52,52 +52,72 @@ impl PixelRays {
 
 /// This machine's prices for the [`Governor`], in picoseconds: the
 /// least-squares fit, no price below 0, of `frames`' measured times (ns)
-/// to their work, for images of `image_pixels` pixels. Fitted are a pixel
-/// rendered again by the refinement (its rays' blend), a ray, a step, a
-/// hit and a hit level, and apart from them every pixel's first write, a
-/// constant of the image's size that no choice of the governor's changes.
-/// `per_pixel` is the refined pixel's price, so the frames' priced costs
-/// all carry the same constant beside their time. A line's and a color
-/// fetch's costs go with the rays' and the hits' (a line's rays are set up
-/// with it; a hit fetches its colors): their prices are 0. The frames
-/// should span the work the governor will spend on (several budgets and
-/// views): the board's prices count instructions, and this machine's
-/// caches and branch predictors do not price the same things alike.
-pub fn fitted_prices(frames: &[(FrameWork, f64)], image_pixels: u64) -> Result<FittedPrices> {
-    let rows: Vec<([f64; 6], f64)> = frames
+/// to their work, for images of `image_pixels` pixels. The base pass (the
+/// line caster) and the refinement (the per-ray path) are priced apart,
+/// as the board's are ([`Governor::on_board`]): the base pass's lines,
+/// rays and hit levels (a ray of the line caster is a hit: it casts none
+/// into the sky but the one a line leaves the terrain with), the
+/// refinement's pixels rendered again (their rays' blend), rays, hits and
+/// hit levels, a step alike in both, and apart from them every pixel's
+/// first write, a constant of the image's size that no choice of the
+/// governor's changes. A color fetch's cost goes with its hit's: its price
+/// is 0. The frames should span the work the governor will spend on
+/// (several budgets and views): the board's prices count instructions,
+/// and this machine's caches and branch predictors do not price the same
+/// things alike.
+pub fn fitted_prices(frames: &[(FrameCost, f64)], image_pixels: u64) -> Result<FittedPrices> {
+    let rows: Vec<([f64; 9], f64)> = frames
         .iter()
-        .map(|(w, ns)| {
+        .map(|(cost, ns)| {
+            let (base, refined) = (&cost.base_work, cost.refined_work());
             (
                 [
                     image_pixels,
-                    w.pixels.saturating_sub(image_pixels),
-                    w.rays,
-                    w.steps,
-                    w.hits,
-                    w.hit_levels,
+                    base.lines,
+                    base.rays,
+                    base.hit_levels,
+                    refined.pixels,
+                    refined.rays,
+                    refined.hits,
+                    refined.hit_levels,
+                    cost.work.steps,
                 ]
                 .map(|n| n as f64),
                 ns * 1000.0,
             )
         })
         .collect();
-    let fit = crate::fit::non_negative_least_squares(&rows).ok_or_else(|| {
+    let apart = || {
         Error::new(format!(
             "the {} timed frames do not tell a pixel's, a ray's, a step's and a hit's costs apart: time frames of more views and budgets",
             frames.len()
         ))
-    })?;
-    let [first_write, per_pixel, per_ray, per_step, per_hit, per_hit_level] =
+    };
+    // (A price the frames cannot tell apart from the others is held at 0.)
+    if rows.len() < rows.first().map_or(1, |(x, _)| x.len()) {
+        return Err(apart());
+    }
+    let fit = crate::fit::non_negative_least_squares(&rows).ok_or_else(apart)?;
+    let [first_write, line, base_ray, base_level, pixel, ray, hit, level, step] =
         fit.map(|p| p.round().clamp(0.0, f64::from(u32::MAX)) as u32);
     Ok(FittedPrices {
-        prices: Prices {
-            per_pixel,
-            per_line: 0,
-            per_ray,
-            per_step,
+        base: Prices {
+            per_pixel: 0,
+            per_line: line,
+            per_ray: base_ray,
+            per_step: step,
             per_color: 0,
-            per_hit,
-            per_hit_level,
+            per_hit: 0,
+            per_hit_level: base_level,
+        },
+        prices: Prices {
+            per_pixel: pixel,
+            per_line: 0,
+            per_ray: ray,
+            per_step: step,
+            per_color: 0,
+            per_hit: hit,
+            per_hit_level: level,
         },
         first_write,
         image_pixels,
@@ -107,7 +127,9 @@ pub fn fitted_prices(frames: &[(FrameWork, f64)], image_pixels: u64) -> Result<F
 /// Prices fitted to this machine's times ([`fitted_prices`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FittedPrices {
-    /// The governor's prices (ps).
+    /// The base pass's prices (ps; a pixel's first write is apart).
+    pub base: Prices,
+    /// The refinement's prices (ps).
     pub prices: Prices,
     /// A pixel's first write (ps), outside the governor's prices.
     pub first_write: u32,
@@ -116,13 +138,19 @@ pub struct FittedPrices {
 }
 
 impl FittedPrices {
-    /// The time (ns) these prices predict for a frame that did `work`.
-    pub fn time_ns(&self, work: &FrameWork) -> f64 {
-        let first_writes = self.image_pixels;
-        let priced = self.prices.of(work) as f64
-            - f64::from(self.prices.per_pixel) * first_writes as f64
-            + f64::from(self.first_write) * first_writes as f64;
-        priced / 1000.0
+    /// A governor at these prices whose frames take `ns` (the first
+    /// writes' constant set aside from its budget), and that budget.
+    pub fn governor(&self, ns: f64) -> Governor {
+        let first_writes = f64::from(self.first_write) * self.image_pixels as f64;
+        let budget = (ns * 1000.0 - first_writes).max(0.0) as u64;
+        Governor::new(budget, self.prices).with_base_prices(self.base)
+    }
+
+    /// The time (ns) these prices predict for a frame that `cost` says
+    /// was rendered at them (or at any prices: its work is repriced).
+    pub fn time_ns(&self, cost: &FrameCost) -> f64 {
+        let priced = self.base.of(&cost.base_work) + self.prices.of(&cost.refined_work());
+        (priced as f64 + f64::from(self.first_write) * self.image_pixels as f64) / 1000.0
     }
 }
 
@@ -312,6 +340,7 @@ pub fn render_surface_in<T: Surface + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use terracast::{FrameWork, U8F8};
 
     fn work(pixels: u64, rays: u64, steps: u64, hits: u64, hit_levels: u64) -> FrameWork {
         FrameWork {
@@ -327,35 +356,69 @@ mod tests {
 
     #[test]
     fn prices_fitted_to_timed_frames_are_the_ones_that_timed_them() {
-        // Frames of 1000 pixels timed at 3 ns a pixel's first write, 9 a
-        // refined pixel, 40 a ray, 2.5 a step, 60 a hit and 15 a hit
-        // level: the fit finds those prices in picoseconds.
-        let frames: Vec<_> = [
-            work(1000, 1000, 9000, 900, 100),
-            work(1000, 2000, 15000, 1900, 900),
-            work(2000, 2000, 30000, 1000, 0),
-            work(2000, 4000, 11000, 3900, 2000),
-            work(1500, 1500, 20000, 1500, 700),
-            work(3000, 5000, 41000, 4000, 1500),
-            work(1200, 2500, 12000, 2400, 300),
-        ]
-        .into_iter()
-        .map(|w| {
-            let ns = 3.0 * 1000.0
-                + 9.0 * (w.pixels - 1000) as f64
-                + 40.0 * w.rays as f64
-                + 2.5 * w.steps as f64
-                + 60.0 * w.hits as f64
-                + 15.0 * w.hit_levels as f64;
-            (w, ns)
-        })
-        .collect();
+        // Frames of 1000 pixels timed at 3 ns a pixel's first write and
+        // 2.5 a step; in the base pass 5 a line, 20 a ray and 4 a hit
+        // level; in the refinement 9 a pixel, 40 a ray, 60 a hit and 15 a
+        // hit level: the fit finds those prices in picoseconds.
+        let mut seed = 7u64;
+        let mut next = |most: u64| {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (seed >> 33) % most + 1
+        };
+        let frames: Vec<(FrameCost, f64)> = (0..14)
+            .map(|_| {
+                let base = FrameWork {
+                    lines: next(400),
+                    ..work(1000, next(1000), next(5000), next(900), next(300))
+                };
+                let refined = work(next(2000), next(2000), next(9000), next(1900), next(900));
+                let all = FrameWork {
+                    pixels: base.pixels + refined.pixels,
+                    lines: base.lines + refined.lines,
+                    rays: base.rays + refined.rays,
+                    steps: base.steps + refined.steps,
+                    colors: base.colors + refined.colors,
+                    hits: base.hits + refined.hits,
+                    hit_levels: base.hit_levels + refined.hit_levels,
+                };
+                let ns = 3.0 * 1000.0
+                    + 2.5 * all.steps as f64
+                    + 5.0 * base.lines as f64
+                    + 20.0 * base.rays as f64
+                    + 4.0 * base.hit_levels as f64
+                    + 9.0 * refined.pixels as f64
+                    + 40.0 * refined.rays as f64
+                    + 60.0 * refined.hits as f64
+                    + 15.0 * refined.hit_levels as f64;
+                let cost = FrameCost {
+                    cost: 0,
+                    work: all,
+                    budget: 0,
+                    base_cost: 0,
+                    base_work: base,
+                    level_bias: U8F8::ONE,
+                    coarse_lines: 0,
+                    refined_lines: 0,
+                    filled_rays: 0,
+                };
+                (cost, ns)
+            })
+            .collect();
         let fitted = fitted_prices(&frames, 1000).unwrap();
-        let prices = fitted.prices;
+        let (base, prices) = (fitted.base, fitted.prices);
         assert_eq!(fitted.first_write, 3000);
-        for (work, ns) in &frames {
-            assert!((fitted.time_ns(work) - ns).abs() < 1e-6, "{work:?}");
+        for (cost, ns) in &frames {
+            assert!((fitted.time_ns(cost) - ns).abs() < 1e-3, "{cost:?}");
         }
+        assert_eq!(
+            [
+                base.per_line,
+                base.per_ray,
+                base.per_hit_level,
+                base.per_step
+            ],
+            [5000, 20000, 4000, 2500]
+        );
         assert_eq!(
             [
                 prices.per_pixel,
@@ -367,6 +430,8 @@ mod tests {
             [9000, 40000, 2500, 60000, 15000]
         );
         assert_eq!((prices.per_line, prices.per_color), (0, 0));
+        // A governor for a frame time sets the first writes aside.
+        assert_eq!(fitted.governor(10_000.0).budget(), 7_000_000);
         // One frame cannot tell five prices apart: a one-line error.
         let error = fitted_prices(&frames[..1], 1000).unwrap_err().to_string();
         assert!(

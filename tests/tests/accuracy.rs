@@ -356,7 +356,7 @@ fn rays_by_footprint_are_more_accurate_where_footprints_are_long() {
 /// bias settled.
 #[test]
 fn a_frame_within_a_budget_against_one_ray_a_pixel() {
-    use terracast::{Framebuffer, Governor, NoProbe, Prices, View};
+    use terracast::{Framebuffer, Governor, NoProbe, View};
     use terracast_sim::kernel::{render_kernel_with, PixelRays};
     const SMALL: (u32, u32) = (320, 240);
     let Some(data) = data_dir("a_frame_within_a_budget_against_one_ray_a_pixel") else {
@@ -375,7 +375,7 @@ fn a_frame_within_a_budget_against_one_ray_a_pixel() {
             render_kernel_with(&kernel, &cam, SMALL.0, SMALL.1, &options, PixelRays::Fixed)
                 .unwrap();
         let view = View::new(&cam, SMALL.0, SMALL.1).unwrap();
-        let mut governor = Governor::new(budget, Prices::BOARD);
+        let mut governor = Governor::on_board(budget);
         let mut colors = vec![[0u8; 3]; (SMALL.0 * SMALL.1) as usize];
         let mut cost = None;
         for _ in 0..3 {

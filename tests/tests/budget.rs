@@ -4,7 +4,7 @@
 //! flight gives the same choices twice.
 
 use terracast::{
-    Camera, CountingProbe, FrameCost, Governor, Prices, RenderOptions, Sample, Sink, Surface, View,
+    Camera, CountingProbe, FrameCost, Governor, RenderOptions, Sample, Sink, Surface, View,
 };
 use terracast_sim::scene::{procedural, KernelScene, Scene};
 
@@ -54,7 +54,7 @@ fn camera(scene: &Scene, i: usize) -> Camera {
 /// Each frame's cost and its view's line count.
 fn fly(scene: &Scene, kernel: &KernelScene, budget: u64) -> Vec<(FrameCost, u32)> {
     let pyramid = kernel.pyramid().expect("pyramid");
-    let mut governor = Governor::new(budget, Prices::BOARD);
+    let mut governor = Governor::on_board(budget);
     (0..FRAMES)
         .map(|i| governed(&mut governor, &pyramid, &camera(scene, i)))
         .collect()
@@ -117,10 +117,10 @@ fn fly_within(
 fn no_frame_exceeds_its_budget_and_the_choices_repeat() {
     let scene = cliffs();
     let kernel = scene.to_kernel().expect("scene");
-    // Below what these views' base pass costs at a bias of 1 (about 2000
-    // of the board's instructions a pixel, more from the eye and over the
-    // cliffs): the governor must coarsen.
-    let tight = fly_within(&scene, &kernel, 1500, true);
+    // Below what the steep views' base pass costs at a bias of 1 (about
+    // 1400 of the board's instructions a pixel, more from the eye and
+    // over the cliffs): the governor must coarsen.
+    let tight = fly_within(&scene, &kernel, 1200, true);
     assert!(
         tight
             .iter()
@@ -155,8 +155,11 @@ fn the_bias_follows_a_swinging_view_without_oscillating() {
     let scene = cliffs();
     let kernel = scene.to_kernel().expect("scene");
     let pyramid = kernel.pyramid().expect("pyramid");
-    let budget = u64::from(SIZE.0 * SIZE.1) * 2500;
-    let mut governor = Governor::new(budget, Prices::BOARD);
+    // Tight: the steep views' base pass costs about this much at a bias
+    // of 1, so the bias must follow the swing.
+    let per_pixel = 1400;
+    let budget = u64::from(SIZE.0 * SIZE.1) * per_pixel;
+    let mut governor = Governor::on_board(budget);
     let frames = 400;
     let mut biases = Vec::new();
     let mut unspent = Vec::new();
@@ -179,7 +182,7 @@ fn the_bias_follows_a_swinging_view_without_oscillating() {
         .collect();
     let turns = moves.windows(2).filter(|m| m[0] != m[1]).count();
     println!(
-        "{frames} frames swinging 2° to 90° and back twice, budget 2500 a pixel: bias {:.2} to {:.2}, {} changes, {turns} turns; {} frames left a tenth unspent",
+        "{frames} frames swinging 2° to 90° and back twice, budget {per_pixel} a pixel: bias {:.2} to {:.2}, {} changes, {turns} turns; {} frames left a tenth unspent",
         f64::from(*biases.iter().min().unwrap_or(&0)) / 256.0,
         f64::from(*biases.iter().max().unwrap_or(&0)) / 256.0,
         moves.len(),
@@ -189,5 +192,8 @@ fn the_bias_follows_a_swinging_view_without_oscillating() {
         unspent.is_empty(),
         "frames that left budget unspent: {unspent:?}"
     );
-    assert!(turns <= 8, "the bias turned {turns} times: {biases:?}");
+    assert!(
+        (2..=8).contains(&turns),
+        "the bias turned {turns} times: {biases:?}"
+    );
 }

@@ -29,8 +29,8 @@ use terracast::config::{
 };
 use terracast::{
     level_count, pyramid_cells, pyramid_points, render, render_by_footprint, Camera, Coherence,
-    CountingProbe, Governor, HeightFilter, NoProbe, Prices, Pyramid, RenderOptions, Resolution,
-    Rgb, Sample, Shading, Sink, Terrain, VerticalSamples, View, ViewError, U8F8,
+    CountingProbe, Governor, HeightFilter, NoProbe, Pyramid, RenderOptions, Resolution, Rgb,
+    Sample, Shading, Sink, Terrain, VerticalSamples, View, ViewError, U8F8,
 };
 
 /// Terrains a default run draws: about a million views, a minute or two
@@ -325,7 +325,7 @@ fn check_terrain(
             .map_err(|why| context("rays by footprint", why))?;
         // Up to 4500 of the board's instructions a pixel, down to none.
         let budget = u64::from(rng.next_u32() % 4) * u64::from(rng.next_u32() % (w * h * 1500 + 1));
-        let mut governor = Governor::new(budget, Prices::BOARD);
+        let mut governor = Governor::on_board(budget);
         // A ray the budget cuts short is shaded where it stopped, in the
         // air: no height check here.
         // Refined lines are written again, with two to eight rays a pixel.

@@ -11,7 +11,10 @@
 //!
 //! 1. **Base pass.** Every line at the level bias (the pixel-to-voxel
 //!    ratio of [`Resolution::Multi`]) the frames before suggest, one ray a
-//!    pixel (or `options.vertical_samples`).
+//!    pixel, by the line caster (a line set up once, a ray its slope; the
+//!    per-ray path for `options.vertical_samples` above one or the other
+//!    coherence settings), priced at the governor's base prices
+//!    ([`Governor::with_base_prices`]).
 //!    - *Correction*: once half the rays are cast, if the cost so far
 //!      projects past the budget, the remaining lines are rendered at the
 //!      coarsest bias: coarser, rather than late.
@@ -21,12 +24,12 @@
 //!      with fewer than six steps' worth left a pixel repeats the ray
 //!      before it on its line.
 //! 2. **Refinement.** What the base pass left is spent on lines rendered
-//!    again with two rays a pixel, four where the pixel's footprint is
-//!    long ([`crate::render_by_footprint`]'s rule, at least two), in
-//!    bit-reversed line order so that the refined lines spread over the
-//!    image. A line starts only while a line's and a pixel's most cost are
-//!    left, and stops at the pixel that would not fit: its other pixels
-//!    keep the rays they had. When every line is refined and budget is
+//!    again on the per-ray path with two rays a pixel, four where the
+//!    pixel's footprint is long ([`crate::render_by_footprint`]'s rule, at
+//!    least two), in bit-reversed line order so that the refined lines
+//!    spread over the image. A line starts only while a line's and a
+//!    pixel's most cost are left, and stops at the pixel that would not
+//!    fit: its other pixels keep the rays they had. When every line is refined and budget is
 //!    left (views of mostly sky, where a refined line is cheap), a second
 //!    round renders the lines again with each pixel's rays doubled (4 or
 //!    8).
@@ -42,14 +45,14 @@
 //! and budget give the same images and costs on every machine.
 //!
 //! ```
-//! use terracast::{render, Camera, CountingProbe, Framebuffer, Governor, Prices, Pyramid, RenderOptions, Terrain, View};
+//! use terracast::{render, Camera, CountingProbe, Framebuffer, Governor, Pyramid, RenderOptions, Terrain, View};
 //!
 //! let heights: [u16; 64] = core::array::from_fn(|i| ((i % 8) * (i / 8)) as u16 * 8);
 //! let terrain = Terrain::new(8, 8, &heights, &[[90, 140, 60]; 64])?;
 //! let pyramid = Pyramid::flat(terrain);
 //! let view = View::new(&Camera::looking([1.0, 1.0, 40.0], 45.0, 30.0), 16, 12)?;
 //! let mut pixels = [[0u8; 3]; 16 * 12];
-//! let mut governor = Governor::new(200_000, Prices::BOARD);
+//! let mut governor = Governor::on_board(600_000);
 //! for _ in 0..3 {
 //!     let mut frame = Framebuffer::new(&mut pixels, 16, 12)?;
 //!     let cost = governor.render(&pyramid, &view, &RenderOptions::default(), &mut frame, &mut CountingProbe::default());
@@ -58,7 +61,8 @@
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 
-use super::ray_caster::{Allowances, RayCaster, REFINED_MOST_LOG2};
+use super::line_caster::{self, LineCaster};
+use super::ray_caster::{limited_fetches, Allowances, RayCaster, REFINED_MOST_LOG2};
 use super::{RenderOptions, Resolution};
 use crate::probe::{CountingProbe, Probe, MAX_COLOR_FETCHES_A_RAY};
 use crate::sink::Sink;
@@ -98,23 +102,41 @@ impl Prices {
         per_hit_level: 0,
     };
 
-    /// The board's (Cortex-M7) instructions, for the per-ray path the
-    /// governor renders with: the least-squares prices that
-    /// `scripts/board-check` prints for its governed frames (`prices fitted
-    /// to these frames`: the board's counts of its runs at 3000 and 2000
-    /// instructions a pixel against their work, a step's price held at 53,
-    /// as these frames take too few steps to tell it apart), raised by 5 %
-    /// so that the board's count stays under the priced cost. A hit's
-    /// price grows with its level: the coarser a hit, the more its shading
-    /// and resumption cost.
+    /// The board's (Cortex-M7) instructions in the refinement, which sets
+    /// every ray up in full (the per-ray path); [`Governor::on_board`]
+    /// prices the base pass at [`Prices::BOARD_LINES`]. Both are the
+    /// least-squares prices that `scripts/board-check` prints for its
+    /// governed frames (`prices fitted to these frames`: the board's counts
+    /// of its runs at 3000, 2000 and 1200 instructions a pixel against their
+    /// work, the two passes' apart, a step's price held at 53, as these
+    /// frames take too few steps to tell it apart), raised by 5 % so that
+    /// the board's count stays under the priced cost. The fit prices no
+    /// refined ray apart from its hit (the two move together): a hit's
+    /// price is both. A hit's price grows with its level: the coarser a
+    /// hit, the more its shading and resumption cost.
     pub const BOARD: Self = Self {
-        per_pixel: 173,
+        per_pixel: 29,
         per_line: 0,
-        per_ray: 431,
+        per_ray: 0,
         per_step: 53,
         per_color: 0,
-        per_hit: 1507,
-        per_hit_level: 244,
+        per_hit: 2023,
+        per_hit_level: 812,
+    };
+
+    /// The board's instructions in the base pass, which takes the line
+    /// caster (a line set up once, a ray its slope), fitted with
+    /// [`Prices::BOARD`]. The line caster casts no ray into the sky but
+    /// the one a line leaves the terrain with: a ray's price is its hit's
+    /// too.
+    pub const BOARD_LINES: Self = Self {
+        per_pixel: 29,
+        per_line: 3001,
+        per_ray: 864,
+        per_step: 53,
+        per_color: 0,
+        per_hit: 0,
+        per_hit_level: 70,
     };
 
     /// What `work` costs at these prices.
@@ -188,6 +210,9 @@ pub struct FrameCost {
     pub budget: u64,
     /// Of `cost`, the base pass's (every line once).
     pub base_cost: u64,
+    /// Of `work`, the base pass's, priced at the governor's base prices
+    /// ([`Governor::with_base_prices`]); the rest at its prices.
+    pub base_work: FrameWork,
     /// The level bias (pixel-to-voxel ratio) the frame was rendered at.
     pub level_bias: U8F8,
     /// Lines finished at the coarsest bias ([`Governor::MAX_BIAS`])
@@ -201,11 +226,29 @@ pub struct FrameCost {
     pub filled_rays: u32,
 }
 
+impl FrameCost {
+    /// Of `work`, the refinement's: what the frame did after its base pass.
+    pub fn refined_work(&self) -> FrameWork {
+        let (all, base) = (&self.work, &self.base_work);
+        FrameWork {
+            pixels: all.pixels - base.pixels,
+            lines: all.lines - base.lines,
+            rays: all.rays - base.rays,
+            steps: all.steps - base.steps,
+            colors: all.colors - base.colors,
+            hits: all.hits - base.hits,
+            hit_levels: all.hit_levels - base.hit_levels,
+        }
+    }
+}
+
 /// A per-frame budget, the prices it is spent at, and the level bias that
 /// keeps it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Governor {
     budget: u64,
+    /// The base pass's prices, and the refinement's.
+    base_prices: Prices,
     prices: Prices,
     /// The level bias for the next frame, U8.8 bits.
     bias: u16,
@@ -222,8 +265,29 @@ impl Governor {
     pub const fn new(budget: u64, prices: Prices) -> Self {
         Self {
             budget,
+            base_prices: prices,
             prices,
             bias: 1 << 8,
+        }
+    }
+
+    /// A governor for frames that cost at most `budget` of the board's
+    /// instructions: the base pass at [`Prices::BOARD_LINES`], the
+    /// refinement at [`Prices::BOARD`].
+    pub const fn on_board(budget: u64) -> Self {
+        Self::new(budget, Prices::BOARD).with_base_prices(Prices::BOARD_LINES)
+    }
+
+    /// This governor with the base pass priced at `base`: where one event
+    /// costs a different amount in the base pass, which takes the line
+    /// caster when the options allow it (one ray a pixel, the default
+    /// coherence), than in the refinement, which sets every ray up in
+    /// full (a board's instructions; a modeled machine whose costs are
+    /// per event prices both alike).
+    pub const fn with_base_prices(self, base: Prices) -> Self {
+        Self {
+            base_prices: base,
+            ..self
         }
     }
 
@@ -232,9 +296,14 @@ impl Governor {
         self.budget
     }
 
-    /// The prices the budget is spent at.
+    /// The prices the refinement is spent at.
     pub fn prices(&self) -> Prices {
         self.prices
+    }
+
+    /// The prices the base pass is spent at.
+    pub fn base_prices(&self) -> Prices {
+        self.base_prices
     }
 
     /// The level bias the next frame starts with.
@@ -249,7 +318,7 @@ impl Governor {
     /// ([`MAX_COLOR_FETCHES_A_RAY`]) and a few steps a ray renders every
     /// ray.
     pub fn least_cost(&self, view: &View, options: &RenderOptions) -> u64 {
-        let prices = &self.prices;
+        let prices = &self.base_prices;
         let pixels = u64::from(view.width()) * u64::from(view.height());
         pixels * u64::from(prices.per_pixel)
             + u64::from(view.lines()) * u64::from(prices.per_line)
@@ -268,24 +337,19 @@ impl Governor {
         probe: &mut P,
     ) -> FrameCost {
         let bias = self.bias;
-        let coarse_bias = Self::MAX_BIAS.to_bits();
         let at = |bits: u16| RenderOptions {
             resolution: Resolution::Multi {
                 pixel_to_voxel: U8F8::from_bits(bits),
             },
             ..*options
         };
-        let (fine, coarse) = (at(bias), at(coarse_bias));
-        let (fine_caster, coarse_caster) = (
-            RayCaster::new(surface, view, &fine),
-            RayCaster::new(surface, view, &coarse),
-        );
+        let (fine, coarse) = (at(bias), at(Self::MAX_BIAS.to_bits()));
+        let fine_caster = RayCaster::new(surface, view, &fine);
         let pixels = u64::from(view.width()) * u64::from(view.height());
-        let rays_total = pixels * u64::from(options.vertical_samples.count());
         // Every pixel is written and every line set up once.
-        let meter = Meter::new(self.prices, surface.top());
-        meter.pixels.set(pixels);
-        meter.lines.set(u64::from(view.lines()));
+        let meter = Meter::new(self.base_prices, surface.top());
+        meter.add_pixels(pixels);
+        meter.add_lines(u64::from(view.lines()));
         let budget = self.budget;
         let mut metered = Metered {
             inner: probe,
@@ -294,27 +358,29 @@ impl Governor {
         let mut base = BaseAllowances {
             meter: &meter,
             budget,
-            rays_total,
+            rays_total: pixels * u64::from(options.vertical_samples.count()),
             filled: 0,
         };
-        let fixed = meter.cost();
-        let mut coarse_lines = 0;
-        for line in 0..view.lines() {
-            // Projected past the budget: the rest goes coarser.
-            let rays = meter.rays.get();
-            let heading_over = coarse_lines > 0
-                || (rays >= rays_total / 2
-                    && u128::from(meter.cost() - fixed) * u128::from(rays_total)
-                        > u128::from(budget.saturating_sub(fixed)) * u128::from(rays));
-            let caster = if heading_over {
-                coarse_lines += 1;
-                &coarse_caster
-            } else {
-                &fine_caster
-            };
-            caster.line(line, sink, &mut metered, &mut base);
-        }
-        let base_cost = meter.cost();
+        let coarse_lines = if line_caster::takes(options) {
+            let (fine_lines, coarse_lines) = (
+                LineCaster::new(surface, view, &fine),
+                LineCaster::new(surface, view, &coarse),
+            );
+            base_pass(view, &mut base, |line, coarse, base| {
+                metered.line(line);
+                let caster = if coarse { &coarse_lines } else { &fine_lines };
+                caster.line_within(line, sink, &mut metered, base);
+            })
+        } else {
+            let coarse_caster = RayCaster::new(surface, view, &coarse);
+            base_pass(view, &mut base, |line, coarse, base| {
+                metered.line(line);
+                let caster = if coarse { &coarse_caster } else { &fine_caster };
+                caster.line(line, sink, &mut metered, base);
+            })
+        };
+        let (base_cost, base_work) = (meter.cost(), meter.work());
+        meter.price_from_here(self.prices, surface.top());
         let mut refined_lines = 0;
         let mut refine = RefineAllowances {
             meter: &meter,
@@ -330,8 +396,9 @@ impl Governor {
                     if budget.saturating_sub(meter.cost()) < line_most {
                         break 'rounds;
                     }
-                    meter.lines.set(meter.lines.get() + 1);
+                    meter.add_lines(1);
                     refined_lines += 1;
+                    metered.line(line);
                     fine_caster.line_refined(line, round, sink, &mut metered, &mut refine);
                 }
             }
@@ -341,6 +408,7 @@ impl Governor {
             work: meter.work(),
             budget,
             base_cost,
+            base_work,
             level_bias: U8F8::from_bits(bias),
             coarse_lines,
             refined_lines,
@@ -349,6 +417,34 @@ impl Governor {
         self.bias = next_bias(bias, &cost);
         cost
     }
+}
+
+/// The base pass: every line of `view` by `cast_line(line, coarse,
+/// allowances)`, at the governor's bias until, once half the rays are
+/// cast, the cost so far projects past the budget; from there on at the
+/// coarsest (`coarse`). Returns the lines rendered coarse.
+fn base_pass(
+    view: &View,
+    base: &mut BaseAllowances<'_>,
+    mut cast_line: impl FnMut(u32, bool, &mut BaseAllowances<'_>),
+) -> u32 {
+    let meter = base.meter;
+    let (budget, rays_total) = (base.budget, base.rays_total);
+    let fixed = meter.cost();
+    let mut coarse_lines = 0;
+    for line in 0..view.lines() {
+        // Projected past the budget: the rest goes coarser.
+        let rays = meter.rays.get();
+        let heading_over = coarse_lines > 0
+            || (rays >= rays_total / 2
+                && u128::from(meter.cost() - fixed) * u128::from(rays_total)
+                    > u128::from(budget.saturating_sub(fixed)) * u128::from(rays));
+        if heading_over {
+            coarse_lines += 1;
+        }
+        cast_line(line, heading_over, base);
+    }
+    coarse_lines
 }
 
 /// The next frame's bias, from this frame's base pass: over three
@@ -378,10 +474,14 @@ fn next_bias(bias: u16, cost: &FrameCost) -> u16 {
     ) as u16
 }
 
-/// What a frame has done so far, and what it has cost.
+/// What a frame has done so far, and what it has cost: each event is
+/// counted and its price added as it happens (the base pass's events at
+/// the base prices, the refinement's at its own), so that the cost left
+/// before each ray is one read.
 #[derive(Debug)]
 struct Meter {
-    prices: Prices,
+    prices: Cell<Prices>,
+    cost: Cell<u64>,
     pixels: Cell<u64>,
     lines: Cell<u64>,
     rays: Cell<u64>,
@@ -390,7 +490,7 @@ struct Meter {
     hits: Cell<u64>,
     hit_levels: Cell<u64>,
     /// The most a ray's shading costs (see [`Prices::shading_most`]).
-    shading_most: u64,
+    shading_most: Cell<u64>,
 }
 
 impl Meter {
@@ -398,7 +498,8 @@ impl Meter {
     /// surface whose top level is `top`.
     fn new(prices: Prices, top: u8) -> Self {
         Self {
-            prices,
+            prices: Cell::new(prices),
+            cost: Cell::new(0),
             pixels: Cell::new(0),
             lines: Cell::new(0),
             rays: Cell::new(0),
@@ -406,8 +507,29 @@ impl Meter {
             colors: Cell::new(0),
             hits: Cell::new(0),
             hit_levels: Cell::new(0),
-            shading_most: prices.shading_most(top),
+            shading_most: Cell::new(prices.shading_most(top)),
         }
+    }
+
+    /// Prices the work from here on at `prices` (the refinement's).
+    fn price_from_here(&self, prices: Prices, top: u8) {
+        self.prices.set(prices);
+        self.shading_most.set(prices.shading_most(top));
+    }
+
+    /// Counts `n` more in `count`, at `price` each.
+    #[inline(always)]
+    fn add(&self, count: &Cell<u64>, n: u64, price: u32) {
+        count.set(count.get() + n);
+        self.cost.set(self.cost.get() + n * u64::from(price));
+    }
+
+    fn add_pixels(&self, n: u64) {
+        self.add(&self.pixels, n, self.prices.get().per_pixel);
+    }
+
+    fn add_lines(&self, n: u64) {
+        self.add(&self.lines, n, self.prices.get().per_line);
     }
 
     fn work(&self) -> FrameWork {
@@ -422,10 +544,12 @@ impl Meter {
         }
     }
 
+    #[inline(always)]
     fn cost(&self) -> u64 {
-        self.prices.of(&self.work())
+        self.cost.get()
     }
 
+    #[inline(always)]
     fn left(&self, budget: u64) -> u64 {
         budget.saturating_sub(self.cost())
     }
@@ -433,13 +557,23 @@ impl Meter {
     /// The allowance a ray gets from `left` (what is left for its steps
     /// once its shading and every later ray are set aside): at most
     /// `4n + 2` steps, none with fewer than six steps' worth left.
+    #[inline]
     fn allowance(&self, left: u64, filled: &mut u32) -> u32 {
-        let per_step = u64::from(self.prices.per_step);
+        let per_step = self.prices.get().per_step;
         // Steps at no price: as many as the ray can take, while anything
-        // is left.
-        let steps = left
-            .checked_div(per_step)
-            .unwrap_or(if left == 0 { 0 } else { u64::MAX });
+        // is left. A frame's budget is below 2^32 on a board: one 32-bit
+        // divide, where a 64-bit one is a library call.
+        let steps = if per_step == 0 {
+            if left == 0 {
+                0
+            } else {
+                u64::MAX
+            }
+        } else if let Ok(left) = u32::try_from(left) {
+            u64::from(left / per_step)
+        } else {
+            left / u64::from(per_step)
+        };
         if steps < 6 {
             *filled += 1;
             return 0;
@@ -457,37 +591,45 @@ struct Metered<'a, P> {
 impl<P: Probe> Probe for Metered<'_, P> {
     #[inline(always)]
     fn visit(&mut self, level: u8, voxel: usize) {
-        self.meter.steps.set(self.meter.steps.get() + 1);
+        let meter = self.meter;
+        meter.add(&meter.steps, 1, meter.prices.get().per_step);
         self.inner.visit(level, voxel);
     }
     #[inline(always)]
     fn bound(&mut self, level: u8, cell: usize) {
-        self.meter.steps.set(self.meter.steps.get() + 1);
+        let meter = self.meter;
+        meter.add(&meter.steps, 1, meter.prices.get().per_step);
         self.inner.bound(level, cell);
     }
     #[inline(always)]
     fn color(&mut self, level: u8, voxel: usize) {
-        self.meter.colors.set(self.meter.colors.get() + 1);
+        let meter = self.meter;
+        meter.add(&meter.colors, 1, meter.prices.get().per_color);
         self.inner.color(level, voxel);
     }
     #[inline(always)]
     fn color_square(&mut self, level: u8, corner: usize) {
-        self.meter.colors.set(self.meter.colors.get() + 1);
+        let meter = self.meter;
+        meter.add(&meter.colors, 1, meter.prices.get().per_color);
         self.inner.color_square(level, corner);
     }
     #[inline(always)]
     fn hit(&mut self, level: u8) {
         let meter = self.meter;
-        meter.hits.set(meter.hits.get() + 1);
-        meter
-            .hit_levels
-            .set(meter.hit_levels.get() + u64::from(level));
+        let prices = meter.prices.get();
+        meter.add(&meter.hits, 1, prices.per_hit);
+        meter.add(&meter.hit_levels, u64::from(level), prices.per_hit_level);
         self.inner.hit(level);
     }
     #[inline(always)]
     fn ray(&mut self) {
-        self.meter.rays.set(self.meter.rays.get() + 1);
+        let meter = self.meter;
+        meter.add(&meter.rays, 1, meter.prices.get().per_ray);
         self.inner.ray();
+    }
+    #[inline(always)]
+    fn line(&mut self, index: u32) {
+        self.inner.line(index);
     }
 }
 
@@ -501,13 +643,17 @@ struct BaseAllowances<'a> {
 }
 
 impl Allowances for BaseAllowances<'_> {
+    type Fetches = u32;
+    fn fetches(allowance: u32) -> u32 {
+        limited_fetches(allowance)
+    }
     fn next(&mut self) -> u32 {
         let meter = self.meter;
-        let prices = &meter.prices;
+        let prices = meter.prices.get();
         // This ray's set-up is counted; its shading and the later rays'
         // set-up are not (a later ray that finds no budget is not shaded).
         let later = self.rays_total.saturating_sub(meter.rays.get()) * u64::from(prices.per_ray)
-            + meter.shading_most;
+            + meter.shading_most.get();
         meter.allowance(
             meter.left(self.budget).saturating_sub(later),
             &mut self.filled,
@@ -536,18 +682,24 @@ const REFINE_ROUNDS: u32 = 2;
 impl RefineAllowances<'_> {
     fn pixel_most(&self) -> u64 {
         let meter = self.meter;
-        let prices = &meter.prices;
+        let prices = meter.prices.get();
         self.most_rays
-            * (u64::from(prices.per_ray) + meter.shading_most + 6 * u64::from(prices.per_step))
+            * (u64::from(prices.per_ray)
+                + meter.shading_most.get()
+                + 6 * u64::from(prices.per_step))
             + u64::from(prices.per_pixel)
     }
 }
 
 impl Allowances for RefineAllowances<'_> {
+    type Fetches = u32;
+    fn fetches(allowance: u32) -> u32 {
+        limited_fetches(allowance)
+    }
     fn next(&mut self) -> u32 {
         let meter = self.meter;
-        let prices = &meter.prices;
-        let later = (self.most_rays - 1) * u64::from(prices.per_ray) + meter.shading_most;
+        let prices = meter.prices.get();
+        let later = (self.most_rays - 1) * u64::from(prices.per_ray) + meter.shading_most.get();
         meter.allowance(
             meter.left(self.budget).saturating_sub(later),
             &mut self.filled,
@@ -559,7 +711,7 @@ impl Allowances for RefineAllowances<'_> {
             return false;
         }
         let meter = self.meter;
-        meter.pixels.set(meter.pixels.get() + 1);
+        meter.add_pixels(1);
         true
     }
 }
@@ -613,6 +765,10 @@ mod tests {
     struct Fixed(u32);
 
     impl Allowances for Fixed {
+        type Fetches = u32;
+        fn fetches(allowance: u32) -> u32 {
+            limited_fetches(allowance)
+        }
         fn next(&mut self) -> u32 {
             self.0
         }
@@ -690,17 +846,24 @@ mod tests {
                 let camera = Camera::looking(eye, yaw, pitch);
                 let view = View::new(&camera, 24, 18).unwrap();
                 let caster = RayCaster::new(&pyramid, &view, &options);
+                // The base pass's caster too.
+                let lines = LineCaster::new(&pyramid, &view, &options);
                 for allowance in [1, 2, 3, 5, 8, 40] {
-                    let mut probe = PerRay::default();
+                    let (mut probe, mut line_probe) = (PerRay::default(), PerRay::default());
                     for line in 0..view.lines() {
                         caster.line(line, &mut Discard, &mut probe, &mut Fixed(allowance));
                         probe.ray();
+                        let limit = &mut Fixed(allowance);
+                        lines.line_within(line, &mut Discard, &mut line_probe, limit);
+                        line_probe.ray();
                     }
-                    assert!(
-                        probe.most() <= 4 * u64::from(allowance) + 2,
-                        "eye {eye:?} pitch {pitch} yaw {yaw} allowance {allowance}: {}",
-                        probe.most()
-                    );
+                    for (caster, probe) in [("per ray", probe), ("line", line_probe)] {
+                        assert!(
+                            probe.most() <= 4 * u64::from(allowance) + 2,
+                            "{caster} caster, eye {eye:?} pitch {pitch} yaw {yaw} allowance {allowance}: {}",
+                            probe.most()
+                        );
+                    }
                 }
             }
         }
@@ -739,6 +902,30 @@ mod tests {
         for allowance in [i32::MAX as u32, i32::MAX as u32 + 1, u32::MAX - 1] {
             assert!(render_with(allowance) == unlimited, "allowance {allowance}");
         }
+        // The line caster alike, against its plain render.
+        let lines = LineCaster::new(&pyramid, &view, &options);
+        let render_lines_with = |allowance: Option<u32>| {
+            let mut pixels = [[0u8; 3]; 32 * 24];
+            let mut sink = crate::Framebuffer::new(&mut pixels, 32, 24).unwrap();
+            for line in 0..view.lines() {
+                let mut probe = crate::NoProbe;
+                match allowance {
+                    Some(a) => lines.line_within(line, &mut sink, &mut probe, &mut Fixed(a)),
+                    None => lines.line(line, &mut sink, &mut probe),
+                }
+            }
+            pixels
+        };
+        let plain = render_lines_with(None);
+        for allowance in [i32::MAX as u32, u32::MAX - 1, u32::MAX] {
+            assert!(
+                render_lines_with(Some(allowance)) == plain,
+                "line caster, allowance {allowance}"
+            );
+        }
+        // With no steps at all, every pixel repeats the one before it:
+        // the sky's.
+        assert!(render_lines_with(Some(0)).iter().all(|p| *p == options.sky));
     }
 
     fn cost(base_cost: u64, coarse_lines: u32) -> FrameCost {
@@ -747,6 +934,7 @@ mod tests {
             work: FrameWork::default(),
             budget: 1000,
             base_cost,
+            base_work: FrameWork::default(),
             level_bias: U8F8::ONE,
             coarse_lines,
             refined_lines: 0,
@@ -812,7 +1000,7 @@ mod tests {
             // Without a limit, both rounds refine every line.
             assert_eq!(unlimited.refined_lines, 2 * view.lines(), "pitch {pitch}");
             let mut refined_twice = false;
-            for share in [1u64, 2, 3, 5, 8] {
+            for share in [1u64, 3, 5, 8, 13] {
                 // From the base pass's cost up: the refinement fills it.
                 let budget = plain.least_cost(&view, &options) + unlimited.base_cost * share / 2;
                 let mut governor = Governor::new(budget, Prices::BOARD);
@@ -857,6 +1045,22 @@ mod tests {
             assert!(
                 refined_twice,
                 "pitch {pitch}: no budget reached the second round"
+            );
+            // On the board's two prices: the base pass at its own, the
+            // refinement at the per-ray path's, within the budget.
+            let budget = 3 * Governor::on_board(0).least_cost(&view, &options);
+            let cost = Governor::on_board(budget).render(
+                &pyramid,
+                &view,
+                &options,
+                &mut Discard,
+                &mut crate::NoProbe,
+            );
+            assert!(cost.refined_lines > 0 && cost.cost <= budget, "{cost:?}");
+            assert_eq!(cost.base_cost, Prices::BOARD_LINES.of(&cost.base_work));
+            assert_eq!(
+                cost.cost,
+                cost.base_cost + Prices::BOARD.of(&cost.refined_work())
             );
         }
     }

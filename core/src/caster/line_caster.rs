@@ -40,6 +40,7 @@
 
 use super::first_hit::first_hit;
 use super::footprint_color::{color_level, levels_color, narrower_side};
+use super::ray_caster::{Allowances, Fetches, Unlimited};
 use super::walk::{along_weight, lerp, line_color};
 use super::{crossing_fraction, sky, Coherence, Frame, RenderOptions, Shading, VerticalSamples};
 use crate::color::Rgb;
@@ -265,6 +266,22 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// from the eye, through the height bounds; a stretch's first ray
     /// starts where the stretch before left off; the others resume.
     pub fn line<S: Sink, P: Probe>(&self, index: u32, sink: &mut S, probe: &mut P) {
+        self.line_within(index, sink, probe, &mut Unlimited);
+    }
+
+    /// Renders image line `index` as [`LineCaster::line`] does, each ray
+    /// within the steps `allowances` gives it (see [`Allowances`]): a ray
+    /// given `n` takes at most `4n + 2` (at most `2n` bound tests of the
+    /// first hit, the rest stepping; one cut short is shaded at the
+    /// sample where it stopped), a ray given none repeats the pixel
+    /// before it.
+    pub fn line_within<S: Sink, P: Probe, A: Allowances>(
+        &self,
+        index: u32,
+        sink: &mut S,
+        probe: &mut P,
+        allowances: &mut A,
+    ) {
         // Most lines of a rolled or steep view's outer sectors miss the
         // image: neither the line, its plane nor its rays are set up.
         if self.view.line_misses_image(index) {
@@ -278,23 +295,25 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             return;
         }
         // The pixel window in 32-bit words where the line's values fit.
+        let a = allowances;
         match (pixels.narrowed(), self.nearest) {
-            (Ok(pixels), true) => self.cast::<_, _, _, true>(&line, pixels, sink, probe),
-            (Ok(pixels), false) => self.cast::<_, _, _, false>(&line, pixels, sink, probe),
-            (Err(pixels), true) => self.cast::<_, _, _, true>(&line, pixels, sink, probe),
-            (Err(pixels), false) => self.cast::<_, _, _, false>(&line, pixels, sink, probe),
+            (Ok(pixels), true) => self.cast::<_, _, _, _, true>(&line, pixels, sink, probe, a),
+            (Ok(pixels), false) => self.cast::<_, _, _, _, false>(&line, pixels, sink, probe, a),
+            (Err(pixels), true) => self.cast::<_, _, _, _, true>(&line, pixels, sink, probe, a),
+            (Err(pixels), false) => self.cast::<_, _, _, _, false>(&line, pixels, sink, probe, a),
         }
     }
 
     /// Casts `line`'s rays through `pixels`, its pixels, into `sink`.
     /// Out of line: the loop's state then has the registers to itself.
     #[inline(never)]
-    fn cast<W: WindowWord, S: Sink, P: Probe, const NEAREST: bool>(
+    fn cast<W: WindowWord, S: Sink, P: Probe, A: Allowances, const NEAREST: bool>(
         &self,
         line: &Line,
         mut pixels: OwnedPixels<W>,
         sink: &mut S,
         probe: &mut P,
+        allowances: &mut A,
     ) {
         let view = self.view;
         let mut walk = self.line_walk(line);
@@ -310,6 +329,8 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // The direction's major-axis component, which a ray's set-up needs
         // with its center's vertical one.
         let axis = [if walk.plane.key.x_major { 0 } else { 1 }];
+        // Under a limit: the pixel a ray with no steps left repeats.
+        let mut previous = self.sky;
         sink.line(&LinePlane {
             // Within ±1 (`Plane::dminor`).
             dminor: walk.plane.dminor as i32,
@@ -317,6 +338,14 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         if walk.first <= walk.last {
             for pixel in pixels.by_ref() {
                 probe.ray();
+                // Height fetches left to this ray's start and climb (its
+                // first hit's bound tests are `allowance` rounds).
+                let allowance = allowances.next();
+                if A::LIMITED && allowance == 0 {
+                    sink.put(pixel.x, pixel.y, previous);
+                    continue;
+                }
+                let mut fetches = A::fetches(allowance);
                 // The direction's words: exactly `Line::pixel_direction`'s
                 // components shifted, so the slope, the run and the drift
                 // are `View::slope`'s and `Plane::drift`'s.
@@ -366,11 +395,17 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                         self.schedule(&mut walk, stretch_run);
                     }
                     at = resume_from
-                        .or_else(|| self.clear_until(&walk, &line.pixel_direction(&pixel), probe))
+                        .or_else(|| {
+                            let d = line.pixel_direction(&pixel);
+                            self.clear_until(&walk, &d, allowance, probe)
+                        })
                         .and_then(|from| self.start(&walk, from, z0, dz, probe));
+                    if A::LIMITED {
+                        fetches.take();
+                    }
                 }
                 let hit = at.as_mut().and_then(|at| {
-                    let z = self.climb(&walk, at, z0, dz, probe)?;
+                    let z = self.climb(&walk, at, (z0, dz), &mut fetches, probe)?;
                     let ray = HitRay {
                         dz: dz as i32,
                         color_reach: self.plan.color_reach(run),
@@ -380,7 +415,12 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                     Some(self.hit::<P, NEAREST>(&walk, at, z, &ray, probe))
                 });
                 match hit {
-                    Some(sample) => sink.put_ray(pixel.x, pixel.y, sample, dz as i32),
+                    Some(sample) => {
+                        if A::LIMITED {
+                            previous = sample;
+                        }
+                        sink.put_ray(pixel.x, pixel.y, sample, dz as i32)
+                    }
                     None => {
                         // It left the terrain: so does every ray after it.
                         sink.put(pixel.x, pixel.y, self.sky);
@@ -444,9 +484,16 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// the surface, by the hierarchical first hit through the pyramid's
     /// height bounds (the line's first sample without them); `None` when
     /// it cannot hit at all. Its bounds cover every level, so the skip
-    /// holds whatever levels the walk steps on.
+    /// holds whatever levels the walk steps on. After `tests` rounds of
+    /// bound tests (see [`first_hit`]) it stops where it has proven.
     #[inline(never)]
-    fn clear_until<P: Probe>(&self, walk: &LineWalk, d: &[i64; 3], probe: &mut P) -> Option<i32> {
+    fn clear_until<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        d: &[i64; 3],
+        tests: u32,
+        probe: &mut P,
+    ) -> Option<i32> {
         if !self.first_hit {
             return Some(walk.first);
         }
@@ -457,7 +504,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         }
         let mut ray = view.ray_with(&self.extent, &self.plan, plane, &clip);
         ray.schedule();
-        let k = first_hit(self.surface, &ray, ray.start, ray.end, u32::MAX, probe)?;
+        let k = first_hit(self.surface, &ray, ray.start, ray.end, tests, probe)?;
         Some(k - 1)
     }
 
@@ -505,13 +552,18 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// schedule while above the surface. Returns the ray's height at its
     /// hit, or `None` when it leaves the map or rises above the highest
     /// terrain (and so does every ray of the line after it).
+    ///
+    /// Each height fetched takes one of `fetches`; with none
+    /// left the ray stops at the sample it is on, above the surface, and
+    /// is shaded there as if it hit (the next ray, higher, climbs on from
+    /// it: the surface is below both there).
     #[inline(always)]
-    fn climb<P: Probe>(
+    fn climb<P: Probe, F: Fetches>(
         &self,
         walk: &LineWalk,
         at: &mut At,
-        z0: i64,
-        dz: i64,
+        (z0, dz): (i64, i64),
+        fetches: &mut F,
         probe: &mut P,
     ) -> Option<i64> {
         let mut z = z0 + i64::from(at.k) * dz;
@@ -533,7 +585,9 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             let (stride, z_step) = (1 << level, dz << level);
             let (mut k, mut index, mut minor, mut height) =
                 (here.k, here.index, here.minor, here.height);
-            while k + stride <= end {
+            // As far as the fetches left reach (no limit: the level's end).
+            let (from, run_end) = (k, fetches.run_end(k, stride, end));
+            while k + stride <= run_end {
                 let before = height;
                 k += stride;
                 index += step;
@@ -556,8 +610,17 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                     return None;
                 }
             }
+            if F::LIMITED {
+                fetches.ran(from, k, level);
+                if k + stride <= end {
+                    return Some(stopped(at, level, (k, index, minor, height), z));
+                }
+            }
             if k >= walk.last {
                 return None;
+            }
+            if F::LIMITED && !fetches.take() {
+                return Some(stopped(at, level, (k, index, minor, height), z));
             }
             // The next level's first grid line, or the map's last sample.
             let next = k + stride;
@@ -827,6 +890,32 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         };
         levels_color(self.surface, level, t, point, probe)
     }
+}
+
+/// Stops a ray that has no fetch left where it is, at sample `k` of
+/// `level` (with its index, minor coordinate and height), the ray at
+/// height `z` there: it is shaded there as if it hit. Out of line and
+/// cold: the plain render never takes it, and its body inlined into the
+/// climb changes how the compiler lays the plain render out (10
+/// instructions a pixel more on the board when measured).
+#[cold]
+#[inline(never)]
+fn stopped(
+    at: &mut At,
+    level: u8,
+    (k, index, minor, height): (i32, isize, i32, i32),
+    z: i64,
+) -> i64 {
+    *at = At {
+        k,
+        level,
+        index,
+        minor,
+        height,
+        before_k: k,
+        before: None,
+    };
+    z
 }
 
 fn align_down(plane: &Plane, k: i64, level: u32) -> i64 {

@@ -100,12 +100,14 @@ pub fn render<T: Surface + ?Sized, S: Sink, P: Probe>(
     if line_caster::takes(options) {
         let caster = line_caster::LineCaster::new(surface, view, options);
         for line in 0..view.lines() {
+            probe.line(line);
             caster.line(line, sink, probe);
         }
         return;
     }
     let caster = RayCaster::new(surface, view, options);
     for line in 0..view.lines() {
+        probe.line(line);
         caster.line(line, sink, probe, &mut Unlimited);
     }
 }
@@ -134,6 +136,7 @@ pub fn render_by_footprint<T: Surface + ?Sized, S: Sink, P: Probe>(
 ) {
     let caster = RayCaster::new(surface, view, options);
     for line in 0..view.lines() {
+        probe.line(line);
         caster.line_by_footprint(line, sink, probe);
     }
 }

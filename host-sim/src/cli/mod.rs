@@ -535,7 +535,7 @@ fn board_verify_command(args: BoardVerifyArgs) -> Result<()> {
     let most = report.governed_most_share();
     if most > 1.0 {
         return Err(Error::new(format!(
-            "a governed frame took {most:.3} of its budget on the board: Prices::BOARD no longer covers the kernel's cost (refit it: `prices fitted to these frames`)"
+            "a governed frame took {most:.3} of its budget on the board: Prices::BOARD_LINES and Prices::BOARD no longer cover the kernel's cost (refit them: `prices fitted to these frames`)"
         )));
     }
     if let Some(budget) = args.budget {

@@ -8,12 +8,12 @@ use crate::outputs::Outputs;
 use crate::scene::KernelScene;
 use crate::sim::threads::render_threads;
 use crate::sim::{
-    flight, record_flight, simulate, table, Machine, SimResult, TABLE_HFOV_DEG, TABLE_MAP_SIDE,
-    TABLE_PITCH,
+    flight, flight_governor, record_flight, record_governed_flight, simulate, table, Machine,
+    SimResult, TABLE_HFOV_DEG, TABLE_MAP_SIDE, TABLE_PITCH,
 };
 use std::path::PathBuf;
 use terracast::config::DEFAULT_HFOV_DEG;
-use terracast::{Camera, RenderOptions};
+use terracast::{Camera, FrameCost, RenderOptions};
 
 /// Most pixels a run records (frames × image size), about 4 GiB of events.
 const MAX_RECORDED_PIXELS: u64 = 100_000_000;
@@ -47,6 +47,14 @@ pub(super) struct SimArgs {
     /// The kernel's settings (Table 1 keeps the defaults).
     #[command(flatten)]
     kernel: super::KernelArgs,
+    /// Render each frame with the kernel's governor, its work within
+    /// SHARE of the deadline on all the workers (0.8 when no SHARE is
+    /// given; the rest is left for tile copies and memory and disk
+    /// waits), at the machine's cycles (`cycles`, local fetches
+    /// included): the governor coarsens a frame that would overrun and
+    /// spends what a frame leaves on more rays a pixel.
+    #[arg(long, value_name = "SHARE", num_args = 0..=1, default_missing_value = "0.8", value_parser = positive(0.0f64, 1.0), conflicts_with_all = ["table", "threads"])]
+    governed: Option<f64>,
     /// Voxels the eye advances a frame.
     #[arg(long, default_value_t = 4.0, value_name = "V", value_parser = number(-1e4f32, 1e4), allow_hyphen_values = true)]
     speed: f32,
@@ -177,20 +185,45 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let traces = record_flight(&kernel, &cameras, args.size, &options, &machine, |done| {
+    let progress = |done| {
         eprint!(
             "\rrecording the kernel's work: frame {done}/{}",
             cameras.len()
         );
-    })?;
+    };
+    let (traces, costs) = match args.governed {
+        Some(share) => {
+            let mut governor = flight_governor(&machine, share, args.size)?;
+            eprintln!(
+                "governed: {} cycles a frame ({share} of the deadline on the workers), {:.0} a pixel",
+                governor.budget(),
+                governor.budget() as f64 / pixels as f64
+            );
+            let (traces, costs) = record_governed_flight(
+                &kernel,
+                &cameras,
+                args.size,
+                &options,
+                &machine,
+                &mut governor,
+                progress,
+            )?;
+            (traces, Some(costs))
+        }
+        None => (
+            record_flight(&kernel, &cameras, args.size, &options, &machine, progress)?,
+            None,
+        ),
+    };
     eprintln!();
     let result = simulate(&machine, &traces);
-    print!("{}", report(&machine, &result));
+    print!("{}", report(&machine, &result, costs.as_deref()));
     Ok(())
 }
 
-/// The per-frame table and the summary.
-fn report(machine: &Machine, result: &SimResult) -> String {
+/// The per-frame table and the summary; with the governor's `costs`, each
+/// frame's cost against its budget and its level bias too.
+fn report(machine: &Machine, result: &SimResult, costs: Option<&[FrameCost]>) -> String {
     let ms = |ps: u64| ps as f64 / 1e9;
     let mut out = format!(
         "{} processors ({} workers) at {} MHz, deadline {} ms\n",
@@ -199,14 +232,19 @@ fn report(machine: &Machine, result: &SimResult) -> String {
         machine.clock_mhz,
         machine.frame.deadline_ms
     );
-    out += "frame  time ms  deadline  compute ms  transfer ms  bank wait ms  disk wait ms  disk reads (critical)\n";
+    out += "frame  time ms  deadline  compute ms  transfer ms  bank wait ms  disk wait ms  disk reads (critical)";
+    out += if costs.is_some() {
+        "  cost / budget  level bias  refined line renders\n"
+    } else {
+        "\n"
+    };
     for (i, f) in result.frames.iter().enumerate() {
         let verdict = match f.miss {
             None => "met".to_string(),
             Some(reason) => format!("MISSED ({})", reason.as_str()),
         };
         out += &format!(
-            "{i:>5}  {:>7.2}  {verdict:<8}  {:>10.2}  {:>11.2}  {:>12.2}  {:>12.2}  {} ({})\n",
+            "{i:>5}  {:>7.2}  {verdict:<8}  {:>10.2}  {:>11.2}  {:>12.2}  {:>12.2}  {} ({})",
             ms(f.time),
             ms(f.compute),
             ms(f.transfer),
@@ -215,6 +253,17 @@ fn report(machine: &Machine, result: &SimResult) -> String {
             f.disk_reads,
             f.critical_loads
         );
+        match costs.and_then(|c| c.get(i)) {
+            Some(cost) => {
+                out += &format!(
+                    "  {:>13.3}  {:>10.2}  {}\n",
+                    cost.cost as f64 / cost.budget.max(1) as f64,
+                    cost.level_bias.to_num::<f64>(),
+                    cost.refined_lines
+                )
+            }
+            None => out += "\n",
+        }
     }
     let utilization = &result.utilization;
     let mean = utilization.iter().sum::<f64>() / utilization.len().max(1) as f64;

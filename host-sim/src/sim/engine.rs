@@ -305,7 +305,9 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
     }
 }
 
-fn work_cycles(machine: &Machine, event: &Event) -> u64 {
+/// A worker's computing cycles for `event`: its rays, steps, color
+/// fetches and local-memory reads.
+pub(crate) fn work_cycles(machine: &Machine, event: &Event) -> u64 {
     let c = &machine.cycles;
     u64::from(event.rays) * c.per_ray
         + u64::from(event.steps) * c.per_step

@@ -53,6 +53,7 @@
 
 use crate::error::{Error, Result};
 use serde::Deserialize;
+use terracast::Prices;
 
 /// A whole machine. `Default` is the PVS.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -321,6 +322,46 @@ impl Machine {
     /// The frame deadline.
     pub fn deadline(&self) -> Ps {
         (self.frame.deadline_ms * 1e9).round() as Ps
+    }
+
+    /// The kernel governor's prices on this machine, in its cycles: a
+    /// ray's set-up, a step and a color fetch, as [`Cycles`] gives them.
+    pub fn compute_prices(&self) -> Result<Prices> {
+        let c = &self.cycles;
+        let price = |cycles: u64, what: &str| {
+            u32::try_from(cycles).map_err(|_| {
+                Error::new(format!(
+                    "cycles.{what} of {cycles} is more than a 32-bit count"
+                ))
+            })
+        };
+        Ok(Prices {
+            per_pixel: 0,
+            per_line: 0,
+            per_ray: price(c.per_ray, "per_ray")?,
+            per_step: price(c.per_step, "per_step")?,
+            per_color: price(c.per_color, "per_color")?,
+            per_hit: 0,
+            per_hit_level: 0,
+        })
+    }
+
+    /// [`Machine::compute_prices`] with the local-memory reads that the
+    /// simulator charges a worker beside them (`cycles.per_local_fetch` a
+    /// voxel: two a step, at most four a color fetch): the prices of
+    /// frames the simulator replays, so that a governed frame's cost is at
+    /// least its workers' computing time.
+    pub fn replay_prices(&self) -> Result<Prices> {
+        let mut prices = self.compute_prices()?;
+        let fetch = u32::try_from(self.cycles.per_local_fetch).unwrap_or(u32::MAX);
+        prices.per_step = prices.per_step.saturating_add(fetch.saturating_mul(2));
+        prices.per_color = prices.per_color.saturating_add(fetch.saturating_mul(4));
+        Ok(prices)
+    }
+
+    /// Cycles of `seconds` on all the workers together.
+    pub fn worker_cycles(&self, seconds: f64) -> f64 {
+        self.clock_mhz * 1e6 * self.workers() as f64 * seconds
     }
 }
 

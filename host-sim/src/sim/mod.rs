@@ -19,11 +19,11 @@ pub mod trace;
 
 pub use engine::{simulate, FrameResult, MissReason, SimResult};
 pub use machine::Machine;
-pub use trace::{record_frame, FrameTrace, TileKey};
+pub use trace::{record_frame, record_governed_frame, FrameTrace, TileKey};
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::scene::KernelScene;
-use terracast::{Camera, RenderOptions};
+use terracast::{Camera, FrameCost, Governor, RenderOptions, View, MAX_COLOR_FETCHES_A_RAY};
 
 /// A straight flight: `frames` views from `start`, the eye advancing
 /// `speed` voxels a frame along the heading.
@@ -58,6 +58,71 @@ pub fn record_flight(
             trace
         })
         .collect()
+}
+
+/// The governor of a flight on `machine` whose frames' work may take
+/// `share` of the frame deadline on all its workers (the rest is left for
+/// copying tiles and waiting for memory and the disk), at the prices of
+/// the simulator's replay ([`Machine::replay_prices`]). Refused when that
+/// budget cannot set up every ray of a `size` frame.
+pub fn flight_governor(machine: &Machine, share: f64, size: (u32, u32)) -> Result<Governor> {
+    let seconds = machine.frame.deadline_ms * 1e-3 * share;
+    let budget = machine.worker_cycles(seconds).floor().max(0.0) as u64;
+    let governor = Governor::new(budget, machine.replay_prices()?);
+    // The least a frame costs depends on its lines only through their
+    // price (none): any camera gives it.
+    let view = View::new(&Camera::default(), size.0, size.1)
+        .map_err(|e| Error::new(format!("bad image size: {e}")))?;
+    let least = least_frame_cost(&governor, &view, &RenderOptions::default());
+    if budget < least {
+        let pixels = f64::from(size.0) * f64::from(size.1);
+        return Err(Error::new(format!(
+            "a governed frame of {}x{} needs at least {:.0} cycles a pixel and {share} of the {} ms deadline on {} workers at {} MHz gives {:.0}: use a smaller --size, a later --deadline-ms or more --processors",
+            size.0,
+            size.1,
+            least as f64 / pixels,
+            machine.frame.deadline_ms,
+            machine.workers(),
+            machine.clock_mhz,
+            budget as f64 / pixels,
+        )));
+    }
+    Ok(governor)
+}
+
+/// The least a governed frame of `view` costs at `governor`'s prices and
+/// still shows every pixel's own ray: every ray set up and shaded
+/// ([`MAX_COLOR_FETCHES_A_RAY`] color fetches), and half a step each.
+pub fn least_frame_cost(governor: &Governor, view: &View, options: &RenderOptions) -> u64 {
+    let prices = governor.prices();
+    let rays = u64::from(view.width())
+        * u64::from(view.height())
+        * u64::from(options.vertical_samples.count());
+    governor.least_cost(view, options)
+        + rays * u64::from(MAX_COLOR_FETCHES_A_RAY) * u64::from(prices.per_color)
+        + rays * u64::from(prices.per_step) / 2
+}
+
+/// Records every view of a flight, each rendered by `governor` within its
+/// budget ([`record_governed_frame`]); with each frame's cost.
+pub fn record_governed_flight(
+    scene: &KernelScene,
+    cameras: &[Camera],
+    size: (u32, u32),
+    options: &RenderOptions,
+    machine: &Machine,
+    governor: &mut Governor,
+    mut progress: impl FnMut(usize),
+) -> Result<(Vec<FrameTrace>, Vec<FrameCost>)> {
+    let mut traces = Vec::with_capacity(cameras.len());
+    let mut costs = Vec::with_capacity(cameras.len());
+    for (i, camera) in cameras.iter().enumerate() {
+        let (trace, cost) = record_governed_frame(scene, camera, size, options, machine, governor)?;
+        traces.push(trace);
+        costs.push(cost);
+        progress(i + 1);
+    }
+    Ok((traces, costs))
 }
 
 /// Cohen-Or's Table 1 for our kernel: frames a second by processors and
@@ -188,5 +253,109 @@ impl Table {
             out += &format!(" {ratio:.1}× | {theirs} |\n");
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::trace::Event;
+    use super::*;
+
+    /// A governed flight whose view swings from grazing to straight down
+    /// meets its deadline every frame, and every frame that has something
+    /// left to buy takes about the same time, where the same flight
+    /// rendered without the governor takes times five times apart; its
+    /// recording holds exactly the work the governor counted, at no more
+    /// than the frame's budget.
+    #[test]
+    fn a_governed_flight_meets_the_deadline_at_every_pitch() {
+        let scene = crate::scene::procedural(256, 3).to_kernel().unwrap();
+        let size = (96, 72);
+        let options = RenderOptions::default();
+        // A first frame that loads the tiles from disk, then the swing.
+        let cameras: Vec<Camera> = [2.0, 2.0, 15.0, 30.0, 60.0, 90.0, 30.0, 2.0]
+            .iter()
+            .map(|&pitch| Camera {
+                pitch_deg: pitch,
+                ..Camera::looking([40.0, 60.0, 120.0], 35.0, 0.0)
+            })
+            .collect();
+        let mut machine = Machine {
+            processors: 8,
+            ..Machine::default()
+        };
+        let ungoverned = record_flight(&scene, &cameras, size, &options, &machine, |_| {}).unwrap();
+        let times = |result: &SimResult| -> Vec<f64> {
+            result.frames[1..].iter().map(|f| f.time as f64).collect()
+        };
+        let spread = |times: &[f64]| {
+            let (low, high) = times
+                .iter()
+                .fold((f64::MAX, 0f64), |(l, h), &t| (l.min(t), h.max(t)));
+            high / low
+        };
+        let free = times(&simulate(&machine, &ungoverned));
+        // A deadline half as long again as the slowest ungoverned frame
+        // (ps to ms): the governor spends 0.8 of it, leaving every frame a
+        // budget above its least (see `flight_governor`).
+        let slowest = free.iter().copied().fold(0.0, f64::max);
+        machine.frame.deadline_ms = 1.5 * slowest / 1e9;
+
+        let mut governor = flight_governor(&machine, 0.8, size).unwrap();
+        let (traces, costs) = record_governed_flight(
+            &scene,
+            &cameras,
+            size,
+            &options,
+            &machine,
+            &mut governor,
+            |_| {},
+        )
+        .unwrap();
+        let result = simulate(&machine, &traces);
+        let governed = times(&result);
+        let mut filled = Vec::new();
+        for (i, (frame, cost)) in result.frames.iter().zip(&costs).enumerate().skip(1) {
+            assert_eq!(frame.miss, None, "frame {i}: {frame:?}");
+            let spent = cost.cost as f64 / cost.budget as f64;
+            let lines = View::new(&cameras[i], size.0, size.1).unwrap().lines();
+            // A frame spends its budget unless both refinement rounds
+            // refined every line (a view of mostly sky).
+            assert!(
+                spent <= 1.0 && (spent >= 0.9 || cost.refined_lines == 2 * lines),
+                "frame {i} spent {spent}: {cost:?}"
+            );
+            if spent >= 0.9 {
+                filled.push(governed[i - 1]);
+            }
+        }
+        assert!(
+            filled.len() >= 4,
+            "{} frames filled their budget",
+            filled.len()
+        );
+        assert!(
+            spread(&filled) < 1.1 && spread(&governed) * 3.0 < spread(&free),
+            "frame time max/min: governed {:.2} ({:.2} over the frames that filled their budget), ungoverned {:.2}",
+            spread(&governed),
+            spread(&filled),
+            spread(&free)
+        );
+        // The recording is the governor's work, priced at most its cost.
+        for ((trace, cost), camera) in traces.iter().zip(&costs).zip(&cameras) {
+            let events = trace.lines.iter().flatten();
+            let sum = |f: fn(&Event) -> u32| events.clone().map(|e| u64::from(f(e))).sum::<u64>();
+            assert_eq!(
+                (sum(|e| e.rays), sum(|e| e.steps), sum(|e| e.colors)),
+                (cost.work.rays, cost.work.steps, cost.work.colors)
+            );
+            let view = View::new(camera, size.0, size.1).unwrap();
+            assert_eq!(
+                trace.lines.len() as u64,
+                u64::from(view.lines()) + u64::from(cost.refined_lines)
+            );
+            let compute: u64 = events.map(|e| engine::work_cycles(&machine, e)).sum();
+            assert!(compute <= cost.cost, "{compute} cycles for {}", cost.cost);
+        }
     }
 }

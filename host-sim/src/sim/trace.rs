@@ -11,7 +11,8 @@ use super::machine::Machine;
 use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use terracast::{
-    level_side, render_line, Camera, Probe, Pyramid, RenderOptions, Sample, Sink, View,
+    level_side, render_line, Camera, FrameCost, Governor, Probe, Pyramid, RenderOptions, Sample,
+    Sink, View,
 };
 
 /// A terrain tile: pyramid level and tile coordinates on that level (the
@@ -187,6 +188,67 @@ pub fn record_frame(
     options: &RenderOptions,
     machine: &Machine,
 ) -> Result<FrameTrace> {
+    record(
+        scene,
+        camera,
+        size,
+        options,
+        machine,
+        |pyramid, view, widths| {
+            (0..view.lines())
+                .map(|line| {
+                    let mut recorder = Recorder::new(widths, machine.tiles.side);
+                    render_line(pyramid, view, options, line, &mut Discard, &mut recorder);
+                    recorder.finish()
+                })
+                .collect()
+        },
+    )
+}
+
+/// Records a view that `governor` renders within its budget (see
+/// [`Governor::render`]): each line of its base pass, then each line its
+/// refinement renders again, one task of the pool each, in that order;
+/// with the frame's cost at the governor's prices.
+pub fn record_governed_frame(
+    scene: &KernelScene,
+    camera: &Camera,
+    size: (u32, u32),
+    options: &RenderOptions,
+    machine: &Machine,
+    governor: &mut Governor,
+) -> Result<(FrameTrace, FrameCost)> {
+    let mut cost = None;
+    let trace = record(
+        scene,
+        camera,
+        size,
+        options,
+        machine,
+        |pyramid, view, widths| {
+            let mut lines = LineRecorder {
+                recorder: Recorder::new(widths, machine.tiles.side),
+                lines: Vec::with_capacity(view.lines() as usize),
+                started: false,
+            };
+            cost = Some(governor.render(pyramid, view, options, &mut Discard, &mut lines));
+            lines.finish()
+        },
+    )?;
+    let cost = cost.ok_or_else(|| Error::new("the governed frame was not rendered"))?;
+    Ok((trace, cost))
+}
+
+/// A frame's recording: the lines `render_lines` records on the scene's
+/// pyramid (given the width of each level's grid), and the footprint.
+fn record(
+    scene: &KernelScene,
+    camera: &Camera,
+    size: (u32, u32),
+    options: &RenderOptions,
+    machine: &Machine,
+    render_lines: impl FnOnce(&Pyramid<'_>, &View, &[u32]) -> Vec<Vec<Event>>,
+) -> Result<FrameTrace> {
     let pyramid: Pyramid<'_> = scene.pyramid_for(options)?;
     let view =
         View::new(camera, size.0, size.1).map_err(|e| Error::new(format!("bad view: {e}")))?;
@@ -194,12 +256,7 @@ pub fn record_frame(
     let widths: Vec<u32> = (0..pyramid.levels())
         .map(|l| level_side(base.width(), l as u32))
         .collect();
-    let mut lines = Vec::with_capacity(view.lines() as usize);
-    for line in 0..view.lines() {
-        let mut recorder = Recorder::new(&widths, machine.tiles.side);
-        render_line(&pyramid, &view, options, line, &mut Discard, &mut recorder);
-        lines.push(recorder.finish());
-    }
+    let lines = render_lines(&pyramid, &view, &widths);
     let (footprint, tiles_tested) = footprint_tiles(
         camera,
         size,
@@ -212,6 +269,47 @@ pub fn record_frame(
         footprint,
         tiles_tested,
     })
+}
+
+/// A [`Recorder`] for a whole frame: each line the kernel starts
+/// ([`Probe::line`]) ends the one before.
+struct LineRecorder<'a> {
+    recorder: Recorder<'a>,
+    lines: Vec<Vec<Event>>,
+    started: bool,
+}
+
+impl LineRecorder<'_> {
+    fn finish(mut self) -> Vec<Vec<Event>> {
+        if self.started {
+            self.lines.push(self.recorder.finish());
+        }
+        self.lines
+    }
+}
+
+impl Probe for LineRecorder<'_> {
+    fn visit(&mut self, level: u8, voxel: usize) {
+        self.recorder.visit(level, voxel);
+    }
+    fn bound(&mut self, level: u8, cell: usize) {
+        self.recorder.bound(level, cell);
+    }
+    fn color(&mut self, level: u8, voxel: usize) {
+        self.recorder.color(level, voxel);
+    }
+    fn color_square(&mut self, level: u8, corner: usize) {
+        self.recorder.color_square(level, corner);
+    }
+    fn ray(&mut self) {
+        self.recorder.ray();
+    }
+    fn line(&mut self, _index: u32) {
+        if self.started {
+            self.lines.push(self.recorder.finish());
+        }
+        self.started = true;
+    }
 }
 
 #[cfg(test)]
