@@ -66,7 +66,9 @@ impl PixelRays {
 /// and this machine's caches and branch predictors do not price the same
 /// things alike.
 pub fn fitted_prices(frames: &[(FrameCost, f64)], image_pixels: u64) -> Result<FittedPrices> {
-    let rows: Vec<([f64; 9], f64)> = frames
+    // The prices fitted: as many frames at least.
+    const FITTED: usize = 9;
+    let rows: Vec<([f64; FITTED], f64)> = frames
         .iter()
         .map(|(cost, ns)| {
             let (base, refined) = (&cost.base_work, cost.refined_work());
@@ -94,7 +96,7 @@ pub fn fitted_prices(frames: &[(FrameCost, f64)], image_pixels: u64) -> Result<F
         ))
     };
     // (A price the frames cannot tell apart from the others is held at 0.)
-    if rows.len() < rows.first().map_or(1, |(x, _)| x.len()) {
+    if rows.len() < FITTED {
         return Err(apart());
     }
     let fit = crate::fit::non_negative_least_squares(&rows).ok_or_else(apart)?;

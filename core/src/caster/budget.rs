@@ -62,7 +62,7 @@
 //! ```
 
 use super::line_caster::{self, LineCaster};
-use super::ray_caster::{limited_fetches, Allowances, RayCaster, REFINED_MOST_LOG2};
+use super::ray_caster::{Allowances, RayCaster, REFINED_MOST_LOG2};
 use super::{RenderOptions, Resolution};
 use crate::probe::{CountingProbe, Probe, MAX_COLOR_FETCHES_A_RAY};
 use crate::sink::Sink;
@@ -644,9 +644,6 @@ struct BaseAllowances<'a> {
 
 impl Allowances for BaseAllowances<'_> {
     type Fetches = u32;
-    fn fetches(allowance: u32) -> u32 {
-        limited_fetches(allowance)
-    }
     fn next(&mut self) -> u32 {
         let meter = self.meter;
         let prices = meter.prices.get();
@@ -693,9 +690,6 @@ impl RefineAllowances<'_> {
 
 impl Allowances for RefineAllowances<'_> {
     type Fetches = u32;
-    fn fetches(allowance: u32) -> u32 {
-        limited_fetches(allowance)
-    }
     fn next(&mut self) -> u32 {
         let meter = self.meter;
         let prices = meter.prices.get();
@@ -766,9 +760,6 @@ mod tests {
 
     impl Allowances for Fixed {
         type Fetches = u32;
-        fn fetches(allowance: u32) -> u32 {
-            limited_fetches(allowance)
-        }
         fn next(&mut self) -> u32 {
             self.0
         }

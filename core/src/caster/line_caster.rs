@@ -40,7 +40,7 @@
 
 use super::first_hit::first_hit;
 use super::footprint_color::{color_level, levels_color, narrower_side};
-use super::ray_caster::{Allowances, Fetches, Unlimited};
+use super::ray_caster::{Allowances, Unlimited};
 use super::walk::{along_weight, lerp, line_color};
 use super::{crossing_fraction, sky, Coherence, Frame, RenderOptions, Shading, VerticalSamples};
 use crate::color::Rgb;
@@ -345,7 +345,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                     sink.put(pixel.x, pixel.y, previous);
                     continue;
                 }
-                let mut fetches = A::fetches(allowance);
+                let mut fetches = A::Fetches::for_allowance(allowance);
                 // The direction's words: exactly `Line::pixel_direction`'s
                 // components shifted, so the slope, the run and the drift
                 // are `View::slope`'s and `Plane::drift`'s.
@@ -400,9 +400,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                             self.clear_until(&walk, &d, allowance, probe)
                         })
                         .and_then(|from| self.start(&walk, from, z0, dz, probe));
-                    if A::LIMITED {
-                        fetches.take();
-                    }
+                    fetches.take();
                 }
                 let hit = at.as_mut().and_then(|at| {
                     let z = self.climb(&walk, at, (z0, dz), &mut fetches, probe)?;
@@ -889,6 +887,67 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             [minor, major]
         };
         levels_color(self.surface, level, t, point, probe)
+    }
+}
+
+/// A count of height fetches a ray may still make (the line caster's
+/// climb counts them in runs of steps, so that its loop is the plain
+/// render's).
+pub(crate) trait Fetches {
+    /// Whether there is a limit: `false` compiles the counting out.
+    const LIMITED: bool;
+    /// The fetches of a ray given `allowance` (see [`Allowances`]): at
+    /// most `2n + 2` for `n` (with at most `2n` bound tests of its first
+    /// hit, `4n + 2` steps in all).
+    fn for_allowance(allowance: u32) -> Self;
+    /// Where a run of steps of `stride` samples from sample `k` must stop
+    /// before passing `end` to stay within the count.
+    fn run_end(&self, k: i32, stride: i32, end: i32) -> i32;
+    /// Counts the steps of a run from sample `from` to `to` on `level`.
+    fn ran(&mut self, from: i32, to: i32, level: u8);
+    /// Takes one: `false` when none is left.
+    fn take(&mut self) -> bool;
+}
+
+/// Any number of fetches.
+impl Fetches for Unlimited {
+    const LIMITED: bool = false;
+    #[inline(always)]
+    fn for_allowance(_allowance: u32) -> Self {
+        Unlimited
+    }
+    #[inline(always)]
+    fn run_end(&self, _k: i32, _stride: i32, end: i32) -> i32 {
+        end
+    }
+    #[inline(always)]
+    fn ran(&mut self, _from: i32, _to: i32, _level: u8) {}
+    #[inline(always)]
+    fn take(&mut self) -> bool {
+        true
+    }
+}
+
+impl Fetches for u32 {
+    const LIMITED: bool = true;
+    #[inline(always)]
+    fn for_allowance(allowance: u32) -> Self {
+        allowance.saturating_mul(2).saturating_add(2)
+    }
+    #[inline(always)]
+    fn run_end(&self, k: i32, stride: i32, end: i32) -> i32 {
+        let steps = i32::try_from(*self).unwrap_or(i32::MAX);
+        end.min(k.saturating_add(stride.saturating_mul(steps)))
+    }
+    #[inline(always)]
+    fn ran(&mut self, from: i32, to: i32, level: u8) {
+        *self = self.saturating_sub(((to - from) >> level) as u32);
+    }
+    #[inline(always)]
+    fn take(&mut self) -> bool {
+        let left = *self > 0;
+        *self = self.saturating_sub(1);
+        left
     }
 }
 

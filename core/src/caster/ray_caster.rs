@@ -11,6 +11,7 @@
 
 use super::first_hit::first_hit;
 use super::footprint_color::footprint_color;
+use super::line_caster::Fetches;
 use super::walk::{lerp, walk, Recent, Stage, Walk};
 use super::{crossing_fraction, sky, Frame, RenderOptions, Shading};
 use crate::probe::Probe;
@@ -27,14 +28,12 @@ use crate::view::View;
 /// short past that), 0 for none at all (the pixel repeats the line's
 /// previous one).
 pub(crate) trait Allowances {
+    /// What the line caster counts a ray's height fetches with
+    /// ([`Fetches::for_allowance`]).
+    type Fetches: Fetches;
     /// Whether any ray may be limited: `false` (the plain render) compiles
     /// the line caster's step counting out.
-    const LIMITED: bool = true;
-    /// What the line caster counts a ray's height fetches with: at most
-    /// `2n + 2` for an allowance `n` (with at most `2n` bound tests of its
-    /// first hit, `4n + 2` steps in all).
-    type Fetches: Fetches;
-    fn fetches(allowance: u32) -> Self::Fetches;
+    const LIMITED: bool = <Self::Fetches as Fetches>::LIMITED;
     fn next(&mut self) -> u32;
     /// Whether the line's next pixel is rendered: `false` ends the line,
     /// its remaining pixels left as the sink has them (a frame's
@@ -49,71 +48,10 @@ pub(crate) trait Allowances {
 pub(crate) struct Unlimited;
 
 impl Allowances for Unlimited {
-    const LIMITED: bool = false;
     type Fetches = Unlimited;
-    #[inline(always)]
-    fn fetches(_allowance: u32) -> Unlimited {
-        Unlimited
-    }
     #[inline(always)]
     fn next(&mut self) -> u32 {
         u32::MAX
-    }
-}
-
-/// A count of height fetches a ray may still make (the line caster's
-/// climb counts them in runs of steps, so that its loop is the plain
-/// render's).
-pub(crate) trait Fetches {
-    /// Whether there is a limit: `false` compiles the counting out.
-    const LIMITED: bool;
-    /// Where a run of steps of `stride` samples from sample `k` must stop
-    /// before passing `end` to stay within the count.
-    fn run_end(&self, k: i32, stride: i32, end: i32) -> i32;
-    /// Counts the steps of a run from sample `from` to `to` on `level`.
-    fn ran(&mut self, from: i32, to: i32, level: u8);
-    /// Takes one: `false` when none is left.
-    fn take(&mut self) -> bool;
-}
-
-/// Any number of fetches.
-impl Fetches for Unlimited {
-    const LIMITED: bool = false;
-    #[inline(always)]
-    fn run_end(&self, _k: i32, _stride: i32, end: i32) -> i32 {
-        end
-    }
-    #[inline(always)]
-    fn ran(&mut self, _from: i32, _to: i32, _level: u8) {}
-    #[inline(always)]
-    fn take(&mut self) -> bool {
-        true
-    }
-}
-
-/// The fetches of a limited ray given `allowance` (see
-/// [`Allowances::fetches`]).
-#[inline(always)]
-pub(crate) fn limited_fetches(allowance: u32) -> u32 {
-    allowance.saturating_mul(2).saturating_add(2)
-}
-
-impl Fetches for u32 {
-    const LIMITED: bool = true;
-    #[inline(always)]
-    fn run_end(&self, k: i32, stride: i32, end: i32) -> i32 {
-        let steps = i32::try_from(*self).unwrap_or(i32::MAX);
-        end.min(k.saturating_add(stride.saturating_mul(steps)))
-    }
-    #[inline(always)]
-    fn ran(&mut self, from: i32, to: i32, level: u8) {
-        *self = self.saturating_sub(((to - from) >> level) as u32);
-    }
-    #[inline(always)]
-    fn take(&mut self) -> bool {
-        let left = *self > 0;
-        *self = self.saturating_sub(1);
-        left
     }
 }
 

@@ -90,11 +90,12 @@ pub fn flight_governor(machine: &Machine, share: f64, size: (u32, u32)) -> Resul
     Ok(governor)
 }
 
-/// The least a governed frame of `view` costs at `governor`'s prices and
-/// still shows every pixel's own ray: every ray set up and shaded
-/// ([`MAX_COLOR_FETCHES_A_RAY`] color fetches), and half a step each.
+/// The least a governed frame of `view` costs at `governor`'s base pass
+/// prices and still shows every pixel's own ray: every ray set up and
+/// shaded ([`MAX_COLOR_FETCHES_A_RAY`] color fetches), and half a step
+/// each.
 pub fn least_frame_cost(governor: &Governor, view: &View, options: &RenderOptions) -> u64 {
-    let prices = governor.prices();
+    let prices = governor.base_prices();
     let rays = u64::from(view.width())
         * u64::from(view.height())
         * u64::from(options.vertical_samples.count());

@@ -11,8 +11,8 @@ use super::machine::Machine;
 use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use terracast::{
-    level_side, render_line, Camera, FrameCost, Governor, Probe, Pyramid, RenderOptions, Sample,
-    Sink, View,
+    level_side, render, Camera, FrameCost, Governor, Probe, Pyramid, RenderOptions, Sample, Sink,
+    View,
 };
 
 /// A terrain tile: pyramid level and tile coordinates on that level (the
@@ -188,22 +188,10 @@ pub fn record_frame(
     options: &RenderOptions,
     machine: &Machine,
 ) -> Result<FrameTrace> {
-    record(
-        scene,
-        camera,
-        size,
-        options,
-        machine,
-        |pyramid, view, widths| {
-            (0..view.lines())
-                .map(|line| {
-                    let mut recorder = Recorder::new(widths, machine.tiles.side);
-                    render_line(pyramid, view, options, line, &mut Discard, &mut recorder);
-                    recorder.finish()
-                })
-                .collect()
-        },
-    )
+    let render_frame = |pyramid: &Pyramid<'_>, view: &View, lines: &mut LineRecorder<'_>| {
+        render(pyramid, view, options, &mut Discard, lines)
+    };
+    Ok(record(scene, camera, size, options, machine, render_frame)?.0)
 }
 
 /// Records a view that `governor` renders within its budget (see
@@ -218,37 +206,23 @@ pub fn record_governed_frame(
     machine: &Machine,
     governor: &mut Governor,
 ) -> Result<(FrameTrace, FrameCost)> {
-    let mut cost = None;
-    let trace = record(
-        scene,
-        camera,
-        size,
-        options,
-        machine,
-        |pyramid, view, widths| {
-            let mut lines = LineRecorder {
-                recorder: Recorder::new(widths, machine.tiles.side),
-                lines: Vec::with_capacity(view.lines() as usize),
-                started: false,
-            };
-            cost = Some(governor.render(pyramid, view, options, &mut Discard, &mut lines));
-            lines.finish()
-        },
-    )?;
-    let cost = cost.ok_or_else(|| Error::new("the governed frame was not rendered"))?;
-    Ok((trace, cost))
+    let render_frame = |pyramid: &Pyramid<'_>, view: &View, lines: &mut LineRecorder<'_>| {
+        governor.render(pyramid, view, options, &mut Discard, lines)
+    };
+    record(scene, camera, size, options, machine, render_frame)
 }
 
-/// A frame's recording: the lines `render_lines` records on the scene's
-/// pyramid (given the width of each level's grid), and the footprint.
-fn record(
+/// A frame's recording, line by line as `render_frame` reports them
+/// ([`Probe::line`]) on the scene's pyramid, and the footprint; with what
+/// `render_frame` returns.
+fn record<T>(
     scene: &KernelScene,
     camera: &Camera,
     size: (u32, u32),
     options: &RenderOptions,
     machine: &Machine,
-    render_lines: impl FnOnce(&Pyramid<'_>, &View, &[u32]) -> Vec<Vec<Event>>,
-) -> Result<FrameTrace> {
+    render_frame: impl FnOnce(&Pyramid<'_>, &View, &mut LineRecorder<'_>) -> T,
+) -> Result<(FrameTrace, T)> {
     let pyramid: Pyramid<'_> = scene.pyramid_for(options)?;
     let view =
         View::new(camera, size.0, size.1).map_err(|e| Error::new(format!("bad view: {e}")))?;
@@ -256,7 +230,12 @@ fn record(
     let widths: Vec<u32> = (0..pyramid.levels())
         .map(|l| level_side(base.width(), l as u32))
         .collect();
-    let lines = render_lines(&pyramid, &view, &widths);
+    let mut lines = LineRecorder {
+        recorder: Recorder::new(&widths, machine.tiles.side),
+        lines: Vec::with_capacity(view.lines() as usize),
+        started: false,
+    };
+    let rendered = render_frame(&pyramid, &view, &mut lines);
     let (footprint, tiles_tested) = footprint_tiles(
         camera,
         size,
@@ -264,11 +243,12 @@ fn record(
         pyramid.levels(),
         machine.tiles.side,
     );
-    Ok(FrameTrace {
-        lines,
+    let trace = FrameTrace {
+        lines: lines.finish(),
         footprint,
         tiles_tested,
-    })
+    };
+    Ok((trace, rendered))
 }
 
 /// A [`Recorder`] for a whole frame: each line the kernel starts
