@@ -19,11 +19,12 @@ use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
 #[cfg(feature = "window")]
 use embedded_graphics::text::{Baseline, Text};
 use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::Instant;
 use terracast::config::{MAX_EYE_HEIGHT, PITCH_RANGE_DEG};
 use terracast::{
-    render_line, render_line_by_footprint, AtmosphereFrame, Camera, Coherence, CountingProbe, Grid,
-    LinePlane, LinePool, LineShade, PreparedAtmosphere, Probe, RenderOptions, Resolution, Sample,
-    Shading, Sink, Surface, View, Wait, U8F8,
+    render_line, render_line_by_footprint, AtmosphereFrame, Camera, Coherence, CountingProbe,
+    FrameCost, Governor, Grid, LinePlane, LinePool, LineShade, LineShare, PreparedAtmosphere,
+    Prices, Probe, RenderOptions, Resolution, Sample, Shading, Sink, Surface, View, Wait, U8F8,
 };
 
 /// How far above the ground the eye stays, voxels.
@@ -141,8 +142,8 @@ pub struct Settings {
     pub options: RenderOptions,
     /// One ray a pixel, or as many as its footprint needs.
     pub rays: PixelRays,
-    /// Whether the governor holds the frame time.
-    pub governor: bool,
+    /// What holds the frame time.
+    pub governor: WindowGovernor,
     /// The resolution the resolution key switches to next (so that a
     /// pixel-to-voxel ratio given at the start comes back).
     other_resolution: Resolution,
@@ -150,7 +151,7 @@ pub struct Settings {
 
 impl Settings {
     /// The settings a window starts with.
-    pub fn new(options: RenderOptions, rays: PixelRays, governor: bool) -> Self {
+    pub fn new(options: RenderOptions, rays: PixelRays, governor: WindowGovernor) -> Self {
         let other_resolution = match options.resolution {
             Resolution::Single => Resolution::Multi {
                 pixel_to_voxel: U8F8::ONE,
@@ -215,6 +216,45 @@ impl Settings {
             },
             coherence_name(options.coherence),
         )
+    }
+}
+
+/// What holds the window's frame time (`--governor`, the G key).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum WindowGovernor {
+    /// The size alone ([`ScaleGovernor`]): every frame as the settings
+    /// say, rendered smaller when it would be late. The default: on the
+    /// development machine it renders twice the pixels [`Self::Cost`] does
+    /// at the same display rate and misses no more display frames
+    /// (`docs/viewer.md`).
+    #[value(alias = "on")]
+    Size,
+    /// The kernel's [`Governor`], one a worker, within a budget that stands
+    /// for a share of the display frame ([`FrameBudget`]), with the size
+    /// from the base pass ([`ScaleGovernor`]): the frame's cost holds, its
+    /// quality adapts.
+    Cost,
+    /// Every frame at the window's size, as the settings say.
+    Off,
+}
+
+impl WindowGovernor {
+    /// The next one the G key switches to.
+    pub fn next(self) -> Self {
+        match self {
+            Self::Size => Self::Cost,
+            Self::Cost => Self::Off,
+            Self::Off => Self::Size,
+        }
+    }
+
+    /// Its `--governor` name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Cost => "cost",
+            Self::Size => "size",
+            Self::Off => "off",
+        }
     }
 }
 
@@ -424,6 +464,257 @@ pub fn render_pool<T: Surface + Sync + ?Sized>(
             .map(|w| w.join().unwrap_or(0))
             .sum::<u64>()
     })
+}
+
+/// Renders `view` into `pixels` (its size) within a budget: one worker a
+/// governor of `governors`, each rendering its [`LineShare`] of the lines
+/// (every `governors.len()`th) within its own budget, with `atmosphere`
+/// over it where given. Returns the frame's steps and what each share
+/// cost and took. The image depends on the governors (their budgets,
+/// prices and biases), never on how the workers' turns fall.
+pub fn render_governed<T: Surface + Sync + ?Sized>(
+    surface: &T,
+    view: &View,
+    (options, atmosphere): (&RenderOptions, Option<&PreparedAtmosphere>),
+    governors: &mut [Governor],
+    pixels: &Pixels,
+) -> (u64, Vec<GovernedShare>) {
+    let count = governors.len() as u32;
+    let worker = |(index, governor): (u32, &mut Governor)| {
+        let began = Instant::now();
+        let mut sink = PixelSink(
+            pixels,
+            atmosphere.map(|air| (air, air.frame(view))),
+            LineShade::default(),
+        );
+        let share = LineShare::new(view, index, count)?;
+        let mut probe = ShareProbe {
+            steps: 0,
+            lines: 0,
+            base_lines: share.line_count(view),
+            began,
+            base_seconds: None,
+        };
+        let cost = governor.render_share(surface, view, options, &share, &mut sink, &mut probe);
+        let seconds = began.elapsed().as_secs_f64();
+        Some((
+            probe.steps,
+            GovernedShare {
+                cost,
+                seconds,
+                base_seconds: probe.base_seconds.unwrap_or(seconds),
+            },
+        ))
+    };
+    let results: Vec<_> = std::thread::scope(|scope| {
+        let mut shares = (0..count).zip(governors.iter_mut());
+        let mine = shares.next();
+        let others: Vec<_> = shares
+            .map(|share| scope.spawn(move || worker(share)))
+            .collect();
+        let mut results = vec![mine.and_then(worker)];
+        results.extend(others.into_iter().map(|w| w.join().ok().flatten()));
+        results
+    });
+    let steps = results.iter().flatten().map(|(steps, _)| steps).sum();
+    (
+        steps,
+        results
+            .into_iter()
+            .flatten()
+            .map(|(_, share)| share)
+            .collect(),
+    )
+}
+
+/// What one share of a governed frame cost, and how long it and its base
+/// pass took.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GovernedShare {
+    /// The governor's account of the share.
+    pub cost: FrameCost,
+    /// Seconds the share took.
+    pub seconds: f64,
+    /// Of them, its base pass's.
+    pub base_seconds: f64,
+}
+
+/// Counts a governed share's steps and times its base pass: the base pass
+/// reports each of the share's lines once, then the refinement starts
+/// with the next line report.
+struct ShareProbe {
+    steps: u64,
+    lines: u32,
+    base_lines: u32,
+    began: Instant,
+    base_seconds: Option<f64>,
+}
+
+impl Probe for ShareProbe {
+    #[inline(always)]
+    fn visit(&mut self, _: u8, _: usize) {
+        self.steps += 1;
+    }
+    #[inline(always)]
+    fn bound(&mut self, _: u8, _: usize) {
+        self.steps += 1;
+    }
+    fn line(&mut self, _: u32) {
+        self.lines += 1;
+        if self.lines == self.base_lines + 1 {
+            self.base_seconds = Some(self.began.elapsed().as_secs_f64());
+        }
+    }
+}
+
+/// The window's frame budget: a display frame's time turned into the
+/// kernel's cost by the seconds a unit of cost has taken in the frames so
+/// far, shared among the workers' governors. Each governor spends its
+/// share, so a frame's time holds while its quality (level bias, refined
+/// lines) adapts to the view.
+///
+/// The prices are the board's ([`Governor::on_board`]), the base pass's
+/// scaled by what it takes on this host against the refinement (timed
+/// apart in every frame): the board's line caster costs a larger part of
+/// the per-ray path than the host's does.
+///
+/// On the host a coarser level saves little time (a frame's cost is
+/// mostly its rays' set-up and shading), and a finer one buys less than
+/// more pixels do, so the governors' bias stays within
+/// [`FrameBudget::BIAS_RANGE`] and the window's [`ScaleGovernor`] renders
+/// fewer pixels when the base pass takes more than
+/// [`FrameBudget::BASE_SHARE_MOST`] of the budget, and more when it takes
+/// under two thirds of that ([`FrameBudget::seconds_for_size`]): more
+/// pixels first, then more rays.
+#[derive(Debug, Clone)]
+pub struct FrameBudget {
+    period: f64,
+    governors: Vec<Governor>,
+    /// Seconds a unit of a share's cost took, smoothed over the frames.
+    seconds_per_unit: Option<f64>,
+    /// The base pass's prices against the board's.
+    base_scale: f64,
+}
+
+impl FrameBudget {
+    /// The share of a display frame a render is given: the rest is margin
+    /// for the host's other work (the window's own drawing, a page of
+    /// tiles, the display server on the same cores).
+    pub const SHARE_OF_PERIOD: f64 = 0.6;
+    /// The most of the budget a base pass may take before the size
+    /// shrinks; under two thirds of it the size grows.
+    pub const BASE_SHARE_MOST: f64 = 0.9;
+    /// A first frame's budget a pixel, before any frame has been timed.
+    pub const FIRST_PER_PIXEL: u64 = 1000;
+    /// The level biases the governors take: from a voxel a pixel wide to
+    /// one two pixels wide.
+    pub const BIAS_RANGE: (U8F8, U8F8) = (U8F8::ONE, U8F8::from_bits(2 << 8));
+
+    /// A budget for display frames of `period` seconds, rendered by
+    /// `workers` governors.
+    pub fn new(period: f64, workers: usize) -> Self {
+        Self {
+            period,
+            governors: vec![
+                Governor::on_board(0)
+                    .with_bias_range(Self::BIAS_RANGE.0, Self::BIAS_RANGE.1);
+                workers.max(1)
+            ],
+            seconds_per_unit: None,
+            base_scale: 1.0,
+        }
+    }
+
+    /// The governors, each with its share of the next frame's budget
+    /// (`pixels` a frame) and the prices learnt so far: to hand to
+    /// [`render_governed`].
+    pub fn governors(&mut self, pixels: u64) -> &mut [Governor] {
+        let workers = self.governors.len() as u64;
+        let share = match self.seconds_per_unit {
+            Some(rate) => (Self::SHARE_OF_PERIOD * self.period / rate).round() as u64,
+            None => Self::FIRST_PER_PIXEL * pixels / workers,
+        };
+        let base_prices = self.base_prices();
+        for governor in &mut self.governors {
+            *governor = governor.with_budget(share).with_base_prices(base_prices);
+        }
+        &mut self.governors
+    }
+
+    /// The base pass's prices: the board's, scaled.
+    pub fn base_prices(&self) -> Prices {
+        let scale = |price: u32| (f64::from(price) * self.base_scale).round() as u32;
+        let board = Prices::BOARD_LINES;
+        Prices {
+            per_pixel: scale(board.per_pixel),
+            per_line: scale(board.per_line),
+            per_ray: scale(board.per_ray),
+            per_step: scale(board.per_step),
+            per_color: scale(board.per_color),
+            per_hit: scale(board.per_hit),
+            per_hit_level: scale(board.per_hit_level),
+        }
+    }
+
+    /// Learns from a frame that took `seconds` in `shares`: the workers run
+    /// at once, so the dearest share sets the time; the base passes' and
+    /// the refinements' seconds a unit set the base pass's prices.
+    pub fn adapt(&mut self, seconds: f64, shares: &[GovernedShare]) {
+        let dearest = shares.iter().map(|s| s.cost.cost).max().unwrap_or(0);
+        if dearest == 0 || seconds <= 0.0 {
+            return;
+        }
+        // Halfway to the new frame's figures: one slow frame (a page of
+        // tiles, another process) does not halve the next one's budget,
+        // and the budget does not swing from frame to frame.
+        let halfway = |old: f64, new: f64| 0.5 * (old + new);
+        let rate = seconds / dearest as f64;
+        self.seconds_per_unit = Some(self.seconds_per_unit.map_or(rate, |r| halfway(r, rate)));
+        let sum = |f: &dyn Fn(&GovernedShare) -> f64| shares.iter().map(f).sum::<f64>();
+        let (base_seconds, base_cost) =
+            (sum(&|s| s.base_seconds), sum(&|s| s.cost.base_cost as f64));
+        let refined_seconds = sum(&|s| s.seconds - s.base_seconds);
+        let refined_cost = sum(&|s| (s.cost.cost - s.cost.base_cost) as f64);
+        // Only a refinement of some size tells its rate.
+        if refined_cost > 0.1 * sum(&|s| s.cost.cost as f64)
+            && refined_seconds > 0.0
+            && base_cost > 0.0
+        {
+            let ratio = (base_seconds / base_cost) / (refined_seconds / refined_cost);
+            self.base_scale =
+                halfway(self.base_scale, self.base_scale * ratio).clamp(1.0 / 16.0, 4.0);
+        }
+    }
+
+    /// What the window's [`ScaleGovernor`] is to hold after a frame that
+    /// took `seconds` in `shares`, as if it were a render time (which it
+    /// holds between a half and three quarters of a display frame): the
+    /// slowest base pass (every line once, one ray a pixel) against the
+    /// time the budget stands for, scaled so that the size shrinks when
+    /// the base pass takes over [`FrameBudget::BASE_SHARE_MOST`] of it and
+    /// grows when it takes under two thirds of that; at least a display
+    /// frame when a share went coarse or repeated rays (its base pass did
+    /// not fit), and the frame's own time when it was late.
+    pub fn seconds_for_size(&self, seconds: f64, shares: &[GovernedShare]) -> f64 {
+        let slowest = shares.iter().map(|s| s.base_seconds).fold(0.0, f64::max);
+        let base_share = slowest / (Self::SHARE_OF_PERIOD * self.period);
+        let mut held = self.period * 0.75 * base_share / Self::BASE_SHARE_MOST;
+        if shares
+            .iter()
+            .any(|s| s.cost.coarse_lines > 0 || s.cost.filled_rays > 0)
+        {
+            held = held.max(self.period);
+        }
+        if seconds > self.period {
+            held = held.max(seconds);
+        }
+        held
+    }
+
+    /// Each share's budget, the last frame's.
+    pub fn share_budget(&self) -> u64 {
+        self.governors.first().map_or(0, Governor::budget)
+    }
 }
 
 fn render_one<T: Surface + ?Sized, S: Sink, P: Probe>(
@@ -659,18 +950,59 @@ pub struct FrameFigures {
     pub pixels: u64,
     /// Steps taken.
     pub steps: u64,
+    /// How the governors spent the frame's budget, when they rendered it.
+    pub governed: Option<Governed>,
+}
+
+/// What a frame's governors did, over their shares.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Governed {
+    /// The frame's budget a pixel, in the board's instructions.
+    pub budget_per_pixel: f64,
+    /// What the frame cost a pixel, at the same prices.
+    pub cost_per_pixel: f64,
+    /// The level biases the shares were rendered at, least and most.
+    pub bias: (f32, f32),
+    /// Lines rendered again with more rays, over all shares.
+    pub refined_lines: u32,
+}
+
+impl Governed {
+    /// The figures of `shares` for a frame of `pixels`.
+    pub fn of(shares: &[GovernedShare], pixels: u64) -> Self {
+        let costs: Vec<FrameCost> = shares.iter().map(|s| s.cost).collect();
+        let pixels = pixels.max(1) as f64;
+        let biases = costs.iter().map(|c| c.level_bias.to_num::<f32>());
+        Self {
+            budget_per_pixel: costs.iter().map(|c| c.budget).sum::<u64>() as f64 / pixels,
+            cost_per_pixel: costs.iter().map(|c| c.cost).sum::<u64>() as f64 / pixels,
+            bias: (
+                biases.clone().fold(f32::INFINITY, f32::min),
+                biases.fold(0.0, f32::max),
+            ),
+            refined_lines: costs.iter().map(|c| c.refined_lines).sum(),
+        }
+    }
 }
 
 impl FrameFigures {
-    /// "12.3 ms  40.1 Mpx/s  2.31 steps/px".
+    /// "12.3 ms  40.1 Mpx/s  2.31 steps/px", and for a governed frame
+    /// "  budget 2400/px  bias 0.50  310 lines refined".
     pub fn describe(&self) -> String {
         let pixels = self.pixels.max(1) as f64;
-        format!(
+        let mut text = format!(
             "{:.1} ms  {:.1} Mpx/s  {:.2} steps/px",
             self.seconds * 1e3,
             pixels / self.seconds.max(1e-9) / 1e6,
             self.steps as f64 / pixels
-        )
+        );
+        if let Some(g) = &self.governed {
+            text += &format!(
+                "  budget {:.0}/px  bias {:.2}  {} lines refined",
+                g.budget_per_pixel, g.bias.1, g.refined_lines
+            );
+        }
+        text
     }
 }
 
@@ -696,7 +1028,7 @@ pub fn threads_or_cores(threads: Option<usize>) -> Result<usize> {
 mod tests {
     use super::*;
     use crate::fly::Path;
-    use terracast::{Framebuffer, NoProbe};
+    use terracast::{FrameWork, Framebuffer, NoProbe, Prices};
 
     #[test]
     fn the_pool_renders_into_window_pixels_what_render_does() {
@@ -723,6 +1055,114 @@ mod tests {
                 assert_eq!(pixels.rgb(), colors.concat(), "{rays:?}, {threads} threads");
             }
         }
+    }
+
+    #[test]
+    fn governed_shares_draw_the_governors_frame_each_within_its_budget() {
+        let scene = crate::scene::procedural(128, 3).to_kernel().unwrap();
+        let pyramid = scene.pyramid().unwrap();
+        let view = View::new(&Camera::looking([64.0, 5.0, 110.0], 90.0, 25.0), 80, 50).unwrap();
+        let options = RenderOptions::default();
+        // Without a limit every line ends refined twice, whoever renders
+        // it: the shares draw one governor's frame.
+        let mut colors = vec![[0u8; 3]; 80 * 50];
+        let mut frame = Framebuffer::new(&mut colors, 80, 50).unwrap();
+        Governor::new(u64::MAX / 8, Prices::BOARD).render(
+            &pyramid,
+            &view,
+            &options,
+            &mut frame,
+            &mut NoProbe,
+        );
+        let pixels = Pixels::new(80, 50);
+        let mut unlimited = [Governor::new(u64::MAX / 8, Prices::BOARD); 3];
+        render_governed(&pyramid, &view, (&options, None), &mut unlimited, &pixels);
+        assert_eq!(pixels.rgb(), colors.concat());
+        // Within a budget: each share keeps its own, and the same governors
+        // draw the same frame again.
+        let mut images = Vec::new();
+        for _ in 0..2 {
+            let mut budget = FrameBudget::new(1.0 / 60.0, 3);
+            let governors = budget.governors(80 * 50);
+            assert_eq!(
+                governors[0].budget(),
+                FrameBudget::FIRST_PER_PIXEL * 80 * 50 / 3
+            );
+            let pixels = Pixels::new(80, 50);
+            let (steps, costs) =
+                render_governed(&pyramid, &view, (&options, None), governors, &pixels);
+            assert!(steps > 0 && costs.len() == 3);
+            assert!(
+                costs
+                    .iter()
+                    .all(|s| s.cost.cost <= s.cost.budget && s.base_seconds <= s.seconds),
+                "{costs:?}"
+            );
+            images.push(pixels.rgb());
+        }
+        assert_eq!(images[0], images[1]);
+    }
+
+    #[test]
+    fn the_frame_budget_follows_the_time_a_unit_of_cost_takes() {
+        let mut budget = FrameBudget::new(0.016, 2);
+        let share = |cost: u64, base_cost: u64, seconds: f64, base_seconds: f64| GovernedShare {
+            cost: FrameCost {
+                cost,
+                work: FrameWork::default(),
+                budget: cost,
+                base_cost,
+                base_work: FrameWork::default(),
+                level_bias: U8F8::ONE,
+                coarse_lines: 0,
+                refined_lines: 0,
+                filled_rays: 0,
+            },
+            seconds,
+            base_seconds,
+        };
+        // A frame of 0.008 s whose dearer share cost 1 000 000: 8 ns a
+        // unit, and the next share is its share of the period at it.
+        // Its base pass took a unit a third of the refinement's time: the
+        // base prices go a half of the way there.
+        budget.adapt(
+            0.008,
+            &[
+                share(1_000_000, 500_000, 0.008, 0.002),
+                share(800_000, 400_000, 0.0064, 0.0016),
+            ],
+        );
+        budget.governors(1000);
+        let at = |seconds_a_unit: f64| {
+            (FrameBudget::SHARE_OF_PERIOD * 0.016 / seconds_a_unit).round() as u64
+        };
+        assert_eq!(budget.share_budget(), at(8e-9));
+        assert_eq!(budget.base_prices().per_line, 2001);
+        assert_eq!(
+            budget.governors(1000)[1].base_prices(),
+            budget.base_prices()
+        );
+        // A slower frame moves the rate halfway: 12 ns a unit. A frame
+        // with too little refinement to time leaves the prices alone.
+        budget.adapt(0.016, &[share(1_000_000, 950_000, 0.016, 0.015)]);
+        budget.governors(1000);
+        assert_eq!(budget.share_budget(), at(12e-9));
+        assert_eq!(budget.base_prices().per_line, 2001);
+        // The size follows the slowest base pass against the time the
+        // budget stands for: at the most it may take of it, three quarters
+        // of a display frame; a share that went coarse, or a late frame,
+        // shrinks it.
+        let most = FrameBudget::BASE_SHARE_MOST * FrameBudget::SHARE_OF_PERIOD * 0.016;
+        let shares = [share(10, 5, 0.012, 0.003), share(10, 5, 0.012, most)];
+        assert!((budget.seconds_for_size(0.012, &shares) - 0.012).abs() < 1e-12);
+        let mut coarse = share(10, 5, 0.012, 0.003);
+        coarse.cost.coarse_lines = 3;
+        assert_eq!(budget.seconds_for_size(0.012, &[coarse]), 0.016);
+        assert_eq!(budget.seconds_for_size(0.020, &shares), 0.020);
+        // A frame with no cost to learn from changes nothing.
+        budget.adapt(0.016, &[]);
+        budget.governors(1000);
+        assert_eq!(budget.share_budget(), at(12e-9));
     }
 
     #[test]
@@ -848,7 +1288,7 @@ mod tests {
             resolution: given,
             ..RenderOptions::default()
         };
-        let mut settings = Settings::new(options, PixelRays::ByFootprint, true);
+        let mut settings = Settings::new(options, PixelRays::ByFootprint, WindowGovernor::Cost);
         settings.toggle_shading();
         // Single resolution and back: the ratio given comes back.
         settings.toggle_resolution();

@@ -127,6 +127,16 @@ fn next_saved(lines: &Receiver<String>) -> String {
     }
 }
 
+/// The saved line of a view saved while the eye climbs.
+fn saved_climbing(display: &str, lines: &Receiver<String>) -> String {
+    x_tool(display, "xdotool", &["keydown", "r"]);
+    std::thread::sleep(Duration::from_millis(500));
+    x_tool(display, "xdotool", &["key", "p"]);
+    let saved = next_saved(lines);
+    x_tool(display, "xdotool", &["keyup", "r"]);
+    saved
+}
+
 /// The `render` arguments a saved line gives (the test's paths need no
 /// quoting).
 fn render_args(saved: &str) -> Vec<String> {
@@ -156,11 +166,7 @@ fn eye_of(args: &[String]) -> [f32; 3] {
 /// Renders what a saved line names and compares it with the saved PNG:
 /// the same, pixel for pixel. Returns the saved image.
 fn check_saved(saved: &str) -> image::RgbImage {
-    let saved_png = saved
-        .strip_prefix("saved ")
-        .and_then(|s| s.split(" (").next())
-        .unwrap();
-    let saved_image = image::open(saved_png).unwrap().to_rgb8();
+    let saved_image = saved_image(saved);
     let args = render_args(saved);
     run_ok("render", &args);
     let rendered_png = args.iter().find_map(|a| a.strip_prefix("--out=")).unwrap();
@@ -181,8 +187,22 @@ fn differing(a: &[u8], b: &[u8]) -> usize {
 /// [`check_saved`], and the window's pixels are the saved view's, pixel
 /// for pixel (enlarged where the governor rendered it smaller).
 fn check_view(display: &str, window: &str, saved: &str) {
+    check_shown(display, window, &check_saved(saved));
+}
+
+/// The saved view a saved line names.
+fn saved_image(saved: &str) -> image::RgbImage {
+    let saved_png = saved
+        .strip_prefix("saved ")
+        .and_then(|s| s.split(" (").next())
+        .unwrap();
+    image::open(saved_png).unwrap().to_rgb8()
+}
+
+/// The window's pixels are `saved_image`'s, pixel for pixel (enlarged
+/// where the governor rendered it smaller).
+fn check_shown(display: &str, window: &str, saved_image: &image::RgbImage) {
     let (w, h, window_rgb) = xwd_rgb(&x_tool(display, "xwd", &["-id", window, "-silent"]));
-    let saved_image = check_saved(saved);
     // The window shows the saved frame, enlarged where the governor
     // rendered it smaller than the window.
     let (rw, rh) = saved_image.dimensions();
@@ -383,10 +403,10 @@ fn a_late_frame_is_rendered_smaller_and_a_still_view_at_the_windows_size() {
     let (_server, display) = start_x_server();
     let prefix = temp_dir().join("late");
     // A millisecond a frame: no render of 200 x 120 pixels on one thread
-    // is that fast, so while the view moves the governor shrinks the
+    // is that fast, so while the view moves the size governor shrinks the
     // frame as far as it goes (a quarter of each side); once it is still,
     // the view is drawn once more at the window's size.
-    let args = "--procedural-size 256 --size 800x480 --fps 1000 --threads 1";
+    let args = "--procedural-size 256 --size 800x480 --fps 1000 --threads 1 --governor size";
     let mut args: Vec<String> = args.split(' ').map(str::to_string).collect();
     args.push(format!("--save-prefix={}", prefix.display()));
     let viewer = Viewer::start(&display, &args);
@@ -399,14 +419,32 @@ fn a_late_frame_is_rendered_smaller_and_a_still_view_at_the_windows_size() {
     assert!(still.contains("at the window's size"), "{still}");
     check_view(&display, window, &still);
     // Climbing: every frame is late, so every frame is small.
-    x_tool(&display, "xdotool", &["keydown", "r"]);
-    std::thread::sleep(Duration::from_millis(500));
-    x_tool(&display, "xdotool", &["key", "p"]);
-    let moving = next_saved(lines);
-    x_tool(&display, "xdotool", &["keyup", "r"]);
+    let moving = saved_climbing(&display, lines);
     assert!(
         moving.contains("the governor rendered it at 200x120"),
         "{moving}"
     );
     assert_eq!(check_saved(&moving).dimensions(), (200, 120));
+    drop(viewer);
+
+    // The cost governor: a base pass that cannot fit the budget shrinks
+    // the frame too; the saved frame is the governor's, which the window
+    // shows and the printed command (no budget) does not claim to draw.
+    let args = "--procedural-size 256 --size 800x480 --fps 1000 --threads 2 --governor cost";
+    let mut args: Vec<String> = args.split(' ').map(str::to_string).collect();
+    args.push(format!(
+        "--save-prefix={}",
+        temp_dir().join("cost").display()
+    ));
+    let viewer = Viewer::start(&display, &args);
+    let (lines, window) = (&viewer.lines, &viewer.window);
+    std::thread::sleep(Duration::from_secs(2));
+    x_tool(&display, "xdotool", &["key", "h"]);
+    let moving = saved_climbing(&display, lines);
+    assert!(
+        moving.contains("the governor rendered it at 200x120 within")
+            && moving.contains("the command renders the view without a budget"),
+        "{moving}"
+    );
+    check_shown(&display, window, &saved_image(&moving));
 }

@@ -42,7 +42,10 @@
 //! A frame never costs more than its budget or [`Governor::least_cost`],
 //! whichever is more (tested over 10 000 frames of a flight that keeps
 //! changing). Everything is integer arithmetic on counts: the same flight
-//! and budget give the same images and costs on every machine.
+//! and budget give the same images and costs on every machine. Several
+//! governors can render one frame between them on as many cores, each a
+//! [`LineShare`] of its lines within its own budget
+//! ([`Governor::render_share`]).
 //!
 //! ```
 //! use terracast::{render, Camera, CountingProbe, Framebuffer, Governor, Pyramid, RenderOptions, Terrain, View};
@@ -215,7 +218,8 @@ pub struct FrameCost {
     pub base_work: FrameWork,
     /// The level bias (pixel-to-voxel ratio) the frame was rendered at.
     pub level_bias: U8F8,
-    /// Lines finished at the coarsest bias ([`Governor::MAX_BIAS`])
+    /// Lines finished at the coarsest bias ([`Governor::MAX_BIAS`], or
+    /// [`Governor::with_bias_range`]'s)
     /// because the frame was heading past its budget.
     pub coarse_lines: u32,
     /// Lines rendered again with more rays (some of them in part) from
@@ -250,8 +254,12 @@ pub struct Governor {
     /// The base pass's prices, and the refinement's.
     base_prices: Prices,
     prices: Prices,
-    /// The level bias for the next frame, U8.8 bits.
+    /// The level bias for the next frame, and the finest and coarsest it
+    /// may take (a frame heading past its budget finishes at the
+    /// coarsest), U8.8 bits.
     bias: u16,
+    finest: u16,
+    coarsest: u16,
 }
 
 impl Governor {
@@ -268,6 +276,8 @@ impl Governor {
             base_prices: prices,
             prices,
             bias: 1 << 8,
+            finest: Self::MIN_BIAS.to_bits(),
+            coarsest: Self::MAX_BIAS.to_bits(),
         }
     }
 
@@ -311,6 +321,29 @@ impl Governor {
         U8F8::from_bits(self.bias)
     }
 
+    /// This governor with its level bias within `finest..=coarsest`
+    /// (itself within [`Governor::MIN_BIAS`] and [`Governor::MAX_BIAS`]):
+    /// for a caller with a better way to spend or save time than the
+    /// levels (a window can render more or fewer pixels), which wants them
+    /// kept near the pixel's footprint.
+    pub fn with_bias_range(self, finest: U8F8, coarsest: U8F8) -> Self {
+        let clamp = |bias: U8F8| bias.clamp(Self::MIN_BIAS, Self::MAX_BIAS).to_bits();
+        let (finest, coarsest) = (clamp(finest), clamp(coarsest));
+        let coarsest = coarsest.max(finest);
+        Self {
+            finest,
+            coarsest,
+            bias: self.bias.clamp(finest, coarsest),
+            ..self
+        }
+    }
+
+    /// This governor with a budget of `budget` from the next frame on (its
+    /// level bias kept): for a caller whose budget follows a clock.
+    pub const fn with_budget(self, budget: u64) -> Self {
+        Self { budget, ..self }
+    }
+
     /// The least a frame of `view` costs, whatever the budget: every pixel
     /// written, every line and every ray (`options.vertical_samples` a
     /// pixel) set up. A budget below it is overrun by up to the
@@ -318,10 +351,16 @@ impl Governor {
     /// ([`MAX_COLOR_FETCHES_A_RAY`]) and a few steps a ray renders every
     /// ray.
     pub fn least_cost(&self, view: &View, options: &RenderOptions) -> u64 {
+        self.least_share_cost(view, options, &LineShare::all(view))
+    }
+
+    /// The least `share` of a frame of `view` costs (see
+    /// [`Governor::least_cost`]).
+    pub fn least_share_cost(&self, view: &View, options: &RenderOptions, share: &LineShare) -> u64 {
         let prices = &self.base_prices;
-        let pixels = u64::from(view.width()) * u64::from(view.height());
+        let pixels = share.pixels;
         pixels * u64::from(prices.per_pixel)
-            + u64::from(view.lines()) * u64::from(prices.per_line)
+            + u64::from(share.line_count(view)) * u64::from(prices.per_line)
             + pixels * u64::from(options.vertical_samples.count()) * u64::from(prices.per_ray)
     }
 
@@ -336,6 +375,23 @@ impl Governor {
         sink: &mut S,
         probe: &mut P,
     ) -> FrameCost {
+        self.render_share(surface, view, options, &LineShare::all(view), sink, probe)
+    }
+
+    /// Renders `share` of `view`'s lines within the budget, as
+    /// [`Governor::render`] renders them all: several governors, each with
+    /// its share of a frame's budget, render a frame between them on as
+    /// many cores, each share within its own budget, the same images and
+    /// costs whatever order they run in.
+    pub fn render_share<T: Surface + ?Sized, S: Sink, P: Probe>(
+        &mut self,
+        surface: &T,
+        view: &View,
+        options: &RenderOptions,
+        share: &LineShare,
+        sink: &mut S,
+        probe: &mut P,
+    ) -> FrameCost {
         let bias = self.bias;
         let at = |bits: u16| RenderOptions {
             resolution: Resolution::Multi {
@@ -343,13 +399,13 @@ impl Governor {
             },
             ..*options
         };
-        let (fine, coarse) = (at(bias), at(Self::MAX_BIAS.to_bits()));
+        let (fine, coarse) = (at(bias), at(self.coarsest));
         let fine_caster = RayCaster::new(surface, view, &fine);
-        let pixels = u64::from(view.width()) * u64::from(view.height());
+        let pixels = share.pixels;
         // Every pixel is written and every line set up once.
         let meter = Meter::new(self.base_prices, surface.top());
         meter.add_pixels(pixels);
-        meter.add_lines(u64::from(view.lines()));
+        meter.add_lines(u64::from(share.line_count(view)));
         let budget = self.budget;
         let mut metered = Metered {
             inner: probe,
@@ -366,14 +422,14 @@ impl Governor {
                 LineCaster::new(surface, view, &fine),
                 LineCaster::new(surface, view, &coarse),
             );
-            base_pass(view, &mut base, |line, coarse, base| {
+            base_pass(view, share, &mut base, |line, coarse, base| {
                 metered.line(line);
                 let caster = if coarse { &coarse_lines } else { &fine_lines };
                 caster.line_within(line, sink, &mut metered, base);
             })
         } else {
             let coarse_caster = RayCaster::new(surface, view, &coarse);
-            base_pass(view, &mut base, |line, coarse, base| {
+            base_pass(view, share, &mut base, |line, coarse, base| {
                 metered.line(line);
                 let caster = if coarse { &coarse_caster } else { &fine_caster };
                 caster.line(line, sink, &mut metered, base);
@@ -392,7 +448,7 @@ impl Governor {
             'rounds: for round in 1..=REFINE_ROUNDS {
                 refine.most_rays = 1 << (round + 1).min(REFINED_MOST_LOG2);
                 let line_most = u64::from(self.prices.per_line) + refine.pixel_most();
-                for line in BitReversed::new(view.lines()) {
+                for line in BitReversed::new(share.line_count(view)).map(|j| share.line(j)) {
                     if budget.saturating_sub(meter.cost()) < line_most {
                         break 'rounds;
                     }
@@ -414,17 +470,75 @@ impl Governor {
             refined_lines,
             filled_rays: base.filled + refine.filled,
         };
-        self.bias = next_bias(bias, &cost);
+        self.bias = next_bias(bias, &cost).clamp(self.finest, self.coarsest);
         cost
     }
 }
 
-/// The base pass: every line of `view` by `cast_line(line, coarse,
+/// Some of a frame's lines, for one of several governors that render a
+/// frame between them (one a core): the lines whose index is `index`
+/// modulo `count`, and how many pixels they own. Neighbouring lines see
+/// nearly the same ground, so each share of an interleaved frame costs
+/// about the same.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LineShare {
+    index: u32,
+    count: u32,
+    pixels: u64,
+}
+
+impl LineShare {
+    /// Every line of `view`.
+    pub fn all(view: &View) -> Self {
+        Self {
+            index: 0,
+            count: 1,
+            pixels: u64::from(view.width()) * u64::from(view.height()),
+        }
+    }
+
+    /// Share `index` of `count` of `view`'s lines; `None` unless `index <
+    /// count`. Counts the pixels the share's lines own (a governor sets
+    /// their rays' set-up aside before it casts any): one pass of the
+    /// ownership test over the share's lines, a few instructions a pixel.
+    pub fn new(view: &View, index: u32, count: u32) -> Option<Self> {
+        if index >= count {
+            return None;
+        }
+        let pixels = (index..view.lines())
+            .step_by(count as usize)
+            .map(|line| view.line_pixels(line).count() as u64)
+            .sum();
+        Some(Self {
+            index,
+            count,
+            pixels,
+        })
+    }
+
+    /// The pixels this share's lines own.
+    pub fn pixels(&self) -> u64 {
+        self.pixels
+    }
+
+    /// How many of `view`'s lines this share holds.
+    pub fn line_count(&self, view: &View) -> u32 {
+        view.lines().saturating_sub(self.index).div_ceil(self.count)
+    }
+
+    /// The share's `j`th line's index in the frame.
+    fn line(&self, j: u32) -> u32 {
+        self.index + j * self.count
+    }
+}
+
+/// The base pass: every line of `share` of `view` by `cast_line(line, coarse,
 /// allowances)`, at the governor's bias until, once half the rays are
 /// cast, the cost so far projects past the budget; from there on at the
 /// coarsest (`coarse`). Returns the lines rendered coarse.
 fn base_pass(
     view: &View,
+    share: &LineShare,
     base: &mut BaseAllowances<'_>,
     mut cast_line: impl FnMut(u32, bool, &mut BaseAllowances<'_>),
 ) -> u32 {
@@ -432,7 +546,7 @@ fn base_pass(
     let (budget, rays_total) = (base.budget, base.rays_total);
     let fixed = meter.cost();
     let mut coarse_lines = 0;
-    for line in 0..view.lines() {
+    for line in (0..share.line_count(view)).map(|j| share.line(j)) {
         // Projected past the budget: the rest goes coarser.
         let rays = meter.rays.get();
         let heading_over = coarse_lines > 0
@@ -963,6 +1077,14 @@ mod tests {
         assert_eq!(first, [0, 4, 2, 6]);
     }
 
+    /// Calls `test` with a pyramid over [`hills`].
+    fn on_hills(test: impl FnOnce(&Pyramid<'_>)) {
+        let (heights, colors) = hills();
+        let terrain = Terrain::new(64, 64, &heights, &colors).unwrap();
+        let (h, c, b) = pyramid_storage(&terrain);
+        test(&Pyramid::new(terrain, &h, &c, &b).unwrap());
+    }
+
     /// A flat-ish scene and a view of it, seen from `pitch`.
     fn hills() -> (vec::Vec<u16>, vec::Vec<crate::color::Rgb>) {
         let side = 64u32;
@@ -975,84 +1097,229 @@ mod tests {
         (heights, colors)
     }
 
+    /// Each pixel's last color, and how many times it was written.
+    struct Recorded {
+        width: u32,
+        colors: vec::Vec<crate::color::Rgb>,
+        writes: vec::Vec<u32>,
+    }
+
+    impl Recorded {
+        fn new(view: &View) -> Self {
+            let pixels = (view.width() * view.height()) as usize;
+            Self {
+                width: view.width(),
+                colors: vec![[0; 3]; pixels],
+                writes: vec![0; pixels],
+            }
+        }
+    }
+
+    impl Sink for Recorded {
+        fn put(&mut self, x: u32, y: u32, sample: crate::Sample) {
+            let at = (y * self.width + x) as usize;
+            self.colors[at] = sample.color;
+            self.writes[at] += 1;
+        }
+    }
+
     #[test]
-    fn a_frame_spends_its_budget_and_never_more() {
-        let (heights, colors) = hills();
-        let terrain = Terrain::new(64, 64, &heights, &colors).unwrap();
-        let (h, c, b) = pyramid_storage(&terrain);
-        let pyramid = Pyramid::new(terrain, &h, &c, &b).unwrap();
-        let options = RenderOptions::default();
-        for pitch in [5.0, 30.0, 90.0] {
-            let view = View::new(&Camera::looking([3.0, 5.0, 80.0], 40.0, pitch), 32, 24).unwrap();
-            let mut probe = crate::CountingProbe::default();
-            let mut plain = Governor::new(u64::MAX / 4, Prices::BOARD);
-            let unlimited = plain.render(&pyramid, &view, &options, &mut Discard, &mut probe);
-            assert!(unlimited.filled_rays == 0 && unlimited.coarse_lines == 0);
-            // Without a limit, both rounds refine every line.
-            assert_eq!(unlimited.refined_lines, 2 * view.lines(), "pitch {pitch}");
-            let mut refined_twice = false;
-            for share in [1u64, 3, 5, 8, 13] {
-                // From the base pass's cost up: the refinement fills it.
-                let budget = plain.least_cost(&view, &options) + unlimited.base_cost * share / 2;
-                let mut governor = Governor::new(budget, Prices::BOARD);
-                let mut probe = crate::CountingProbe::default();
-                let cost = governor.render(&pyramid, &view, &options, &mut Discard, &mut probe);
-                assert!(cost.cost <= budget, "pitch {pitch}: {cost:?}");
-                assert!(
-                    cost.refined_lines > 0 || share == 1,
-                    "pitch {pitch}: {cost:?}"
+    fn a_bias_range_holds_the_levels_whatever_the_budget() {
+        on_hills(|pyramid| {
+            let options = RenderOptions::default();
+            let view = View::new(&Camera::looking([3.0, 5.0, 80.0], 40.0, 20.0), 32, 24).unwrap();
+            let budget = Governor::on_board(0).least_cost(&view, &options);
+            let two = U8F8::from_num(2);
+            let mut free = Governor::on_board(budget);
+            let mut held = Governor::on_board(budget).with_bias_range(U8F8::ONE, two);
+            for _ in 0..6 {
+                for governor in [&mut free, &mut held] {
+                    let cost = governor.render(
+                        pyramid,
+                        &view,
+                        &options,
+                        &mut Discard,
+                        &mut crate::NoProbe,
+                    );
+                    assert!(cost.cost <= budget.max(governor.least_cost(&view, &options)));
+                }
+                assert!(held.level_bias() <= two);
+            }
+            assert!(free.level_bias() > two, "{:?}", free.level_bias());
+            // A budget to spare: the bias goes no finer than the range.
+            let mut free = Governor::on_board(budget * 20);
+            let mut held = Governor::on_board(budget * 20).with_bias_range(U8F8::ONE, two);
+            for _ in 0..12 {
+                for governor in [&mut free, &mut held] {
+                    governor.render(pyramid, &view, &options, &mut Discard, &mut crate::NoProbe);
+                }
+                assert!(held.level_bias() >= U8F8::ONE);
+            }
+            assert!(free.level_bias() < U8F8::ONE, "{:?}", free.level_bias());
+            // Past the limits, the limits.
+            let finest = Governor::on_board(1).with_bias_range(U8F8::ZERO, U8F8::ZERO);
+            assert_eq!(finest.level_bias(), Governor::MIN_BIAS);
+        });
+    }
+
+    #[test]
+    fn shares_of_a_frame_each_keep_their_budget_and_together_draw_it() {
+        on_hills(|pyramid| {
+            let options = RenderOptions::default();
+            for pitch in [5.0, 30.0, 90.0] {
+                let view =
+                    View::new(&Camera::looking([3.0, 5.0, 80.0], 40.0, pitch), 33, 24).unwrap();
+                assert!(LineShare::new(&view, 3, 3).is_none());
+                let shares: vec::Vec<LineShare> = (0..3)
+                    .map(|i| LineShare::new(&view, i, 3).unwrap())
+                    .collect();
+                let all = LineShare::all(&view);
+                assert_eq!(
+                    shares.iter().map(LineShare::pixels).sum::<u64>(),
+                    all.pixels()
                 );
-                assert_eq!(cost.work.steps, probe.steps);
-                assert_eq!(cost.cost, Prices::BOARD.of(&cost.work));
-                // The meter counts what the probe does; a refined pixel
-                // is written and a refined line set up again.
-                let counted = FrameWork::counted(
-                    &probe,
-                    cost.work.pixels,
-                    u64::from(view.lines()) + u64::from(cost.refined_lines),
+                assert_eq!(
+                    shares.iter().map(|s| s.line_count(&view)).sum::<u32>(),
+                    view.lines()
                 );
-                assert_eq!(counted, cost.work, "pitch {pitch} share {share}");
-                let lines = u64::from(view.lines());
-                if cost.base_cost * 2 < budget {
-                    // Unless both rounds refined every line, the budget is
-                    // spent to within a line's and a pixel's most cost of
-                    // the round it stopped in.
-                    let refined = u64::from(cost.refined_lines);
-                    let pixel_most = RefineAllowances {
-                        meter: &Meter::new(Prices::BOARD, pyramid.top()),
-                        budget,
-                        filled: 0,
-                        most_rays: if refined >= lines { 8 } else { 4 },
-                    }
-                    .pixel_most();
-                    assert!(
-                        cost.cost + pixel_most + u64::from(Prices::BOARD.per_line) >= budget
-                            || refined == 2 * lines,
-                        "pitch {pitch} share {share}: {cost:?}"
+                // Without a limit, every line ends refined twice whoever
+                // renders it: the shares draw the whole frame's image.
+                let mut whole = Recorded::new(&view);
+                Governor::new(u64::MAX / 4, Prices::BOARD).render(
+                    pyramid,
+                    &view,
+                    &options,
+                    &mut whole,
+                    &mut crate::NoProbe,
+                );
+                let mut together = Recorded::new(&view);
+                for share in shares.iter().rev() {
+                    Governor::new(u64::MAX / 4, Prices::BOARD).render_share(
+                        pyramid,
+                        &view,
+                        &options,
+                        share,
+                        &mut together,
+                        &mut crate::NoProbe,
                     );
                 }
-                refined_twice |= u64::from(cost.refined_lines) > lines;
+                assert!(together.colors == whole.colors, "pitch {pitch}");
+                assert!(together.writes == whole.writes, "pitch {pitch}");
+                // Each share within its own budget, every pixel written, the
+                // same cost and image again on a second run.
+                let least: u64 = shares
+                    .iter()
+                    .map(|s| Governor::on_board(0).least_share_cost(&view, &options, s))
+                    .sum();
+                assert_eq!(least, Governor::on_board(0).least_cost(&view, &options));
+                let mut runs = vec::Vec::new();
+                for _ in 0..2 {
+                    let mut frame = Recorded::new(&view);
+                    let mut costs = vec::Vec::new();
+                    for share in &shares {
+                        let budget =
+                            2 * Governor::on_board(0).least_share_cost(&view, &options, share);
+                        let cost = Governor::on_board(budget).render_share(
+                            pyramid,
+                            &view,
+                            &options,
+                            share,
+                            &mut frame,
+                            &mut crate::NoProbe,
+                        );
+                        assert!(cost.cost <= budget, "pitch {pitch}: {cost:?}");
+                        assert_eq!(
+                            cost.work.lines,
+                            u64::from(share.line_count(&view) + cost.refined_lines)
+                        );
+                        costs.push(cost);
+                    }
+                    assert!(frame.writes.iter().all(|&n| n >= 1), "pitch {pitch}");
+                    runs.push((frame.colors, costs));
+                }
+                assert!(runs[0] == runs[1], "pitch {pitch}");
             }
-            assert!(
-                refined_twice,
-                "pitch {pitch}: no budget reached the second round"
-            );
-            // On the board's two prices: the base pass at its own, the
-            // refinement at the per-ray path's, within the budget.
-            let budget = 3 * Governor::on_board(0).least_cost(&view, &options);
-            let cost = Governor::on_board(budget).render(
-                &pyramid,
-                &view,
-                &options,
-                &mut Discard,
-                &mut crate::NoProbe,
-            );
-            assert!(cost.refined_lines > 0 && cost.cost <= budget, "{cost:?}");
-            assert_eq!(cost.base_cost, Prices::BOARD_LINES.of(&cost.base_work));
-            assert_eq!(
-                cost.cost,
-                cost.base_cost + Prices::BOARD.of(&cost.refined_work())
-            );
-        }
+        });
+    }
+
+    #[test]
+    fn a_frame_spends_its_budget_and_never_more() {
+        on_hills(|pyramid| {
+            let options = RenderOptions::default();
+            for pitch in [5.0, 30.0, 90.0] {
+                let view =
+                    View::new(&Camera::looking([3.0, 5.0, 80.0], 40.0, pitch), 32, 24).unwrap();
+                let mut probe = crate::CountingProbe::default();
+                let mut plain = Governor::new(u64::MAX / 4, Prices::BOARD);
+                let unlimited = plain.render(pyramid, &view, &options, &mut Discard, &mut probe);
+                assert!(unlimited.filled_rays == 0 && unlimited.coarse_lines == 0);
+                // Without a limit, both rounds refine every line.
+                assert_eq!(unlimited.refined_lines, 2 * view.lines(), "pitch {pitch}");
+                let mut refined_twice = false;
+                for share in [1u64, 3, 5, 8, 13] {
+                    // From the base pass's cost up: the refinement fills it.
+                    let budget =
+                        plain.least_cost(&view, &options) + unlimited.base_cost * share / 2;
+                    let mut governor = Governor::new(budget, Prices::BOARD);
+                    let mut probe = crate::CountingProbe::default();
+                    let cost = governor.render(pyramid, &view, &options, &mut Discard, &mut probe);
+                    assert!(cost.cost <= budget, "pitch {pitch}: {cost:?}");
+                    assert!(
+                        cost.refined_lines > 0 || share == 1,
+                        "pitch {pitch}: {cost:?}"
+                    );
+                    assert_eq!(cost.work.steps, probe.steps);
+                    assert_eq!(cost.cost, Prices::BOARD.of(&cost.work));
+                    // The meter counts what the probe does; a refined pixel
+                    // is written and a refined line set up again.
+                    let counted = FrameWork::counted(
+                        &probe,
+                        cost.work.pixels,
+                        u64::from(view.lines()) + u64::from(cost.refined_lines),
+                    );
+                    assert_eq!(counted, cost.work, "pitch {pitch} share {share}");
+                    let lines = u64::from(view.lines());
+                    if cost.base_cost * 2 < budget {
+                        // Unless both rounds refined every line, the budget is
+                        // spent to within a line's and a pixel's most cost of
+                        // the round it stopped in.
+                        let refined = u64::from(cost.refined_lines);
+                        let pixel_most = RefineAllowances {
+                            meter: &Meter::new(Prices::BOARD, pyramid.top()),
+                            budget,
+                            filled: 0,
+                            most_rays: if refined >= lines { 8 } else { 4 },
+                        }
+                        .pixel_most();
+                        assert!(
+                            cost.cost + pixel_most + u64::from(Prices::BOARD.per_line) >= budget
+                                || refined == 2 * lines,
+                            "pitch {pitch} share {share}: {cost:?}"
+                        );
+                    }
+                    refined_twice |= u64::from(cost.refined_lines) > lines;
+                }
+                assert!(
+                    refined_twice,
+                    "pitch {pitch}: no budget reached the second round"
+                );
+                // On the board's two prices: the base pass at its own, the
+                // refinement at the per-ray path's, within the budget.
+                let budget = 3 * Governor::on_board(0).least_cost(&view, &options);
+                let cost = Governor::on_board(budget).render(
+                    pyramid,
+                    &view,
+                    &options,
+                    &mut Discard,
+                    &mut crate::NoProbe,
+                );
+                assert!(cost.refined_lines > 0 && cost.cost <= budget, "{cost:?}");
+                assert_eq!(cost.base_cost, Prices::BOARD_LINES.of(&cost.base_work));
+                assert_eq!(
+                    cost.cost,
+                    cost.base_cost + Prices::BOARD.of(&cost.refined_work())
+                );
+            }
+        });
     }
 }

@@ -31,7 +31,7 @@ mod per_line;
 mod ray_caster;
 pub(crate) mod walk;
 
-pub use budget::{FrameCost, FrameWork, Governor, Prices};
+pub use budget::{FrameCost, FrameWork, Governor, LineShare, Prices};
 pub use options::{Coherence, RenderOptions, Resolution, Shading, VerticalSamples};
 pub use per_line::{render_level_columns, render_pixel_lines, ColumnsError};
 

@@ -10,10 +10,10 @@ use crate::outputs::Outputs;
 use crate::tiles::{new_slots, Terrain, TiledViewer};
 use crate::viewer::{
     describe_camera, draw_line_of_text, fly_step, ground_under, keep_above, render_arguments,
-    render_pool, shell_word, threads_or_cores, turn_by, FrameFigures, Motion, Pixels, Recorder,
-    ScaleGovernor, Settings, DRAG_DEG_PER_PIXEL,
+    render_governed, render_pool, shell_word, threads_or_cores, turn_by, FrameBudget, FrameFigures,
+    Governed, GovernedShare, Motion, Pixels, Recorder, ScaleGovernor, Settings, WindowGovernor,
+    DRAG_DEG_PER_PIXEL,
 };
-use clap::ValueEnum;
 use std::collections::HashSet;
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -21,8 +21,8 @@ use std::rc::Rc;
 use std::time::Instant;
 use terracast::config::DEFAULT_HFOV_DEG;
 use terracast::{
-    Camera, PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, StickLayer, View,
-    WithSticks,
+    Camera, Governor, PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, StickLayer,
+    View, WithSticks, U8F8,
 };
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
@@ -50,11 +50,14 @@ pub(super) struct ViewArgs {
     /// or 60 where it does not say].
     #[arg(long, value_name = "HZ", value_parser = positive(0.0f32, 1000.0), allow_hyphen_values = true)]
     fps: Option<f32>,
-    /// The governor: render smaller (enlarged to the window) when a frame
-    /// would be late, grow back to the window's size when there is time.
-    /// Off: every frame at the window's size.
-    #[arg(long, value_enum, default_value_t = Switch::On)]
-    governor: Switch,
+    /// What holds the frame time. size: frames are rendered smaller
+    /// (enlarged to the window) when one would be late, and grow back to
+    /// the window's size when there is time. cost: the kernel's governor
+    /// spends a budget that stands for a share of the display frame (level
+    /// bias, refined lines), the size shrinking when one ray a pixel
+    /// leaves no room in it. off: every frame at the window's size.
+    #[arg(long, value_enum, default_value_t = WindowGovernor::Size)]
+    governor: WindowGovernor,
     /// Ground speed at the start, voxels a second [default: a tenth of
     /// the map's side, at most 100].
     #[arg(long, value_name = "V", value_parser = positive(0.0f32, 1e6), allow_hyphen_values = true)]
@@ -81,15 +84,6 @@ pub(super) struct ViewArgs {
     kernel: KernelArgs,
 }
 
-/// A setting that is on or off.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(super) enum Switch {
-    /// On.
-    On,
-    /// Off.
-    Off,
-}
-
 /// How long the view stays still before a frame the governor shrank is
 /// drawn again at the window's size.
 const STILL_AFTER: std::time::Duration = std::time::Duration::from_millis(300);
@@ -114,11 +108,7 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
         .transpose()?;
     let sky = args.sky.unwrap_or(terracast::config::DEFAULT_SKY);
     let options = args.kernel.options(sky);
-    let settings = Settings::new(
-        options,
-        args.kernel.vertical_samples.1,
-        args.governor == Switch::On,
-    );
+    let settings = Settings::new(options, args.kernel.vertical_samples.1, args.governor);
     let mut slots;
     let mut scene_storage = None;
     let mut early_event_loop = None;
@@ -187,7 +177,7 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
         "terracast view: {}x{} window, {threads} thread(s), governor {}; {KEYS_HELP}",
         args.size.0,
         args.size.1,
-        if settings.governor { "on" } else { "off" }
+        settings.governor.name()
     );
     let mut app = App {
         terrain_flags: terrain_flags(&args),
@@ -202,6 +192,7 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
         camera,
         settings,
         governor: ScaleGovernor::new(1.0 / 60.0),
+        budget: FrameBudget::new(1.0 / 60.0, threads),
         fps: args.fps,
         threads,
         speed,
@@ -379,6 +370,52 @@ impl World<'_> {
             }
         }
     }
+
+    /// Renders `camera` into `pixels` within `governors`' budgets, one
+    /// share of the lines a worker; returns the steps taken and each
+    /// share's cost.
+    fn render_governed(
+        &mut self,
+        camera: &Camera,
+        options: (&RenderOptions, Option<&PreparedAtmosphere>),
+        governors: &mut [Governor],
+        pixels: &Pixels,
+    ) -> Result<(u64, Vec<GovernedShare>)> {
+        let size = pixels.size();
+        match self {
+            Self::Memory { full, sticks, .. } => {
+                let view = View::new(camera, size.0, size.1).map_err(view_error)?;
+                let surface: &Pyramid = full;
+                Ok(match sticks {
+                    Some(layer) => {
+                        let surface = WithSticks::new(surface, *layer);
+                        render_governed(&surface, &view, options, governors, pixels)
+                    }
+                    None => render_governed(surface, &view, options, governors, pixels),
+                })
+            }
+            Self::Tiled(viewer) => {
+                // The cache loads what the finest of the governors' biases
+                // needs.
+                let finest = governors
+                    .iter()
+                    .map(Governor::level_bias)
+                    .min()
+                    .unwrap_or(U8F8::ONE);
+                let loading = RenderOptions {
+                    resolution: Resolution::Multi {
+                        pixel_to_voxel: finest,
+                    },
+                    ..*options.0
+                };
+                let (drawn, _misses) = viewer.frame(camera, size, &loading, |surface, local| {
+                    let view = View::new(local, size.0, size.1).map_err(view_error)?;
+                    Ok::<_, Error>(render_governed(surface, &view, options, governors, pixels))
+                })?;
+                drawn
+            }
+        }
+    }
 }
 
 /// What the window shows: the camera and options it was rendered with.
@@ -404,7 +441,10 @@ struct App<'s> {
     world: World<'s>,
     camera: Camera,
     settings: Settings,
+    /// The size frames are rendered at.
     governor: ScaleGovernor,
+    /// The cost each frame is rendered within.
+    budget: FrameBudget,
     fps: Option<f32>,
     threads: usize,
     speed: f32,
@@ -443,12 +483,22 @@ struct Measure {
     began: Option<Instant>,
     frames: u64,
     render_seconds: f64,
+    /// Each render's seconds, for their spread.
+    renders: Vec<f64>,
     /// Renders longer than a display frame, and the longest.
     late: u64,
     slowest: f64,
     pixels: u64,
-    /// The least and most the governor divided the window's sides by.
+    /// The least and most the governor divided the window's sides by, and
+    /// the rendered pixels' share of the window's, summed over the frames.
     scale: Option<(f32, f32)>,
+    pixel_share: f64,
+    /// Over the governed frames: their count, the least and most level
+    /// bias, and their budgets and costs a pixel, summed.
+    governed: u64,
+    bias: Option<(f32, f32)>,
+    budget_per_pixel: f64,
+    cost_per_pixel: f64,
 }
 
 impl Measure {
@@ -456,11 +506,20 @@ impl Measure {
         self.began.get_or_insert_with(Instant::now);
         self.frames += 1;
         self.render_seconds += figures.seconds;
+        self.renders.push(figures.seconds);
         self.late += u64::from(figures.seconds > period);
         self.slowest = self.slowest.max(figures.seconds);
         self.pixels += figures.pixels;
         let (lo, hi) = self.scale.unwrap_or((scale, scale));
         self.scale = Some((lo.min(scale), hi.max(scale)));
+        self.pixel_share += 1.0 / f64::from(scale * scale);
+        if let Some(g) = &figures.governed {
+            self.governed += 1;
+            let (lo, hi) = self.bias.unwrap_or(g.bias);
+            self.bias = Some((lo.min(g.bias.0), hi.max(g.bias.1)));
+            self.budget_per_pixel += g.budget_per_pixel;
+            self.cost_per_pixel += g.cost_per_pixel;
+        }
     }
 
     fn done(&self) -> bool {
@@ -468,25 +527,50 @@ impl Measure {
             .is_some_and(|t| t.elapsed().as_secs_f64() >= self.seconds)
     }
 
-    fn report(&self, size: (u32, u32), threads: usize, governor: bool, period: f64) -> String {
+    fn report(
+        &self,
+        size: (u32, u32),
+        threads: usize,
+        governor: WindowGovernor,
+        period: f64,
+    ) -> String {
         let wall = self
             .began
             .map_or(0.0, |t| t.elapsed().as_secs_f64())
             .max(1e-9);
         let frames = self.frames.max(1) as f64;
         let (lo, hi) = self.scale.unwrap_or((1.0, 1.0));
+        let mut renders = self.renders.clone();
+        renders.sort_by(f64::total_cmp);
+        let percentile =
+            |p: usize| renders.get(renders.len() * p / 100).copied().unwrap_or(0.0) * 1e3;
+        let spent = match self.bias {
+            Some((least, most)) => {
+                let governed = self.governed.max(1) as f64;
+                format!(
+                    "; {} frames governed: budget {:.0} a pixel on average, {:.3} of it spent, level bias {least:.2} to {most:.2}",
+                    self.governed,
+                    self.budget_per_pixel / governed,
+                    self.cost_per_pixel / self.budget_per_pixel.max(1e-9),
+                )
+            }
+            None => String::new(),
+        };
         format!(
-            "measured: {} frames at {}x{} in {wall:.1} s: {:.1} frames a second ({:.1} ms a render, slowest {:.1} ms; {} of the renders longer than a {:.0} Hz frame; {:.1} Mpx/s rendering; {threads} thread(s), governor {}: sides divided by {lo:.2} to {hi:.2})",
+            "measured: {} frames at {}x{} in {wall:.1} s: {:.1} frames a second ({:.1} ms a render, 5 % to 95 % of them {:.1} to {:.1} ms, slowest {:.1} ms; {} of the renders longer than a {:.0} Hz frame; {:.1} Mpx/s rendering; {threads} thread(s), governor {}: sides divided by {lo:.2} to {hi:.2}, {:.0} % of the window's pixels on average{spent})",
             self.frames,
             size.0,
             size.1,
             self.frames as f64 / wall,
             self.render_seconds / frames * 1e3,
+            percentile(5),
+            percentile(95),
             self.slowest * 1e3,
             self.late,
             1.0 / period,
             self.pixels as f64 / self.render_seconds.max(1e-9) / 1e6,
-            if governor { "on" } else { "off" },
+            governor.name(),
+            100.0 * self.pixel_share / frames,
         )
     }
 }
@@ -549,7 +633,8 @@ impl App<'_> {
                 .map_err(|e| Error::new(format!("window: {e}")))?;
         }
         let still = std::mem::take(&mut self.still_frame);
-        let size = if self.settings.governor && !still {
+        let moving_governed = self.settings.governor != WindowGovernor::Off && !still;
+        let size = if moving_governed {
             self.governor.render_size(window_size)
         } else {
             window_size
@@ -560,21 +645,40 @@ impl App<'_> {
         let options = self.settings.options;
         let rays = self.settings.rays;
         let began = Instant::now();
-        let steps = self.world.render(
-            &self.camera,
-            (&options, self.atmosphere_on.then_some(&self.atmosphere)),
-            rays,
-            self.threads,
-            &self.pixels,
-        )?;
+        let air = self.atmosphere_on.then_some(&self.atmosphere);
+        let pixel_count = u64::from(size.0) * u64::from(size.1);
+        let governed = self.settings.governor == WindowGovernor::Cost && !still;
+        let (steps, costs) = if governed {
+            let governors = self.budget.governors(pixel_count);
+            self.world
+                .render_governed(&self.camera, (&options, air), governors, &self.pixels)?
+        } else {
+            let steps = self.world.render(
+                &self.camera,
+                (&options, air),
+                rays,
+                self.threads,
+                &self.pixels,
+            )?;
+            (steps, Vec::new())
+        };
+        let seconds = began.elapsed().as_secs_f64();
         let figures = FrameFigures {
-            seconds: began.elapsed().as_secs_f64(),
-            pixels: u64::from(size.0) * u64::from(size.1),
+            seconds,
+            pixels: pixel_count,
             steps,
+            governed: governed.then(|| Governed::of(&costs, pixel_count)),
         };
         let scale_before = self.governor.scale();
-        if self.settings.governor && !still {
-            self.governor.adapt(figures.seconds);
+        if governed {
+            // The cost holds the time; the size follows the base pass,
+            // which no budget makes cheaper than every ray once.
+            self.budget.adapt(seconds, &costs);
+            self.governor
+                .adapt(self.budget.seconds_for_size(seconds, &costs));
+            self.last_change = now;
+        } else if moving_governed {
+            self.governor.adapt(seconds);
             self.last_change = now;
         }
         // Frames go on while the governor is still finding its size.
@@ -653,13 +757,16 @@ impl App<'_> {
             path.display(),
             describe_camera(&shown.camera),
             shown.figures.describe(),
-            if shown.size == self.window_size {
-                "at the window's size".to_string()
-            } else {
-                format!(
+            match (shown.size == self.window_size, shown.figures.governed) {
+                (true, None) => "at the window's size".to_string(),
+                (false, None) => format!(
                     "the governor rendered it at {}x{} for the window's {}x{}",
                     shown.size.0, shown.size.1, self.window_size.0, self.window_size.1
-                )
+                ),
+                (_, Some(g)) => format!(
+                    "the governor rendered it at {}x{} within {:.0} a pixel; the command renders the view without a budget",
+                    shown.size.0, shown.size.1, g.budget_per_pixel
+                ),
             },
             line.join(" ")
         );
@@ -683,7 +790,7 @@ impl App<'_> {
             KeyCode::Digit3 => self.settings.toggle_rays(),
             KeyCode::Digit4 => self.settings.next_coherence(),
             KeyCode::Digit5 => self.atmosphere_on = !self.atmosphere_on,
-            KeyCode::KeyG => self.settings.governor = !self.settings.governor,
+            KeyCode::KeyG => self.settings.governor = self.settings.governor.next(),
             KeyCode::KeyH => {
                 // The same view with or without the line: drawn at the
                 // window's size, as a still view is.
@@ -776,7 +883,9 @@ impl ApplicationHandler for App<'_> {
                 .and_then(|m| m.refresh_rate_millihertz())
                 .map_or(60.0, |mhz| mhz as f32 / 1000.0)
         });
-        self.governor = ScaleGovernor::new(1.0 / f64::from(hz.max(1.0)));
+        let period = 1.0 / f64::from(hz.max(1.0));
+        self.governor = ScaleGovernor::new(period);
+        self.budget = FrameBudget::new(period, self.threads);
         window.request_redraw();
         self.window = Some(window);
     }
@@ -844,12 +953,15 @@ impl ApplicationHandler for App<'_> {
             }
         } else {
             // Nothing changes: the clock that moves the camera restarts
-            // with the next key, and a frame the governor shrank is drawn
-            // once more at the window's size when the view has been still
-            // for a moment.
+            // with the next key, and a frame the governor shrank or
+            // rendered within a budget is drawn once more at the window's
+            // size, as the settings say, when the view has been still for
+            // a moment (a still view is sharp, and `render` draws it).
             self.last_tick = None;
-            let shrunk = self.shown.is_some_and(|s| s.size != self.window_size);
-            if shrunk {
+            let governed = self
+                .shown
+                .is_some_and(|s| s.size != self.window_size || s.figures.governed.is_some());
+            if governed {
                 let at = self.last_change + STILL_AFTER;
                 if Instant::now() >= at {
                     self.still_frame = true;
