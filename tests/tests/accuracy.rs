@@ -410,11 +410,16 @@ fn a_frame_within_a_budget_against_one_ray_a_pixel() {
 /// rays are cheaper, so the finer bias's cost is overstated). The
 /// governor's refinement spends on more rays (two a pixel, four where the
 /// footprint is long), not on a finer bias; the test holds that choice to
-/// the measurement: on the grazing views, where it refines most, rays by
+/// the measurement. Over one ray a pixel, on the grazing views, rays by
 /// footprint buy more a unit of cost than two rays everywhere, and the
 /// finer bias buys nothing (on these 1024² maps the terrain fit keeps
 /// the heights on level 0 at this size, so a finer ratio changes little
-/// but the far colors).
+/// but the far colors). But a refinement renders a line again, so it pays
+/// for a way's whole render, not for what the way adds to one ray a
+/// pixel: as a refinement pays for it, at every pitch, two rays
+/// everywhere buy more than rays by footprint, which leave most pixels at
+/// the one ray they already had. That is the order the refinement takes: two rays a
+/// pixel (four where the footprint is long) first.
 #[test]
 fn what_each_way_of_spending_buys_a_unit_of_cost() {
     use terracast::{
@@ -446,8 +451,8 @@ fn what_each_way_of_spending_buys_a_unit_of_cost() {
         ("two rays a pixel", two, false),
         ("rays by footprint", base, true),
     ];
-    println!("| pitch | way | PSNR dB | gain dB | priced cost a pixel | more a pixel | dB a 1000 a pixel |");
-    println!("|---|---|---|---|---|---|---|");
+    println!("| pitch | way | PSNR dB | gain dB | priced cost a pixel | more a pixel | dB a 1000 a pixel more | dB a 1000 a pixel as a refinement pays |");
+    println!("|---|---|---|---|---|---|---|---|");
     for pitch in [2.0, 5.0, 15.0, 30.0, 60.0, 90.0] {
         let cam = Camera::looking([300.0, 700.0, 170.0], 20.0, pitch);
         let r = reference_view(&reference, &cam, SMALL);
@@ -467,15 +472,27 @@ fn what_each_way_of_spending_buys_a_unit_of_cost() {
             measured.push((name, psnr(&colors, &r.colors), cost));
         }
         let (_, base_db, base_cost) = measured[0];
-        let mut per_cost = Vec::new();
+        let (mut per_cost, mut as_paid) = (Vec::new(), Vec::new());
         for &(name, db, cost) in &measured {
             let (gain, more) = (db - base_db, cost - base_cost);
             // Under one instruction a pixel more: no cost to speak of.
             let rate = (more >= 1.0).then(|| 1000.0 * gain / more);
             per_cost.push(rate.unwrap_or(0.0));
+            // A refined line is rendered again: the way's whole cost.
+            let paid = 1000.0 * gain / cost;
+            as_paid.push(paid);
             println!(
-                "| {pitch}° | {name} | {db:.2} | {gain:+.2} | {cost:.0} | {more:+.0} | {} |",
+                "| {pitch}° | {name} | {db:.2} | {gain:+.2} | {cost:.0} | {more:+.0} | {} | {paid:.2} |",
                 rate.map_or("–".into(), |rate| format!("{rate:.2}"))
+            );
+        }
+        {
+            let [_, finer, two, by_footprint] = as_paid[..] else {
+                unreachable!()
+            };
+            assert!(
+                two > by_footprint && two > finer,
+                "pitch {pitch}, as a refinement pays: two rays {two:.3} dB a 1000 a pixel, rays by footprint {by_footprint:.3}, finer levels {finer:.3}"
             );
         }
         if pitch <= 5.0 {
