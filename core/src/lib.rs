@@ -69,8 +69,8 @@ pub use color::Rgb;
 
 pub use caster::{
     render, render_by_footprint, render_level_columns, render_line, render_line_by_footprint,
-    render_pixel_lines, Coherence, ColumnsError, FrameCost, FrameWork, Governor, LineShare, Prices,
-    RenderOptions, Resolution, Shading, VerticalSamples,
+    render_pixel_lines, render_pixel_path, Coherence, ColumnsError, FrameCost, FrameWork, Governor,
+    LineShare, Prices, RenderOptions, Resolution, Shading, VerticalSamples,
 };
 pub use fixed::types::U8F8;
 pub use pool::{LinePool, Task, Wait};

@@ -43,9 +43,10 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
-    pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines, Atmosphere,
-    Camera, Coherence, Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid,
-    RenderOptions, Resolution, Rgb, Shading, Stick, Surface, View, WithSticks, U8F8,
+    pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines,
+    render_pixel_path, Atmosphere, Camera, Coherence, Framebuffer, HeightFilter, NoProbe,
+    PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, Shading, Stick, Surface, View,
+    WithSticks, U8F8,
 };
 use terracast_board::governed;
 use terracast_board::scene::{BoardScene, MAX_STICKS};
@@ -529,9 +530,10 @@ impl Renders {
 /// default, by the kernel at single resolution, and by the per-line design
 /// at its smallest (`render_level_columns`: level 0, one set-up a column,
 /// subvoxel shading); then each view as it is, by the kernel's default, at
-/// single resolution, and by the same design under pitch and roll
-/// (`render_pixel_lines`): each render's ticks, over semihosting, for
-/// `scripts/board-bound`.
+/// single resolution, by the same design under pitch and roll
+/// (`render_pixel_lines`), and by its per-pixel path alone
+/// (`render_pixel_path`: no step): each render's ticks, over semihosting,
+/// for `scripts/board-bound`.
 fn level_bound(
     pyramid: &Pyramid,
     cameras: &[Camera],
@@ -588,12 +590,17 @@ fn level_bound(
             render_pixel_lines(pyramid.base(), &posed, &single, f);
             Ok(())
         })?;
+        let path = ticks_of(&|f| {
+            render_pixel_path(pyramid.base(), &posed, &single, f);
+            Ok(())
+        })?;
         hprintln!(
-            "posed view {} kernel {} single {} lines {}",
+            "posed view {} kernel {} single {} lines {} path {}",
             index,
             kernel,
             kernel_single,
-            lines
+            lines,
+            path
         );
     }
     Ok(())

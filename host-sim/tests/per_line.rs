@@ -162,6 +162,47 @@ fn pixel_lines_match_the_kernel_at_single_resolution_at_any_pose() {
     }
 }
 
+/// Counts each pixel's writes.
+struct Writes {
+    width: u32,
+    count: Vec<u32>,
+}
+
+impl terracast::Sink for Writes {
+    fn put(&mut self, x: u32, y: u32, _: terracast::Sample) {
+        self.count[(y * self.width + x) as usize] += 1;
+    }
+}
+
+#[test]
+fn the_per_pixel_path_alone_writes_every_pixel_once() {
+    let scene = procedural(128, 2);
+    let kernel_scene = scene.to_kernel().unwrap();
+    let terrain = kernel_scene.terrain().unwrap();
+    let top = scene.max_height();
+    for camera in [
+        Camera::looking([64.0, 64.0, top + 40.0], 30.0, 90.0),
+        Camera {
+            roll_deg: 30.0,
+            ..Camera::looking([20.0, 30.0, top + 20.0], 50.0, 20.0)
+        },
+    ] {
+        let view = View::new(&camera, 63, 47).unwrap();
+        let mut writes = Writes {
+            width: 63,
+            count: vec![0; 63 * 47],
+        };
+        terracast::render_pixel_path(&terrain, &view, &single(), &mut writes);
+        assert!(writes.count.iter().all(|&n| n == 1), "{camera:?}");
+        // Straight down over the map: every pixel a shaded terrain pixel.
+        let mut buffer = SampleBuffer::new(63, 47);
+        terracast::render_pixel_path(&terrain, &view, &single(), &mut buffer);
+        if camera.pitch_deg == 90.0 {
+            assert!(!buffer.samples.iter().any(|s| s.is_sky()), "{camera:?}");
+        }
+    }
+}
+
 #[test]
 fn a_pitched_view_is_refused() {
     let scene = procedural(64, 1);

@@ -33,7 +33,7 @@ pub(crate) mod walk;
 
 pub use budget::{FrameCost, FrameWork, Governor, LineShare, Prices};
 pub use options::{Coherence, RenderOptions, Resolution, Shading, VerticalSamples};
-pub use per_line::{render_level_columns, render_pixel_lines, ColumnsError};
+pub use per_line::{render_level_columns, render_pixel_lines, render_pixel_path, ColumnsError};
 
 use crate::probe::Probe;
 use crate::sink::{Sample, Sink};

@@ -32,6 +32,14 @@
 //! would cross (`Plane::drift`). What it leaves out of the kernel's line
 //! caster is the pyramid (levels, stretches, far colors) and the first
 //! hit: it is the bound for the kernel's pitched frames.
+//!
+//! [`render_pixel_path`] is the same again without the walk: every pixel
+//! of every line owned, its ray's slope and color drift worked out and its
+//! hit shaded (the crossing's division, both grid lines' colors) at the
+//! line's first sample in the map, as if the ray hit there. It takes no
+//! step, and writes sky only on a line that never enters the map: what
+//! the per-pixel path costs a terrain pixel before any step, the floor
+//! under a pitched frame of this design.
 
 use super::walk::lerp;
 use super::{crossing_fraction, sky, RenderOptions};
@@ -92,6 +100,22 @@ pub fn render_pixel_lines<S: Sink>(
     let lines = FrameCaster::new(terrain, view, options);
     for index in 0..view.lines() {
         lines.line(index, sink);
+    }
+}
+
+/// Renders `view` of `terrain` as [`render_pixel_lines`] does, every ray
+/// shaded where its line enters the map instead of where it hits (no step,
+/// no sky): the per-pixel path alone (see the module's notes). A
+/// measurement, not an image of the terrain.
+pub fn render_pixel_path<S: Sink>(
+    terrain: &Terrain<'_>,
+    view: &View,
+    options: &RenderOptions,
+    sink: &mut S,
+) {
+    let lines = FrameCaster::new(terrain, view, options);
+    for index in 0..view.lines() {
+        lines.line_unwalked(index, sink);
     }
 }
 
@@ -272,6 +296,39 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
             }
         }
         // The sky above the line's last hit.
+        pixels.for_each_position(|x, y| sink.put(x, y, self.sky));
+    }
+
+    /// Renders image line `index` as [`FrameCaster::line`] does, each ray
+    /// shaded at the line's first sample (see [`render_pixel_path`]).
+    fn line_unwalked<S: Sink>(&self, index: u32, sink: &mut S) {
+        let view = self.view;
+        if view.line_misses_image(index) {
+            return;
+        }
+        let Some(line) = view.line(index) else {
+            return;
+        };
+        let mut pixels = line.pixels(view.height());
+        let plane =
+            Plane::new(view, &self.extent, &line.reference).with_across(&view.across(&line));
+        let walk = Walk::new(&plane, self.width);
+        if walk.first <= walk.last {
+            let axis = [if plane.key.x_major { 0 } else { 1 }];
+            let eye_z = view.eye[2].to_bits();
+            // The first sample, as if the sample before it stood a voxel
+            // above the surface: every hit takes the crossing's division.
+            let mut at = self.start(&plane, &walk);
+            at.before = at.height + (1 << COORD_FRAC_BITS);
+            for pixel in pixels.by_ref() {
+                let [major] = line.direction_words(pixel.along, axis);
+                let run = if plane.key.forward { major } else { -major }.max(0);
+                let dz = i64::from(slope_quotient(line.up_word(&pixel), run as u32));
+                let z = eye_z + ((plane.delta0 * dz) >> COORD_FRAC_BITS) + at.k * dz;
+                let drift = plane.drift_of_word(run, pixel.offset);
+                sink.put(pixel.x, pixel.y, self.hit(&at, z, dz, drift, &walk, &plane));
+            }
+        }
         pixels.for_each_position(|x, y| sink.put(x, y, self.sky));
     }
 
