@@ -327,6 +327,23 @@ fn run() -> Result<(), &'static str> {
         MAP_DEPTH,
         pyramid_ticks
     );
+    // scripts/board-profile BOUND=path: the per-pixel path alone, each
+    // view once, and nothing else.
+    if option_env!("TERRACAST_BOARD_BOUND") == Some("path") {
+        for camera in scene.header.views() {
+            let view =
+                View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+            let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+                .map_err(|_| "framebuffer too small")?;
+            render_pixel_path(
+                pyramid.base(),
+                &view,
+                &RenderOptions::default(),
+                &mut framebuffer,
+            );
+        }
+        return Ok(());
+    }
     // scripts/board-bound: the per-pixel path against its bound, and
     // nothing else.
     if option_env!("TERRACAST_BOARD_BOUND").is_some() {
