@@ -212,7 +212,17 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         aside: i64,
         plane: &Plane,
     ) -> Rgb {
-        self.color(index, across, (minor + aside).clamp(0, plane.minor_max))
+        // As the line caster keeps it inside: one unsigned compare for the
+        // rule, where `clamp` is a call on the board.
+        let moved = minor + aside;
+        let inside = if moved as u64 <= plane.minor_max as u64 {
+            moved
+        } else if moved < 0 {
+            0
+        } else {
+            plane.minor_max
+        };
+        self.color(index, across, inside)
     }
 
     #[inline(always)]
