@@ -46,6 +46,7 @@ use super::{crossing_fraction, sky, RenderOptions};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BITS};
 use crate::divide::div_trunc;
+use crate::view::lines::{Line, Owned, OwnedPixels};
 use crate::view::plane::{slope_quotient, Plane};
 use crate::{Sample, Sink, Terrain, View};
 use core::fmt;
@@ -268,27 +269,46 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         }
     }
 
-    /// Renders image line `index` (see [`render_pixel_lines`]).
-    fn line<S: Sink>(&self, index: u32, sink: &mut S) {
+    /// Image line `index` set up: the line, its pixels, its plane and how
+    /// its walk moves; `None` for a line that owns no pixel. The line's
+    /// rays cross the map when `walk.first <= walk.last`.
+    #[inline(always)]
+    fn set_up(&self, index: u32) -> Option<(Line, OwnedPixels, Plane, Walk)> {
         let view = self.view;
         if view.line_misses_image(index) {
-            return;
+            return None;
         }
-        let Some(line) = view.line(index) else {
-            return;
-        };
-        let mut pixels = line.pixels(view.height());
+        let line = view.line(index)?;
+        let pixels = line.pixels(view.height());
         let plane =
             Plane::new(view, &self.extent, &line.reference).with_across(&view.across(&line));
         let walk = Walk::new(&plane, self.width);
+        Some((line, pixels, plane, walk))
+    }
+
+    /// The ray of `pixel` on `line`: its run along the major axis (a
+    /// word) and its height change a sample (Q16), one division.
+    #[inline(always)]
+    fn ray(line: &Line, plane: &Plane, pixel: &Owned) -> (i32, i64) {
+        let axis = [if plane.key.x_major { 0 } else { 1 }];
+        let [major] = line.direction_words(pixel.along, axis);
+        let run = if plane.key.forward { major } else { -major }.max(0);
+        (
+            run,
+            i64::from(slope_quotient(line.up_word(pixel), run as u32)),
+        )
+    }
+
+    /// Renders image line `index` (see [`render_pixel_lines`]).
+    fn line<S: Sink>(&self, index: u32, sink: &mut S) {
+        let Some((line, mut pixels, plane, walk)) = self.set_up(index) else {
+            return;
+        };
         if walk.first <= walk.last {
-            let axis = [if plane.key.x_major { 0 } else { 1 }];
-            let eye_z = view.eye[2].to_bits();
+            let eye_z = self.view.eye[2].to_bits();
             let (mut at, mut previous_dz) = (None, i64::MIN);
             for pixel in pixels.by_ref() {
-                let [major] = line.direction_words(pixel.along, axis);
-                let run = if plane.key.forward { major } else { -major }.max(0);
-                let dz = i64::from(slope_quotient(line.up_word(&pixel), run as u32));
+                let (run, dz) = Self::ray(&line, &plane, &pixel);
                 // Lower than the ray before (next to the vanishing point):
                 // from the line's first sample again.
                 if dz < previous_dz {
@@ -312,28 +332,17 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
     /// Renders image line `index` as [`FrameCaster::line`] does, each ray
     /// shaded at the line's first sample (see [`render_pixel_path`]).
     fn line_unwalked<S: Sink>(&self, index: u32, sink: &mut S) {
-        let view = self.view;
-        if view.line_misses_image(index) {
-            return;
-        }
-        let Some(line) = view.line(index) else {
+        let Some((line, mut pixels, plane, walk)) = self.set_up(index) else {
             return;
         };
-        let mut pixels = line.pixels(view.height());
-        let plane =
-            Plane::new(view, &self.extent, &line.reference).with_across(&view.across(&line));
-        let walk = Walk::new(&plane, self.width);
         if walk.first <= walk.last {
-            let axis = [if plane.key.x_major { 0 } else { 1 }];
-            let eye_z = view.eye[2].to_bits();
+            let eye_z = self.view.eye[2].to_bits();
             // The first sample, as if the sample before it stood a voxel
             // above the surface: every hit takes the crossing's division.
             let mut at = self.start(&plane, &walk);
             at.before = at.height + (1 << COORD_FRAC_BITS);
             for pixel in pixels.by_ref() {
-                let [major] = line.direction_words(pixel.along, axis);
-                let run = if plane.key.forward { major } else { -major }.max(0);
-                let dz = i64::from(slope_quotient(line.up_word(&pixel), run as u32));
+                let (run, dz) = Self::ray(&line, &plane, &pixel);
                 let z = eye_z + ((plane.delta0 * dz) >> COORD_FRAC_BITS) + at.k * dz;
                 let drift = plane.drift_of_word(run, pixel.offset);
                 sink.put(pixel.x, pixel.y, self.hit(&at, z, dz, drift, &walk, &plane));
