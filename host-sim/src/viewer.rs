@@ -970,17 +970,17 @@ pub struct Governed {
 impl Governed {
     /// The figures of `shares` for a frame of `pixels`.
     pub fn of(shares: &[GovernedShare], pixels: u64) -> Self {
-        let costs: Vec<FrameCost> = shares.iter().map(|s| s.cost).collect();
+        let costs = || shares.iter().map(|s| &s.cost);
         let pixels = pixels.max(1) as f64;
-        let biases = costs.iter().map(|c| c.level_bias.to_num::<f32>());
+        let biases = costs().map(|c| c.level_bias.to_num::<f32>());
         Self {
-            budget_per_pixel: costs.iter().map(|c| c.budget).sum::<u64>() as f64 / pixels,
-            cost_per_pixel: costs.iter().map(|c| c.cost).sum::<u64>() as f64 / pixels,
+            budget_per_pixel: costs().map(|c| c.budget).sum::<u64>() as f64 / pixels,
+            cost_per_pixel: costs().map(|c| c.cost).sum::<u64>() as f64 / pixels,
             bias: (
                 biases.clone().fold(f32::INFINITY, f32::min),
                 biases.fold(0.0, f32::max),
             ),
-            refined_lines: costs.iter().map(|c| c.refined_lines).sum(),
+            refined_lines: costs().map(|c| c.refined_lines).sum(),
         }
     }
 }
