@@ -710,11 +710,6 @@ impl FrameBudget {
         }
         held
     }
-
-    /// Each share's budget, the last frame's.
-    pub fn share_budget(&self) -> u64 {
-        self.governors.first().map_or(0, Governor::budget)
-    }
 }
 
 fn render_one<T: Surface + ?Sized, S: Sink, P: Probe>(
@@ -1132,11 +1127,10 @@ mod tests {
                 share(800_000, 400_000, 0.0064, 0.0016),
             ],
         );
-        budget.governors(1000);
         let at = |seconds_a_unit: f64| {
             (FrameBudget::SHARE_OF_PERIOD * 0.016 / seconds_a_unit).round() as u64
         };
-        assert_eq!(budget.share_budget(), at(8e-9));
+        assert_eq!(budget.governors(1000)[0].budget(), at(8e-9));
         assert_eq!(budget.base_prices().per_line, 2001);
         assert_eq!(
             budget.governors(1000)[1].base_prices(),
@@ -1145,8 +1139,7 @@ mod tests {
         // A slower frame moves the rate halfway: 12 ns a unit. A frame
         // with too little refinement to time leaves the prices alone.
         budget.adapt(0.016, &[share(1_000_000, 950_000, 0.016, 0.015)]);
-        budget.governors(1000);
-        assert_eq!(budget.share_budget(), at(12e-9));
+        assert_eq!(budget.governors(1000)[0].budget(), at(12e-9));
         assert_eq!(budget.base_prices().per_line, 2001);
         // The size follows the slowest base pass against the time the
         // budget stands for: at the most it may take of it, three quarters
@@ -1161,8 +1154,7 @@ mod tests {
         assert_eq!(budget.seconds_for_size(0.020, &shares), 0.020);
         // A frame with no cost to learn from changes nothing.
         budget.adapt(0.016, &[]);
-        budget.governors(1000);
-        assert_eq!(budget.share_budget(), at(12e-9));
+        assert_eq!(budget.governors(1000)[0].budget(), at(12e-9));
     }
 
     #[test]
