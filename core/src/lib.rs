@@ -69,8 +69,9 @@ pub use color::Rgb;
 
 pub use caster::{
     render, render_by_footprint, render_level_columns, render_line, render_line_by_footprint,
-    render_pixel_lines, render_pixel_path, Coherence, ColumnsError, FrameCost, FrameWork, Governor,
-    LineShare, Prices, RenderOptions, Resolution, Shading, VerticalSamples,
+    render_pixel_lines, render_pixel_path, render_pixel_path_tabled, tabulate_pixel_ownership,
+    Coherence, ColumnsError, FrameCost, FrameWork, Governor, LineShare, Prices, RenderOptions,
+    Resolution, Shading, VerticalSamples,
 };
 pub use fixed::types::U8F8;
 pub use pool::{LinePool, Task, Wait};
@@ -84,5 +85,5 @@ pub use sink::{Framebuffer, FramebufferError, LinePlane, Sample, Sink};
 pub use sticks::{Stick, StickError, StickGrid, StickLayer, WithSticks};
 pub use surface::{Extent, Grid, Surface};
 pub use terrain::{Terrain, TerrainError};
-pub use view::{max_lines, Camera, View, ViewError};
+pub use view::{max_lines, Camera, TableError, View, ViewError};
 pub use warp::{control_points, with_margin, ControlPoint, Warp, WarpError};

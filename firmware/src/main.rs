@@ -43,10 +43,10 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
-    pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines,
-    render_pixel_path, Atmosphere, Camera, Coherence, Framebuffer, HeightFilter, NoProbe,
-    PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, Shading, Stick, Surface, View,
-    WithSticks, U8F8,
+    max_lines, pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines,
+    render_pixel_path, render_pixel_path_tabled, tabulate_pixel_ownership, Atmosphere, Camera,
+    Coherence, Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid, RenderOptions,
+    Resolution, Rgb, Shading, Stick, Surface, View, WithSticks, U8F8,
 };
 use terracast_board::governed;
 use terracast_board::scene::{BoardScene, MAX_STICKS};
@@ -67,6 +67,15 @@ const PYRAMID_CELLS: usize = pyramid_cells(MAP_WIDTH, MAP_DEPTH);
 const PIXELS: usize = IMAGE_WIDTH as usize * IMAGE_HEIGHT as usize;
 const CAPTURE_BYTES: usize = frame_capture_bytes(IMAGE_WIDTH, IMAGE_HEIGHT);
 const COLUMN: usize = IMAGE_HEIGHT as usize;
+/// The frame's pixel-ownership table (`render_pixel_path_tabled`), in
+/// the bound's build only: a pixel each in two arrays, a line each.
+const TABLED: bool = option_env!("TERRACAST_BOARD_BOUND").is_some();
+const TABLE_PIXELS: usize = if TABLED { PIXELS } else { 0 };
+const TABLE_LINES: usize = if TABLED {
+    max_lines(IMAGE_WIDTH, IMAGE_HEIGHT) as usize + 1
+} else {
+    0
+};
 
 // The board's working memory, in .bss (RAM). Each is borrowed mutably
 // exactly once, at the top of `main`.
@@ -75,6 +84,9 @@ static mut COARSE_COLORS: [Rgb; PYRAMID_POINTS] = [[0; 3]; PYRAMID_POINTS];
 static mut BOUNDS: [u16; PYRAMID_CELLS] = [0; PYRAMID_CELLS];
 static mut FRAME: [Rgb; PIXELS] = [[0; 3]; PIXELS];
 static mut CAPTURE: [u8; CAPTURE_BYTES] = [0; CAPTURE_BYTES];
+static mut LINE_OF: [u16; TABLE_PIXELS] = [0; TABLE_PIXELS];
+static mut ORDER: [u32; TABLE_PIXELS] = [0; TABLE_PIXELS];
+static mut STARTS: [u32; TABLE_LINES] = [0; TABLE_LINES];
 static mut STICKS: [Stick; MAX_STICKS] = [Stick {
     first: 0,
     texels: 0,
@@ -352,7 +364,15 @@ fn run() -> Result<(), &'static str> {
             CALIBRATION_INSTRUCTIONS,
             calibration
         );
-        return level_bound(&pyramid, scene.header.views(), frame);
+        // SAFETY: as the statics above; borrowed only here.
+        let table: (&mut [u16], &mut [u32], &mut [u32]) = unsafe {
+            (
+                &mut *addr_of_mut!(LINE_OF),
+                &mut *addr_of_mut!(ORDER),
+                &mut *addr_of_mut!(STARTS),
+            )
+        };
+        return level_bound(&pyramid, scene.header.views(), frame, table);
     }
     let renders = Renders {
         options,
@@ -549,12 +569,15 @@ impl Renders {
 /// subvoxel shading); then each view as it is, by the kernel's default, at
 /// single resolution, by the same design under pitch and roll
 /// (`render_pixel_lines`), and by its per-pixel path alone
-/// (`render_pixel_path`: no step): each render's ticks, over semihosting,
-/// for `scripts/board-bound`.
+/// (`render_pixel_path`: no step), stepped line by line and from a table
+/// of the frame's pixel ownership (`render_pixel_path_tabled`, into
+/// `table`): each render's ticks, over semihosting, for
+/// `scripts/board-bound`.
 fn level_bound(
     pyramid: &Pyramid,
     cameras: &[Camera],
     frame: &mut [Rgb],
+    (line_of, order, starts): (&mut [u16], &mut [u32], &mut [u32]),
 ) -> Result<(), &'static str> {
     let default = RenderOptions::default();
     let single = RenderOptions {
@@ -611,13 +634,32 @@ fn level_bound(
             render_pixel_path(pyramid.base(), &posed, &single, f);
             Ok(())
         })?;
+        // Its ownership tabled once a frame (the table's build counted).
+        let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+            .map_err(|_| "framebuffer too small")?;
+        let start = ticks();
+        render_pixel_path_tabled(
+            pyramid.base(),
+            &posed,
+            &single,
+            (&mut *line_of, &mut *order, &mut *starts),
+            &mut framebuffer,
+        )
+        .map_err(|_| "the pixel table is too small")?;
+        let tabled = ticks() - start;
+        let start = ticks();
+        tabulate_pixel_ownership(&posed, (&mut *line_of, &mut *order, &mut *starts))
+            .map_err(|_| "the pixel table is too small")?;
+        let table_only = ticks() - start;
         hprintln!(
-            "posed view {} kernel {} single {} lines {} path {}",
+            "posed view {} kernel {} single {} lines {} path {} tabled {} table {}",
             index,
             kernel,
             kernel_single,
             lines,
-            path
+            path,
+            tabled,
+            table_only
         );
     }
     Ok(())

@@ -204,6 +204,69 @@ fn the_per_pixel_path_alone_writes_every_pixel_once() {
 }
 
 #[test]
+fn the_tabled_per_pixel_path_draws_the_stepped_ones_frame() {
+    let scene = procedural(128, 2);
+    let kernel_scene = scene.to_kernel().unwrap();
+    let terrain = kernel_scene.terrain().unwrap();
+    let top = scene.max_height();
+    let (width, height) = (80u32, 61u32);
+    let pixels = (width * height) as usize;
+    for (pitch, roll, yaw) in [
+        (0.0, 0.0, 30.0),
+        (2.0, 0.0, 70.0),
+        (12.0, 0.0, 200.0),
+        (45.0, 0.0, 10.0),
+        (90.0, 0.0, 0.0),
+        (20.0, 30.0, 120.0),
+        (0.0, -15.0, 300.0),
+        (-30.0, 0.0, 45.0),
+    ] {
+        let camera = Camera {
+            pitch_deg: pitch,
+            roll_deg: roll,
+            ..Camera::looking([30.0, 40.0, top + 25.0], yaw, pitch)
+        };
+        let view = View::new(&camera, width, height).unwrap();
+        let mut stepped = SampleBuffer::new(width, height);
+        terracast::render_pixel_path(&terrain, &view, &single(), &mut stepped);
+        let (mut line_of, mut order) = (vec![0u16; pixels], vec![0u32; pixels]);
+        let mut starts = vec![0u32; view.lines() as usize + 1];
+        let mut tabled = SampleBuffer::new(width, height);
+        let mut writes = Writes {
+            width,
+            count: vec![0; pixels],
+        };
+        for sink in [&mut tabled as &mut dyn terracast::Sink, &mut writes] {
+            terracast::render_pixel_path_tabled(
+                &terrain,
+                &view,
+                &single(),
+                (&mut line_of, &mut order, &mut starts),
+                &mut &mut *sink,
+            )
+            .unwrap();
+        }
+        assert!(writes.count.iter().all(|&n| n == 1), "{camera:?}");
+        assert!(
+            tabled.samples == stepped.samples,
+            "{camera:?}: not the stepped frame"
+        );
+    }
+    // Storage short of a line: refused.
+    let view = View::new(&Camera::looking([30.0, 40.0, top], 0.0, 30.0), 16, 8).unwrap();
+    let (mut line_of, mut order) = ([0u16; 128], [0u32; 128]);
+    let mut starts = vec![0u32; view.lines() as usize];
+    let refused = terracast::render_pixel_path_tabled(
+        &terrain,
+        &view,
+        &single(),
+        (&mut line_of, &mut order, &mut starts),
+        &mut SampleBuffer::new(16, 8),
+    );
+    assert_eq!(refused, Err(terracast::TableError::TooSmall));
+}
+
+#[test]
 fn a_pitched_view_is_refused() {
     let scene = procedural(64, 1);
     let kernel_scene = scene.to_kernel().unwrap();

@@ -33,7 +33,10 @@ pub(crate) mod walk;
 
 pub use budget::{FrameCost, FrameWork, Governor, LineShare, Prices};
 pub use options::{Coherence, RenderOptions, Resolution, Shading, VerticalSamples};
-pub use per_line::{render_level_columns, render_pixel_lines, render_pixel_path, ColumnsError};
+pub use per_line::{
+    render_level_columns, render_pixel_lines, render_pixel_path, render_pixel_path_tabled,
+    tabulate_pixel_ownership, ColumnsError,
+};
 
 use crate::probe::Probe;
 use crate::sink::{Sample, Sink};

@@ -40,13 +40,21 @@
 //! step, and writes sky only on a line that never enters the map: what
 //! the per-pixel path costs a terrain pixel before any step, the floor
 //! under a pitched frame of this design.
+//!
+//! [`render_pixel_path_tabled`] is that path with each line's pixels read
+//! from a table of the frame's pixel ownership, built once a frame into
+//! caller storage by a pass over the image's rows and a counting sort by
+//! line, instead of each line stepping its rows' ownership test: the same
+//! frame, and what the pixel costs when its line is looked up rather than
+//! stepped to ([`tabulate_pixel_ownership`] builds the table alone, to
+//! count it apart).
 
 use super::walk::lerp;
 use super::{crossing_fraction, sky, RenderOptions};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BITS};
 use crate::divide::div_trunc;
-use crate::view::lines::{Line, Owned, OwnedPixels};
+use crate::view::lines::{Line, Owned, OwnedPixels, TableError};
 use crate::view::plane::{slope_quotient, Plane};
 use crate::{Sample, Sink, Terrain, View};
 use core::fmt;
@@ -118,6 +126,50 @@ pub fn render_pixel_path<S: Sink>(
     for index in 0..view.lines() {
         lines.line_unwalked(index, sink);
     }
+}
+
+/// Renders `view` of `terrain` as [`render_pixel_path`] does, each line's
+/// pixels from a table of the frame's pixel ownership built first into
+/// caller storage (`line_of` and `order` a pixel each, `starts` a line
+/// each plus one: [`View::lines`]) instead of each line stepping its
+/// rows: the same image, and what the per-pixel path costs with its
+/// ownership found once a frame (see the module's notes). A measurement,
+/// not an image of the terrain.
+pub fn render_pixel_path_tabled<S: Sink>(
+    terrain: &Terrain<'_>,
+    view: &View,
+    options: &RenderOptions,
+    (line_of, order, starts): (&mut [u16], &mut [u32], &mut [u32]),
+    sink: &mut S,
+) -> Result<(), TableError> {
+    let table = view.tabulate_pixels(line_of, order, starts)?;
+    let lines = FrameCaster::new(terrain, view, options);
+    let top_row = view.height() as i32 - 1;
+    for (index, ends) in table.starts.windows(2).enumerate() {
+        let Some(pixels) = table.order.get(ends[0] as usize..ends[1] as usize) else {
+            continue;
+        };
+        // A line that owns no pixel is never set up.
+        if pixels.is_empty() {
+            continue;
+        }
+        let Some((line, _, plane, walk)) = lines.set_up(index as u32) else {
+            continue;
+        };
+        let owned = pixels
+            .iter()
+            .map(|&p| line.owned_at((p & 0xFFFF) as i32, (p >> 16) as i32, top_row));
+        lines.pixels_unwalked(&line, owned, &plane, &walk, sink);
+    }
+    Ok(())
+}
+
+/// The table [`render_pixel_path_tabled`] builds, alone (a measurement).
+pub fn tabulate_pixel_ownership(
+    view: &View,
+    (line_of, order, starts): (&mut [u16], &mut [u32], &mut [u32]),
+) -> Result<(), TableError> {
+    view.tabulate_pixels(line_of, order, starts).map(|_| ())
 }
 
 /// What every column or line of a frame shares: the terrain, the view and
@@ -332,23 +384,38 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
     /// Renders image line `index` as [`FrameCaster::line`] does, each ray
     /// shaded at the line's first sample (see [`render_pixel_path`]).
     fn line_unwalked<S: Sink>(&self, index: u32, sink: &mut S) {
-        let Some((line, mut pixels, plane, walk)) = self.set_up(index) else {
+        let Some((line, pixels, plane, walk)) = self.set_up(index) else {
             return;
         };
-        if walk.first <= walk.last {
-            let eye_z = self.view.eye[2].to_bits();
-            // The first sample, as if the sample before it stood a voxel
-            // above the surface: every hit takes the crossing's division.
-            let mut at = self.start(&plane, &walk);
-            at.before = at.height + (1 << COORD_FRAC_BITS);
-            for pixel in pixels.by_ref() {
-                let (run, dz) = Self::ray(&line, &plane, &pixel);
-                let z = eye_z + ((plane.delta0 * dz) >> COORD_FRAC_BITS) + at.k * dz;
-                let drift = plane.drift_of_word(run, pixel.offset);
-                sink.put(pixel.x, pixel.y, self.hit(&at, z, dz, drift, &walk, &plane));
-            }
+        self.pixels_unwalked(&line, pixels, &plane, &walk, sink);
+    }
+
+    /// `pixels` of `line` rendered as [`FrameCaster::line_unwalked`]
+    /// renders a line's.
+    #[inline(always)]
+    fn pixels_unwalked<S: Sink>(
+        &self,
+        line: &Line,
+        pixels: impl Iterator<Item = Owned>,
+        plane: &Plane,
+        walk: &Walk,
+        sink: &mut S,
+    ) {
+        if walk.first > walk.last {
+            pixels.for_each(|pixel| sink.put(pixel.x, pixel.y, self.sky));
+            return;
         }
-        pixels.for_each_position(|x, y| sink.put(x, y, self.sky));
+        let eye_z = self.view.eye[2].to_bits();
+        // The first sample, as if the sample before it stood a voxel
+        // above the surface: every hit takes the crossing's division.
+        let mut at = self.start(plane, walk);
+        at.before = at.height + (1 << COORD_FRAC_BITS);
+        for pixel in pixels {
+            let (run, dz) = Self::ray(line, plane, &pixel);
+            let z = eye_z + ((plane.delta0 * dz) >> COORD_FRAC_BITS) + at.k * dz;
+            let drift = plane.drift_of_word(run, pixel.offset);
+            sink.put(pixel.x, pixel.y, self.hit(&at, z, dz, drift, walk, plane));
+        }
     }
 
     /// The walk's first sample inside the map, with nothing known before it.

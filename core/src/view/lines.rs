@@ -37,7 +37,7 @@
 use super::plane::DIRECTION_WORD_SHIFT;
 use super::View;
 use crate::config::COORD_FRAC_BITS;
-use crate::divide::div_trunc;
+use crate::divide::{div_ceil, div_floor, div_trunc};
 
 /// Fractional bits of image-plane positions in the ownership tests.
 const IMG_FRAC: u32 = 8;
@@ -745,6 +745,218 @@ impl Line {
     }
 }
 
+/// Why a frame's pixel ownership cannot be tabled
+/// ([`crate::render_pixel_path_tabled`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TableError {
+    /// The storage holds fewer entries than the frame has pixels (or
+    /// lines, plus one).
+    TooSmall,
+}
+
+impl core::fmt::Display for TableError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("the pixel table holds fewer entries than the frame needs")
+    }
+}
+
+impl core::error::Error for TableError {}
+
+/// Which line owns each pixel of a frame, found once a frame by a pass
+/// over each sector's rows, not by each line stepping its own rows:
+/// line `i`'s pixels are `order[starts[i]..starts[i + 1]]`, in the order
+/// its rays are cast, each packed as cross coordinate `t` (low 16 bits)
+/// and axis coordinate `s` (high 16 bits). Exactly the pixels
+/// [`Line::pixels`] gives each line (tested).
+pub(crate) struct PixelTable<'a> {
+    pub order: &'a [u32],
+    pub starts: &'a [u32],
+}
+
+impl View {
+    /// Tables the frame's pixel ownership into caller storage: `line_of`
+    /// (a pixel each: its line, in the scan's order), `order` (a pixel
+    /// each) and `starts` (a line each, plus one) (see [`PixelTable`]).
+    ///
+    /// On row `s` of a sector through `V`, pixel `t` belongs to line `K =
+    /// ⌊((t − t_V)·b + (½ + t_V)·a) / a⌋` (`a = |s − s_V|`, `b` the far
+    /// edge's; the nearest line, as `Line::owns` decides it), so along a
+    /// row `K` steps by `b/a` a pixel: a quotient and a remainder, two
+    /// divisions a row and a few adds a pixel. Parallel lines shift by
+    /// their lean a row. A counting sort by line then puts each line's
+    /// pixels together, in the order of the scan, which is the order its
+    /// rays are cast.
+    pub(crate) fn tabulate_pixels<'a>(
+        &self,
+        line_of: &mut [u16],
+        order: &'a mut [u32],
+        starts: &'a mut [u32],
+    ) -> Result<PixelTable<'a>, TableError> {
+        let pixels = self.width() as usize * self.height() as usize;
+        let lines = self.lines() as usize;
+        if line_of.len() < pixels
+            || order.len() < pixels
+            || starts.len() < lines + 1
+            || lines >= usize::from(NO_LINE)
+        {
+            return Err(TableError::TooSmall);
+        }
+        let starts = &mut starts[..lines + 1];
+        starts.fill(0);
+        // Each pixel's line in scan order, and each line's count.
+        let mut scanned = 0;
+        self.scan_rows(|sector, base, s, (t_lo, t_hi)| {
+            let n = (t_hi - t_lo + 1) as usize;
+            let Some(row) = line_of.get_mut(scanned..scanned + n) else {
+                return;
+            };
+            scanned += n;
+            let (count, k_first) = (i64::from(sector.lines), i64::from(sector.k_first));
+            let mut note = |slot: &mut u16, k: i64| {
+                let line = k - k_first;
+                *slot = if (0..count).contains(&line) {
+                    let line = base + line as u32;
+                    if let Some(n) = starts.get_mut(line as usize + 1) {
+                        *n += 1;
+                    }
+                    line as u16
+                } else {
+                    NO_LINE
+                };
+            };
+            match sector.vanishing {
+                None => {
+                    // Line K holds t within half a pixel of
+                    // K + lean·(s − s_ref), the lower end in (Q32).
+                    let lean = sector.lean * i64::from(s - sector.s_ref);
+                    let shift = (lean + (1 << 31)) >> 32;
+                    for (slot, t) in row.iter_mut().zip(i64::from(t_lo)..) {
+                        note(slot, t - shift);
+                    }
+                }
+                Some((s_v, t_v)) => {
+                    let a = ((i64::from(s) << IMG_FRAC) - s_v).abs();
+                    let b = ((i64::from(sector.s_ref) << IMG_FRAC) - s_v).abs();
+                    let denominator = a << IMG_FRAC;
+                    let numerator =
+                        ((i64::from(t_lo) << IMG_FRAC) - t_v) * b + (IMG_ONE / 2 + t_v) * a;
+                    let mut k = div_floor(numerator, denominator);
+                    let mut rest = numerator - k * denominator;
+                    let per_pixel = b << IMG_FRAC;
+                    let k_step = div_floor(per_pixel, denominator);
+                    let rest_step = per_pixel - k_step * denominator;
+                    for slot in row.iter_mut() {
+                        note(slot, k);
+                        k += k_step;
+                        rest += rest_step;
+                        if rest >= denominator {
+                            k += 1;
+                            rest -= denominator;
+                        }
+                    }
+                }
+            }
+        });
+        for i in 1..starts.len() {
+            starts[i] += starts[i - 1];
+        }
+        // Place them: `starts[i]` runs to line i's end as it fills...
+        let mut scanned = 0;
+        self.scan_rows(|_, _, s, (t_lo, t_hi)| {
+            let n = (t_hi - t_lo + 1) as usize;
+            let Some(row) = line_of.get(scanned..scanned + n) else {
+                return;
+            };
+            scanned += n;
+            for (&line, t) in row.iter().zip(t_lo..) {
+                let Some(next) = starts.get_mut(usize::from(line)) else {
+                    continue;
+                };
+                if let Some(slot) = order.get_mut(*next as usize) {
+                    *slot = (t as u32 & 0xFFFF) | ((s as u32) << 16);
+                }
+                *next += 1;
+            }
+        });
+        // ... and back to its start.
+        starts.copy_within(0..lines, 1);
+        starts[0] = 0;
+        let owned = starts[lines] as usize;
+        Ok(PixelTable {
+            order: &order[..owned.min(pixels)],
+            starts,
+        })
+    }
+
+    /// Calls `row(sector, base, s, (t_lo, t_hi))` for every row `s` of
+    /// every sector that has pixels, `t_lo..=t_hi` those pixels (inside
+    /// the image and the sector's cone), `base` the sector's first line
+    /// index: sector by sector, each sector's rows in the order its rays
+    /// are cast.
+    fn scan_rows(&self, mut row: impl FnMut(&Sector, u32, i32, (i32, i32))) {
+        let mut base = 0u32;
+        for sector in self.lines.sectors.iter().flatten() {
+            let mut s = sector.first;
+            loop {
+                let range = match sector.vanishing {
+                    None => Some((0, sector.cross_len - 1)),
+                    Some((s_v, t_v)) => {
+                        let a = ((i64::from(s) << IMG_FRAC) - s_v).abs();
+                        // The sector's cone, |t − t_V| <= a (< a left and
+                        // right of V), inside the image.
+                        let (low, high) = (t_v - a, t_v + a);
+                        let (t_lo, t_hi) = if sector.along_rows {
+                            (div_ceil(low, IMG_ONE), div_floor(high, IMG_ONE))
+                        } else {
+                            (div_floor(low, IMG_ONE) + 1, div_ceil(high, IMG_ONE) - 1)
+                        };
+                        let (t_lo, t_hi) = (t_lo.max(0), t_hi.min(i64::from(sector.cross_len) - 1));
+                        (t_lo <= t_hi && a > 0).then_some((t_lo as i32, t_hi as i32))
+                    }
+                };
+                if let Some(range) = range {
+                    row(sector, base, s, range);
+                }
+                if s == sector.last {
+                    break;
+                }
+                s += sector.step;
+            }
+            base += sector.lines;
+        }
+    }
+}
+
+/// A pixel no line of its sector owns, in the table's scan (none does:
+/// tested).
+const NO_LINE: u16 = u16::MAX;
+
+impl Line {
+    /// Pixel `(t, s)` as this line owns it (see [`OwnedPixels`]), in an
+    /// image whose top row is `top_row`.
+    #[inline(always)]
+    pub(crate) fn owned_at(&self, t: i32, s: i32, top_row: i32) -> Owned {
+        let (x, row) = if self.sector.along_rows {
+            (t, s)
+        } else {
+            (s, t)
+        };
+        let (s_v, t_v) = self.anchor();
+        // As `OwnedPixels` steps it: the Q32 slope times the row's Q8
+        // distance from the anchor, Q40.
+        let point = self.slope * ((i64::from(s) << IMG_FRAC) - s_v);
+        Owned {
+            x: x as u32,
+            y: (top_row - row) as u32,
+            s,
+            along: s - self.sector.s_ref,
+            offset: (i64::from(t) << COORD_FRAC_BITS)
+                - ((t_v << (COORD_FRAC_BITS - IMG_FRAC))
+                    + (point >> (32 + IMG_FRAC - COORD_FRAC_BITS))),
+        }
+    }
+}
+
 /// Iterator over a line's pixels (see [`Line::pixels`]): the ownership
 /// test of `Line::owns` stepped row by row by adds.
 ///
@@ -1277,6 +1489,62 @@ mod tests {
                 assert_eq!(stepped, exact, "pitch {pitch} roll {roll} line {index}");
             }
         }
+    }
+
+    #[test]
+    fn the_tabled_pixels_are_the_stepped_pixels_line_by_line() {
+        // Every line's pixels from the frame's table, in order, with the
+        // same image position, axis coordinate and offset from the line.
+        let mut compared = 0;
+        for roll in [0.0, 7.5, 30.0, -60.0, 90.0, 135.0, 180.0] {
+            for pitch in [-89.0, -45.0, 0.0, 2.0, 12.0, 45.0, 89.9, 90.0] {
+                for (size, hfov) in [((64, 48), 60.0), ((63, 47), 120.0), ((9, 31), 30.0)] {
+                    let view = rolled(pitch, roll, 25.0, size, hfov);
+                    let pixels = (size.0 * size.1) as usize;
+                    let mut line_of = vec![0u16; pixels];
+                    let mut order = vec![0u32; pixels];
+                    let mut starts = vec![0u32; view.lines() as usize + 1];
+                    let table = view
+                        .tabulate_pixels(&mut line_of, &mut order, &mut starts)
+                        .unwrap();
+                    assert_eq!(table.order.len(), pixels);
+                    for index in 0..view.lines() {
+                        let range = table.starts[index as usize] as usize
+                            ..table.starts[index as usize + 1] as usize;
+                        let Some(line) = view.line(index) else {
+                            assert!(range.is_empty());
+                            continue;
+                        };
+                        let tabled: vec::Vec<Owned> = table.order[range]
+                            .iter()
+                            .map(|&p| {
+                                line.owned_at(
+                                    (p & 0xFFFF) as i32,
+                                    (p >> 16) as i32,
+                                    size.1 as i32 - 1,
+                                )
+                            })
+                            .collect();
+                        let stepped: vec::Vec<Owned> = line.pixels(size.1).collect();
+                        assert_eq!(
+                            tabled, stepped,
+                            "roll {roll} pitch {pitch} size {size:?} line {index}"
+                        );
+                        compared += tabled.len();
+                    }
+                }
+            }
+        }
+        assert!(compared > 100_000, "{compared} pixels compared");
+        // Too little storage is an error, not a panic.
+        let view = view(30.0, 25.0, (16, 8), 60.0);
+        let (mut line_of, mut order) = ([0u16; 128], [0u32; 127]);
+        let mut starts = vec![0u32; view.lines() as usize + 1];
+        assert_eq!(
+            view.tabulate_pixels(&mut line_of, &mut order, &mut starts)
+                .err(),
+            Some(TableError::TooSmall)
+        );
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! frame is derived from them with integer arithmetic only (see [`ray`]).
 
 pub(crate) mod lines;
-pub use lines::max_lines;
+pub use lines::{max_lines, TableError};
 pub(crate) mod lod;
 pub(crate) mod plane;
 pub(crate) mod ray;
