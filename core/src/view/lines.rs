@@ -750,7 +750,9 @@ impl Line {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TableError {
     /// The storage holds fewer entries than the frame has pixels (or
-    /// lines, plus one).
+    /// lines, plus one), or the frame has more lines than the table's
+    /// 16-bit line numbers name (possible from about 5 000 pixels a
+    /// side: [`crate::max_lines`]).
     TooSmall,
 }
 
@@ -869,6 +871,7 @@ impl View {
             };
             scanned += n;
             for (&line, t) in row.iter().zip(t_lo..) {
+                // (`NO_LINE` is past every line: such a pixel is skipped.)
                 let Some(next) = starts.get_mut(usize::from(line)) else {
                     continue;
                 };
