@@ -98,6 +98,54 @@ fn a_flight_reports_every_frame_and_the_machine() {
 }
 
 #[test]
+fn a_flight_over_objects_holds_their_stick_table_or_says_it_cannot() {
+    let args = [
+        "sim",
+        "--objects",
+        "--procedural-size",
+        "256",
+        "--size",
+        "64x48",
+        "--frames",
+        "3",
+        "--processors",
+        "8",
+    ];
+    let (code, out, err) = sim(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("trees and") && err.contains("stick table") && err.contains("every worker"),
+        "{err}"
+    );
+    assert!(out.contains("worker utilization"), "{out}");
+    // On real threads too.
+    let (code, out, err) = sim(&[&args[..], &["--threads", "2"]].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.lines().any(|l| l.trim_start().starts_with("2 ")),
+        "{out}"
+    );
+    // A processor whose local memory holds one tile has no room for it.
+    let dir = std::env::temp_dir().join(format!("terracast-sim-objects-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let machine = dir.join("one-tile.toml");
+    std::fs::write(&machine, "[local_memory]\nmib = 1\n[tiles]\nside = 512\n").unwrap();
+    let (code, _, err) = sim(&[&args[..], &["--machine", s(&machine)]].concat());
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("stick table") && err.contains("local_memory.mib"),
+        "{err}"
+    );
+    assert_eq!(
+        err.trim_end()
+            .lines()
+            .last()
+            .map(|l| l.contains("stick table")),
+        Some(true)
+    );
+}
+
+#[test]
 fn threads_render_the_same_frames_and_report_mpx() {
     let (code, out, err) = sim(&[
         "sim",

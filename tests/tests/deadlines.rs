@@ -6,8 +6,8 @@
 use terracast::{Camera, RenderOptions};
 use terracast_sim::scene::{procedural, KernelScene};
 use terracast_sim::sim::{
-    flight, record_flight, simulate, table, FrameTrace, Machine, MissReason, SimResult,
-    TABLE_HFOV_DEG, TABLE_MAP_SIDE,
+    flight, record_flight, simulate, simulate_with_sticks, table, FrameTrace, Machine, MissReason,
+    SimResult, TABLE_HFOV_DEG, TABLE_MAP_SIDE,
 };
 
 const SIZE: (u32, u32) = (160, 120);
@@ -187,4 +187,51 @@ fn table_1_frame_rate_rises_with_pitch_when_the_frame_sees_terrain() {
             table.pitch
         );
     }
+}
+
+#[test]
+fn a_scene_with_objects_holds_its_stick_table_in_every_processor() {
+    let mut planted = procedural(512, 7);
+    planted.plant_objects(7);
+    let scene = planted.to_kernel().unwrap();
+    let table_bytes = scene.stick_table_bytes();
+    assert!(table_bytes > 0);
+    let pvs = Machine::default();
+    pvs.check_resident(table_bytes).unwrap();
+    let flight = traces(&scene, 4.0, &pvs);
+    let without_table = simulate(&pvs, &flight);
+    let with_table = simulate_with_sticks(&pvs, &flight, table_bytes);
+    // The master reads the table once, before the first frame's tiles.
+    assert_eq!(
+        with_table.frames[0].disk_reads,
+        without_table.frames[0].disk_reads + 1
+    );
+    let later_reads = |r: &SimResult| r.frames[1..].iter().map(|f| f.disk_reads).sum::<u64>();
+    assert_eq!(later_reads(&with_table), later_reads(&without_table));
+    // Every worker copies it from global memory before its first line.
+    let transfer = |r: &SimResult| r.frames.iter().map(|f| f.transfer).sum::<u64>();
+    let copy_one = pvs.bank_latency().max(1);
+    assert!(
+        transfer(&with_table)
+            >= transfer(&without_table) + u64::from(pvs.processors - 1) * copy_one,
+        "{} against {}",
+        transfer(&with_table),
+        transfer(&without_table)
+    );
+    // The objects' work itself (their steps and hits) is in the recording.
+    let bare = traces(&self::scene(), 4.0, &pvs);
+    let compute = |r: &SimResult| r.frames.iter().map(|f| f.compute).sum::<u64>();
+    assert!(compute(&with_table) > compute(&simulate(&pvs, &bare)));
+    // No table, no difference.
+    assert_eq!(simulate_with_sticks(&pvs, &flight, 0), without_table);
+    // A table that leaves a processor no room for a tile is refused.
+    let small = Machine::from_toml("[local_memory]\nmib = 1").unwrap();
+    let e = small.check_resident(1 << 20).unwrap_err().to_string();
+    assert!(
+        e.contains("stick table (1024 KiB)") && e.contains("local_memory.mib"),
+        "{e}"
+    );
+    assert_eq!(pvs.resident_tiles(1), 1);
+    assert_eq!(pvs.resident_tiles(pvs.tile_bytes()), 1);
+    assert_eq!(pvs.resident_tiles(pvs.tile_bytes() + 1), 2);
 }

@@ -8,8 +8,8 @@ use crate::outputs::Outputs;
 use crate::scene::KernelScene;
 use crate::sim::threads::render_threads;
 use crate::sim::{
-    flight, flight_governor, record_flight, record_governed_flight, simulate, table, Machine,
-    SimResult, TABLE_HFOV_DEG, TABLE_MAP_SIDE, TABLE_PITCH,
+    flight, flight_governor, record_flight, record_governed_flight, simulate_with_sticks, table,
+    Machine, SimResult, TABLE_HFOV_DEG, TABLE_MAP_SIDE, TABLE_PITCH,
 };
 use std::path::PathBuf;
 use terracast::config::DEFAULT_HFOV_DEG;
@@ -130,9 +130,16 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
     } else {
         (DEFAULT_PROCEDURAL_SIDE, DEFAULT_HFOV_DEG)
     };
-    args.scene.refuse_objects("sim")?;
     let scene = load_scene_or(&args.scene, side)?;
     let kernel = scene.to_kernel_with(args.kernel.height_filter())?;
+    let stick_table_bytes = kernel.stick_table_bytes();
+    machine.check_resident(stick_table_bytes)?;
+    if stick_table_bytes > 0 {
+        eprintln!(
+            "the objects' stick table ({:.1} KiB) is read from disk once and held whole in global memory and by every worker",
+            stick_table_bytes as f64 / 1024.0
+        );
+    }
     let [yaw, pitch] = super::DEFAULT_YAW_PITCH;
     let start = args.camera.camera(scene.default_eye(), [yaw, pitch, hfov]);
     let options = args.kernel.fixed_rays_options()?;
@@ -216,7 +223,7 @@ pub(super) fn sim_command(args: SimArgs) -> Result<()> {
         ),
     };
     eprintln!();
-    let result = simulate(&machine, &traces);
+    let result = simulate_with_sticks(&machine, &traces, stick_table_bytes);
     print!("{}", report(&machine, &result, costs.as_deref()));
     Ok(())
 }

@@ -113,6 +113,8 @@ struct Worker {
     line: Option<(Task, usize)>,
     /// Waiting for a frame to be published.
     waiting: bool,
+    /// Whether its local memory holds the stick table (or there is none).
+    holds_table: bool,
     finished: bool,
     local: LruCache<TileKey>,
 }
@@ -133,12 +135,32 @@ struct FrameBook {
 
 /// Runs `frames` (all of one image size) on `machine`.
 pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
+    simulate_with_sticks(machine, frames, 0)
+}
+
+/// Runs `frames` of a scene with objects on `machine`: its stick table,
+/// `stick_table_bytes`, is read from disk by the master before the first
+/// frame's tiles, and held whole in global memory and in every worker's
+/// local memory (each copies it through the banks before its first
+/// line), where it takes the room of as many tiles
+/// ([`Machine::resident_tiles`]; [`Machine::check_resident`] says whether
+/// it fits). A stick point's voxel holds its stick's index in place of a
+/// color, so tiles keep their size.
+pub fn simulate_with_sticks(
+    machine: &Machine,
+    frames: &[FrameTrace],
+    stick_table_bytes: u64,
+) -> SimResult {
     let lines = frames.iter().map(|f| f.lines.len()).max().unwrap_or(0) as u32;
     let pool = LinePool::new(lines, frames.len() as u32);
     let mut banks = Banks::new(machine);
     let mut disk = DiskChannel::default();
-    let mut global: LruCache<TileKey> = LruCache::new(machine.global_tiles());
+    let table_slots = machine.resident_tiles(stick_table_bytes);
+    let global_slots = machine.global_tiles().saturating_sub(table_slots).max(1);
+    let mut global: LruCache<TileKey> = LruCache::new(global_slots);
     let tile_bytes = machine.tile_bytes();
+    // The table lies in global memory after the tiles' slots.
+    let table_address = global_slots as u64 * tile_bytes;
     let disk_read = machine.disk_read();
     let mut workers: Vec<Worker> = (0..machine.workers())
         .map(|_| Worker {
@@ -147,7 +169,8 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
             line: None,
             waiting: false,
             finished: false,
-            local: LruCache::new(machine.local_tiles()),
+            holds_table: stick_table_bytes == 0,
+            local: LruCache::new(machine.local_tiles().saturating_sub(table_slots).max(1)),
         })
         .collect();
     let mut books: Vec<FrameBook> = frames.iter().map(|_| FrameBook::default()).collect();
@@ -175,6 +198,10 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
                 master_clock = master_clock.max(books[f - 1].started_at.unwrap_or(0));
             }
             let start = master_clock;
+            if f == 0 && stick_table_bytes > 0 {
+                master_clock = disk.read(master_clock, machine.disk_read_bytes(stick_table_bytes));
+                books[f].disk_reads += 1;
+            }
             let trace = &frames[f];
             master_clock += machine.cycles(
                 machine.cycles.view_setup + trace.tiles_tested * machine.cycles.per_footprint_tile,
@@ -218,6 +245,15 @@ pub fn simulate(machine: &Machine, frames: &[FrameTrace]) -> SimResult {
                     }
                     if task.line == 0 {
                         book.started_at = Some(worker.clock);
+                    }
+                    if !worker.holds_table {
+                        let (arrived, waited) =
+                            banks.read(worker.clock, table_address, stick_table_bytes);
+                        book.transfer += arrived - worker.clock;
+                        book.bank_wait += waited;
+                        worker.busy += arrived - worker.clock;
+                        worker.clock = arrived;
+                        worker.holds_table = true;
                     }
                     worker.line = Some((task, 0));
                 }

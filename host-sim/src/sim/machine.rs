@@ -315,8 +315,35 @@ impl Machine {
 
     /// Time to read one tile from disk, latency included.
     pub fn disk_read(&self) -> Ps {
-        let transfer = self.tile_bytes() as f64 / (self.disk.mb_per_s * 1e6);
+        self.disk_read_bytes(self.tile_bytes())
+    }
+
+    /// Time to read `bytes` from disk in one read, latency included.
+    pub fn disk_read_bytes(&self, bytes: u64) -> Ps {
+        let transfer = bytes as f64 / (self.disk.mb_per_s * 1e6);
         ((self.disk.latency_ms * 1e-3 + transfer) * 1e12).round() as Ps
+    }
+
+    /// Tile slots that `bytes` of data held whole for a run take (in
+    /// global memory and in every processor's local memory): the
+    /// objects' stick table, which every stick point's voxel indexes.
+    pub fn resident_tiles(&self, bytes: u64) -> usize {
+        bytes.div_ceil(self.tile_bytes()) as usize
+    }
+
+    /// Refused when `bytes` held whole leave a processor's local memory
+    /// (or global memory) no room for a tile.
+    pub fn check_resident(&self, bytes: u64) -> Result<()> {
+        let slots = self.resident_tiles(bytes);
+        if slots >= self.local_tiles() || slots >= self.global_tiles() {
+            return Err(Error::new(format!(
+                "the objects' stick table ({} KiB) leaves no room for a {} KiB tile in a processor's {} MiB of local memory; give the machine more local_memory.mib",
+                bytes.div_ceil(1024),
+                self.tile_bytes() / 1024,
+                self.local_memory.mib
+            )));
+        }
+        Ok(())
     }
 
     /// The frame deadline.

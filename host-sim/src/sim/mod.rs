@@ -17,7 +17,7 @@ pub mod memory;
 pub mod threads;
 pub mod trace;
 
-pub use engine::{simulate, FrameResult, MissReason, SimResult};
+pub use engine::{simulate, simulate_with_sticks, FrameResult, MissReason, SimResult};
 pub use machine::Machine;
 pub use trace::{record_frame, record_governed_frame, FrameTrace, TileKey};
 
@@ -196,7 +196,7 @@ pub fn table(
                         processors,
                         ..machine.clone()
                     };
-                    simulate(&machine, &traces).fps()
+                    simulate_with_sticks(&machine, &traces, scene.stick_table_bytes()).fps()
                 })
                 .collect(),
         );

@@ -6,7 +6,8 @@ use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
-    render_line, Camera, LinePool, NoProbe, RenderOptions, Rgb, Sample, Sink, View, Wait,
+    render_line, Camera, LinePool, NoProbe, RenderOptions, Rgb, Sample, Sink, Surface, View, Wait,
+    WithSticks,
 };
 
 /// A worker's pixels of one frame, as they come: a line's pixels are
@@ -56,6 +57,26 @@ pub fn render_threads(
         .iter()
         .map(|c| View::new(c, size.0, size.1).map_err(|e| Error::new(format!("bad view: {e}"))))
         .collect::<Result<Vec<_>>>()?;
+    Ok(match scene.sticks()? {
+        Some(layer) => run(
+            &WithSticks::new(&pyramid, layer),
+            &views,
+            size,
+            options,
+            threads,
+        ),
+        None => run(&pyramid, &views, size, options, threads),
+    })
+}
+
+/// [`render_threads`] on `surface`.
+fn run<T: Surface + Sync + ?Sized>(
+    surface: &T,
+    views: &[View],
+    size: (u32, u32),
+    options: &RenderOptions,
+    threads: usize,
+) -> ThreadedRun {
     let lines = views.iter().map(View::lines).max().unwrap_or(0);
     let pool = LinePool::new(lines, views.len() as u32);
     let started = Instant::now();
@@ -81,7 +102,7 @@ pub fn render_threads(
                                 };
                                 let view = &views[task.frame as usize];
                                 render_line(
-                                    &pyramid,
+                                    surface,
                                     view,
                                     options,
                                     task.line,
@@ -113,7 +134,7 @@ pub fn render_threads(
             }
         }
     }
-    Ok(ThreadedRun { frames, seconds })
+    ThreadedRun { frames, seconds }
 }
 
 #[cfg(test)]
@@ -123,28 +144,46 @@ mod tests {
 
     #[test]
     fn any_number_of_threads_renders_the_frames_render_does() {
-        let scene = crate::scene::procedural(128, 5).to_kernel().unwrap();
+        let bare = crate::scene::procedural(128, 5);
+        let mut planted = bare.clone();
+        planted.plant_objects(5);
         let options = RenderOptions::default();
         let cameras: Vec<Camera> = (0..3)
             .map(|i| terracast::Camera::looking([64.0, 10.0 + 5.0 * i as f32, 120.0], 90.0, 20.0))
             .collect();
         let size = (64, 48);
-        let pyramid = scene.pyramid_for(&options).unwrap();
-        let expected: Vec<Vec<Rgb>> = cameras
-            .iter()
-            .map(|c| {
-                let mut colors = vec![[0u8; 3]; 64 * 48];
-                let mut fb = Framebuffer::new(&mut colors, 64, 48).unwrap();
-                let view = View::new(c, 64, 48).unwrap();
-                render(&pyramid, &view, &options, &mut fb, &mut NoProbe);
-                colors
-            })
-            .collect();
-        for threads in [1, 2, 5] {
-            let run = render_threads(&scene, &cameras, size, &options, threads).unwrap();
-            assert_eq!(run.frames, expected, "{threads} threads");
-            assert!(run.mpx_per_s(size) > 0.0);
+        let mut frames_of_each = Vec::new();
+        for scene in [bare, planted] {
+            let scene = scene.to_kernel().unwrap();
+            let pyramid = scene.pyramid_for(&options).unwrap();
+            let sticks = scene.sticks().unwrap();
+            let expected: Vec<Vec<Rgb>> = cameras
+                .iter()
+                .map(|c| {
+                    let mut colors = vec![[0u8; 3]; 64 * 48];
+                    let mut fb = Framebuffer::new(&mut colors, 64, 48).unwrap();
+                    let view = View::new(c, 64, 48).unwrap();
+                    match sticks {
+                        Some(layer) => render(
+                            &WithSticks::new(&pyramid, layer),
+                            &view,
+                            &options,
+                            &mut fb,
+                            &mut NoProbe,
+                        ),
+                        None => render(&pyramid, &view, &options, &mut fb, &mut NoProbe),
+                    }
+                    colors
+                })
+                .collect();
+            for threads in [1, 2, 5] {
+                let run = render_threads(&scene, &cameras, size, &options, threads).unwrap();
+                assert_eq!(run.frames, expected, "{threads} threads");
+                assert!(run.mpx_per_s(size) > 0.0);
+            }
+            assert!(render_threads(&scene, &cameras, size, &options, 0).is_err());
+            frames_of_each.push(expected);
         }
-        assert!(render_threads(&scene, &cameras, size, &options, 0).is_err());
+        assert_ne!(frames_of_each[0], frames_of_each[1], "the objects show");
     }
 }

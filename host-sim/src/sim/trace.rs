@@ -11,8 +11,8 @@ use super::machine::Machine;
 use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use terracast::{
-    level_side, render, Camera, FrameCost, Governor, Probe, Pyramid, RenderOptions, Sample, Sink,
-    View,
+    level_side, render, Camera, FrameCost, Governor, Probe, RenderOptions, Sample, Sink, Surface,
+    View, WithSticks,
 };
 
 /// A terrain tile: pyramid level and tile coordinates on that level (the
@@ -188,10 +188,7 @@ pub fn record_frame(
     options: &RenderOptions,
     machine: &Machine,
 ) -> Result<FrameTrace> {
-    let render_frame = |pyramid: &Pyramid<'_>, view: &View, lines: &mut LineRecorder<'_>| {
-        render(pyramid, view, options, &mut Discard, lines)
-    };
-    Ok(record(scene, camera, size, options, machine, render_frame)?.0)
+    Ok(record(scene, camera, size, machine, FrameRender::Plain(options))?.0)
 }
 
 /// Records a view that `governor` renders within its budget (see
@@ -206,24 +203,63 @@ pub fn record_governed_frame(
     machine: &Machine,
     governor: &mut Governor,
 ) -> Result<(FrameTrace, FrameCost)> {
-    let render_frame = |pyramid: &Pyramid<'_>, view: &View, lines: &mut LineRecorder<'_>| {
-        governor.render(pyramid, view, options, &mut Discard, lines)
-    };
-    record(scene, camera, size, options, machine, render_frame)
+    let (trace, cost) = record(
+        scene,
+        camera,
+        size,
+        machine,
+        FrameRender::Governed(options, governor),
+    )?;
+    let cost = cost.ok_or_else(|| Error::new("a governed render gave no cost"))?;
+    Ok((trace, cost))
 }
 
-/// A frame's recording, line by line as `render_frame` reports them
-/// ([`Probe::line`]) on the scene's pyramid, and the footprint; with what
-/// `render_frame` returns.
-fn record<T>(
+/// How a recorded frame is rendered: as `render` does, or within a
+/// governor's budget.
+enum FrameRender<'a> {
+    Plain(&'a RenderOptions),
+    Governed(&'a RenderOptions, &'a mut Governor),
+}
+
+impl FrameRender<'_> {
+    fn options(&self) -> &RenderOptions {
+        match self {
+            Self::Plain(options) | Self::Governed(options, _) => options,
+        }
+    }
+
+    /// Renders `view` of `surface` into nothing, its events into `lines`;
+    /// the frame's cost where a governor rendered it.
+    fn run<T: Surface + ?Sized>(
+        self,
+        surface: &T,
+        view: &View,
+        lines: &mut LineRecorder<'_>,
+    ) -> Option<FrameCost> {
+        match self {
+            Self::Plain(options) => {
+                render(surface, view, options, &mut Discard, lines);
+                None
+            }
+            Self::Governed(options, governor) => {
+                Some(governor.render(surface, view, options, &mut Discard, lines))
+            }
+        }
+    }
+}
+
+/// A frame's recording, line by line as the render reports them
+/// ([`Probe::line`]) on the scene's pyramid (with its objects' sticks,
+/// when it has any), and the footprint; with the governed render's cost.
+fn record(
     scene: &KernelScene,
     camera: &Camera,
     size: (u32, u32),
-    options: &RenderOptions,
     machine: &Machine,
-    render_frame: impl FnOnce(&Pyramid<'_>, &View, &mut LineRecorder<'_>) -> T,
-) -> Result<(FrameTrace, T)> {
-    let pyramid: Pyramid<'_> = scene.pyramid_for(options)?;
+    frame_render: FrameRender<'_>,
+) -> Result<(FrameTrace, Option<FrameCost>)> {
+    let pyramid = scene.pyramid_for(frame_render.options())?;
+    let sticks = scene.sticks()?;
     let view =
         View::new(camera, size.0, size.1).map_err(|e| Error::new(format!("bad view: {e}")))?;
     let base = pyramid.base();
@@ -235,7 +271,10 @@ fn record<T>(
         lines: Vec::with_capacity(view.lines() as usize),
         started: false,
     };
-    let rendered = render_frame(&pyramid, &view, &mut lines);
+    let cost = match sticks {
+        Some(layer) => frame_render.run(&WithSticks::new(&pyramid, layer), &view, &mut lines),
+        None => frame_render.run(&pyramid, &view, &mut lines),
+    };
     let (footprint, tiles_tested) = footprint_tiles(
         camera,
         size,
@@ -248,7 +287,7 @@ fn record<T>(
         footprint,
         tiles_tested,
     };
-    Ok((trace, rendered))
+    Ok((trace, cost))
 }
 
 /// A [`Recorder`] for a whole frame: each line the kernel starts
@@ -295,7 +334,7 @@ impl Probe for LineRecorder<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use terracast::{render, CountingProbe};
+    use terracast::{render, CountingProbe, Pyramid};
 
     #[test]
     fn the_recording_holds_all_of_the_kernels_work() {
@@ -359,5 +398,47 @@ mod tests {
             .clone()
             .all(|e| e.tile.x <= 256 / side && e.tile.y <= 256 / side));
         assert!(!trace.footprint.is_empty());
+    }
+
+    #[test]
+    fn a_scene_with_objects_is_recorded_as_the_kernel_renders_it_with_its_sticks() {
+        let bare = crate::scene::procedural(256, 2);
+        let mut planted = bare.clone();
+        planted.plant_objects(2);
+        let (bare, planted) = (bare.to_kernel().unwrap(), planted.to_kernel().unwrap());
+        // Over the map's middle, where the seeded rule plants.
+        let camera = terracast::Camera::looking([128.0, 20.0, 60.0], 90.0, 20.0);
+        let options = RenderOptions::default();
+        let machine = Machine::default();
+        let view = View::new(&camera, 80, 60).unwrap();
+        let totals = |trace: &FrameTrace| {
+            let events = trace.lines.iter().flatten();
+            (
+                events.clone().map(|e| u64::from(e.rays)).sum::<u64>(),
+                events.clone().map(|e| u64::from(e.steps)).sum::<u64>(),
+                events.map(|e| u64::from(e.colors)).sum::<u64>(),
+            )
+        };
+        let pyramid: Pyramid<'_> = planted.pyramid_for(&options).unwrap();
+        let layer = planted.sticks().unwrap().expect("the scene has objects");
+        let mut counts = CountingProbe::default();
+        render(
+            &WithSticks::new(&pyramid, layer),
+            &view,
+            &options,
+            &mut Discard,
+            &mut counts,
+        );
+        let with_objects =
+            totals(&record_frame(&planted, &camera, (80, 60), &options, &machine).unwrap());
+        assert_eq!(
+            with_objects,
+            (counts.rays, counts.steps, counts.color_fetches)
+        );
+        // The objects change the work: it is not the bare map's.
+        let without = totals(&record_frame(&bare, &camera, (80, 60), &options, &machine).unwrap());
+        assert_ne!(with_objects, without);
+        assert_eq!(bare.stick_table_bytes(), 0);
+        assert!(planted.stick_table_bytes() > 0);
     }
 }
