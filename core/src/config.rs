@@ -47,6 +47,11 @@ pub const MAX_LEVEL: u32 = 15;
 /// their height increment stays in range too.
 pub const MAX_WALK_LEVEL: u32 = 14;
 
+/// Finest photo detail over the height grid, as a shift: a
+/// [`crate::Detail`] is 2 to `2^MAX_DETAIL_SHIFT` (32) times finer than
+/// level 0 on each side.
+pub const MAX_DETAIL_SHIFT: u32 = 5;
+
 /// Largest image side in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 8_192;
 

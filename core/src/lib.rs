@@ -47,6 +47,7 @@ mod atmosphere;
 mod caster;
 mod color;
 pub mod config;
+mod detail;
 mod divide;
 mod pool;
 mod probe;
@@ -66,6 +67,7 @@ pub use atmosphere::{
     PreparedAtmosphere, Sun, VISIBILITY_CONTRAST,
 };
 pub use color::Rgb;
+pub use detail::{detail_points, Detail, DetailError, WithDetail};
 
 pub use caster::{
     render, render_by_footprint, render_level_columns, render_line, render_line_by_footprint,

@@ -50,7 +50,7 @@
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS};
 use crate::pyramid::{level_count, level_side, MAX_LEVELS};
-use crate::surface::{Extent, Grid, Surface};
+use crate::surface::{Grid, Surface};
 use crate::terrain::Terrain;
 use core::fmt;
 
@@ -372,30 +372,7 @@ impl<'s, T: Surface + ?Sized> Surface for WithSticks<'s, T> {
             layer: Some(self.layer),
         }
     }
-    #[inline(always)]
-    fn roughness(&self) -> u8 {
-        self.surface.roughness()
-    }
-    #[inline(always)]
-    fn stride(&self, level: u8) -> Option<isize> {
-        self.surface.stride(level)
-    }
-    #[inline(always)]
-    fn top(&self) -> u8 {
-        self.surface.top()
-    }
-    #[inline]
-    fn extent(&self) -> Extent {
-        self.surface.extent()
-    }
-    #[inline]
-    fn has_bounds(&self) -> bool {
-        self.surface.has_bounds()
-    }
-    #[inline]
-    fn bound(&self, level: u8, x: i64, y: i64) -> Option<(u16, usize)> {
-        self.surface.bound(level, x, y)
-    }
+    crate::surface::lend_surface!(surface);
 }
 
 #[cfg(test)]

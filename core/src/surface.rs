@@ -9,6 +9,7 @@
 //! compiles to the same slice indexing as before the trait existed.
 
 use crate::color::Rgb;
+use crate::detail::Detail;
 
 /// The size of level 0 and its highest height: what clipping a ray to the
 /// map needs.
@@ -120,4 +121,44 @@ pub trait Surface {
     /// the cell for the probe. `None` when unknown: the caller must assume
     /// the worst.
     fn bound(&self, level: u8, x: i64, y: i64) -> Option<(u16, usize)>;
+    /// Photos finer than level 0, each over part of the map, whose colors
+    /// a hit nearer than the color reach takes ([`crate::WithDetail`]);
+    /// none by default.
+    #[inline(always)]
+    fn details(&self) -> &[Detail<'_>] {
+        &[]
+    }
 }
+
+/// The [`Surface`] methods of a wrapper that lends field `$inner`'s
+/// levels, bounds and extent as they are ([`crate::WithSticks`],
+/// [`crate::WithDetail`]: what they change is what a hit sees).
+macro_rules! lend_surface {
+    ($inner:ident) => {
+        #[inline(always)]
+        fn roughness(&self) -> u8 {
+            self.$inner.roughness()
+        }
+        #[inline(always)]
+        fn stride(&self, level: u8) -> Option<isize> {
+            self.$inner.stride(level)
+        }
+        #[inline(always)]
+        fn top(&self) -> u8 {
+            self.$inner.top()
+        }
+        #[inline]
+        fn extent(&self) -> $crate::surface::Extent {
+            self.$inner.extent()
+        }
+        #[inline]
+        fn has_bounds(&self) -> bool {
+            self.$inner.has_bounds()
+        }
+        #[inline]
+        fn bound(&self, level: u8, x: i64, y: i64) -> Option<(u16, usize)> {
+            self.$inner.bound(level, x, y)
+        }
+    };
+}
+pub(crate) use lend_surface;

@@ -27,7 +27,7 @@ use crate::scene::{KernelScene, Scene};
 use crate::sim::Machine;
 use terracast::{
     control_points, with_margin, Camera, CountingProbe, FrameCost, Framebuffer, Governor,
-    PreparedAtmosphere, RenderOptions, Rgb, Sample, Surface, View, Warp, WithSticks,
+    PreparedAtmosphere, RenderOptions, Rgb, Sample, Surface, View, Warp, WithDetail, WithSticks,
 };
 
 /// A camera path: keyframes in time, linearly interpolated.
@@ -366,6 +366,7 @@ pub fn fly(
     }
     let pyramid = kernel.pyramid_for(&options.render)?;
     let sticks = kernel.sticks()?;
+    let details = kernel.details()?;
     let first = path.camera(0.0, options.hfov);
     let (_, render_size) = with_margin(&first, options.size, options.margin);
     // The budget: the rendering period's cycles on the workers, spent at
@@ -411,6 +412,14 @@ pub fn fly(
             Some(layer) => governed(
                 governor,
                 &WithSticks::new(&pyramid, layer),
+                &view,
+                options,
+                &mut frame,
+                &mut counts,
+            ),
+            None if !details.is_empty() => governed(
+                governor,
+                &WithDetail::new(&pyramid, &details),
                 &view,
                 options,
                 &mut frame,

@@ -7,7 +7,8 @@ use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
     render, render_by_footprint, Camera, Coherence, CountingProbe, FrameCost, Governor,
-    PreparedAtmosphere, Prices, Probe, RenderOptions, Sample, Sink, Surface, View, WithSticks,
+    PreparedAtmosphere, Prices, Probe, RenderOptions, Sample, Sink, Surface, View, WithDetail,
+    WithSticks,
 };
 
 /// How many rays each pixel gets.
@@ -226,12 +227,20 @@ pub fn render_kernel_in(
 ) -> Result<(Frame, RenderStats)> {
     let pyramid = scene.pyramid_for(options)?;
     let size = (width, height);
+    let details = scene.details()?;
     let (frame, mut stats) = match scene.sticks()? {
         Some(sticks) => {
             let surface = WithSticks::new(&pyramid, sticks);
             let (frame, mut stats) =
                 render_surface_in(&surface, camera, size, options, rays, atmosphere)?;
             stats.resident_bytes = sticks.bytes() as u64;
+            (frame, stats)
+        }
+        None if !details.is_empty() => {
+            let surface = WithDetail::new(&pyramid, &details);
+            let (frame, mut stats) =
+                render_surface_in(&surface, camera, size, options, rays, atmosphere)?;
+            stats.resident_bytes = details.iter().map(|d| d.bytes() as u64).sum();
             (frame, stats)
         }
         None => render_surface_in(&pyramid, camera, size, options, rays, atmosphere)?,

@@ -3,13 +3,15 @@
 //! A [`Scene`] keeps heights as `f32` voxels (value × height scale) for the
 //! exact reference, and converts them once to the kernel's U12.4 form.
 
+mod detail;
 pub mod geotiff;
 mod load;
 mod procedural;
 
+pub use detail::PhotoDetail;
 pub use load::{
     derived_height_scale, fill_voids, hgt_spacing, load_colors, load_heights, not_a_height_map,
-    HgtSpacing,
+    read_color_map, stretch_colors, HgtSpacing,
 };
 pub use procedural::HeightBands;
 pub use procedural::{color_by_height_and_slope, procedural};
@@ -18,7 +20,7 @@ pub(crate) use procedural::{terrain_color, value_noise, WATER_LEVEL};
 use crate::error::{Error, Result};
 use crate::objects::Objects;
 use terracast::{
-    pyramid_cells, pyramid_points, HeightFilter, Pyramid, RenderOptions, Resolution, Rgb,
+    pyramid_cells, pyramid_points, Detail, HeightFilter, Pyramid, RenderOptions, Resolution, Rgb,
     StickLayer, Terrain,
 };
 
@@ -36,6 +38,9 @@ pub struct Scene {
     /// 3D objects standing on the terrain, as sticks ([`crate::objects`]):
     /// `heights` are their tops where they stand.
     pub objects: Option<Objects>,
+    /// Photos kept finer than the grid, each over its rectangle, later
+    /// over earlier (`colors` are there the mean of each point's texels).
+    pub details: Vec<PhotoDetail>,
 }
 
 /// Colors at a cell's corners (`(i, j)`, `(i + 1, j)`, `(i, j + 1)`,
@@ -75,6 +80,18 @@ pub struct KernelScene {
     /// about as long as a 320 × 240 render).
     roughness: u8,
     objects: Option<Objects>,
+    /// The photos kept finer than the grid, in the kernel's storage.
+    details: Vec<KernelDetail>,
+}
+
+/// A photo kept finer than the grid ([`PhotoDetail`]) with the kernel's
+/// levels of it.
+#[derive(Debug, Clone)]
+struct KernelDetail {
+    origin: [u32; 2],
+    size: [u32; 2],
+    shift: u32,
+    levels: Vec<Rgb>,
 }
 
 /// Loads a height map and its color map (colored by height and slope when
@@ -86,10 +103,18 @@ pub fn load_pair(
     seed: u64,
 ) -> Result<Scene> {
     let (w, d, heights) = load_heights(height, scale)?;
-    let colors = match color {
-        Some(c) => load_colors(c, w, d)?,
-        None => color_by_height_and_slope(w, d, &heights, seed),
+    let Some(color) = color else {
+        let colors = color_by_height_and_slope(w, d, &heights, seed);
+        return Scene::new(w, d, heights, colors);
     };
+    let photo = read_color_map(color)?;
+    // A photo finer than the grid is kept at its own resolution.
+    if let Some(detail) = PhotoDetail::from_photo(&photo, w, d) {
+        let mut scene = Scene::new(w, d, heights, detail.grid_colors())?;
+        scene.details.push(detail);
+        return Ok(scene);
+    }
+    let colors = stretch_colors(&photo, color, w, d)?;
     Scene::new(w, d, heights, colors)
 }
 
@@ -131,6 +156,7 @@ pub fn load_scene_files(
     let (w, d, heights) = load_heights(height, scale)?;
     let mut scene_colors = color_by_height_and_slope(w, d, &heights, seed);
     let grid_at = grid_at.unwrap_or_else(|| unreachable!("placed photos need a grid"));
+    let mut details = Vec::new();
     for (path, at) in colors.iter().zip(photos_at) {
         let at = at.unwrap_or_else(|| unreachable!("placed photos are georeferenced"));
         if at.geographic != grid_at.geographic {
@@ -155,8 +181,16 @@ pub fn load_scene_files(
             100.0 * covered as f64 / (f64::from(w) * f64::from(d)),
             grid_at.pixel[0] / at.pixel[0]
         );
+        // A photo finer than the grid is kept at its own resolution over
+        // the points it covers, their colors its texels' mean.
+        if let Some(detail) = PhotoDetail::placed(&photo, &at, &grid_at, (w, d), &scene_colors) {
+            detail.reduce_into(&mut scene_colors, w);
+            details.push(detail);
+        }
     }
-    Scene::new(w, d, heights, scene_colors)
+    let mut scene = Scene::new(w, d, heights, scene_colors)?;
+    scene.details = details;
+    Ok(scene)
 }
 
 impl Scene {
@@ -184,6 +218,7 @@ impl Scene {
             heights,
             colors,
             objects: None,
+            details: Vec::new(),
         })
     }
 
@@ -229,7 +264,7 @@ impl Scene {
                 objects.trees, objects.houses
             ));
         }
-        let line = format!(
+        let mut line = format!(
             "{}: {} sticks on {} grid points, {} bytes in the kernel",
             parts.join("; "),
             objects.sticks.len(),
@@ -237,6 +272,11 @@ impl Scene {
             objects.bytes()
         );
         self.objects = Some(objects);
+        // A stick's texels color it, not the photo under it: objects
+        // stand on the grid's colors.
+        if !std::mem::take(&mut self.details).is_empty() {
+            line += "; the photo is kept at the height grid's resolution under objects";
+        }
         Ok(line)
     }
 
@@ -265,8 +305,12 @@ impl Scene {
             + (h(i, j + 1) * (1.0 - fx) + h(i + 1, j + 1) * fx) * fy
     }
 
-    /// Bilinear color of the grid at world (x, y).
+    /// Bilinear color at world (x, y): of the photo's texels where it is
+    /// kept finer than the grid, else of the grid's colors.
     pub fn color_at(&self, x: f64, y: f64) -> [f64; 3] {
+        if let Some(color) = self.details.iter().rev().find_map(|d| d.color_at(x, y)) {
+            return color;
+        }
         let (i, j, fx, fy) = self.cell_at(x, y);
         let w = self.width as usize;
         let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
@@ -358,6 +402,16 @@ impl Scene {
             bounds: vec![0; pyramid_cells(w, d)],
             roughness: 0,
             objects: self.objects.clone(),
+            details: self
+                .details
+                .iter()
+                .map(|detail| KernelDetail {
+                    origin: detail.origin,
+                    size: detail.size,
+                    shift: detail.shift,
+                    levels: detail.kernel_levels(),
+                })
+                .collect(),
         };
         let terrain = Terrain::new(w, d, &scene.heights, &scene.colors)
             .map_err(|e| Error::new(format!("terrain rejected by the kernel: {e}")))?;
@@ -443,6 +497,18 @@ impl KernelScene {
             (std::mem::size_of_val(objects.sticks.as_slice())
                 + std::mem::size_of_val(objects.texels.as_slice())) as u64
         })
+    }
+
+    /// The kernel's view of the photos kept finer than the grid (none
+    /// when it has none).
+    pub fn details(&self) -> Result<Vec<Detail<'_>>> {
+        self.details
+            .iter()
+            .map(|detail| {
+                Detail::new(detail.origin, detail.size, detail.shift, &detail.levels)
+                    .map_err(|e| Error::new(format!("photo detail rejected by the kernel: {e}")))
+            })
+            .collect()
     }
 
     /// The filter the coarse heights were made with.

@@ -519,3 +519,65 @@ fn a_scene_file_stands_its_objects_on_the_terrain_and_bad_ones_get_one_line() {
     assert!(err.contains("--place"), "{err}");
     assert_eq!(std::fs::read(&front).unwrap(), before);
 }
+
+#[test]
+fn a_photo_finer_than_the_height_grid_is_kept_unless_asked_not_to() {
+    // A 16 x 16 height map under a 64 x 64 checkered photo: four pixels a
+    // grid spacing, squares of two, which the grid's colors average to one gray.
+    let (h, _) = maps_named("fine-h.png", "fine-unused.png");
+    let photo = temp("fine-photo.png");
+    image::RgbImage::from_fn(64, 64, |x, y| {
+        if (x / 2 + y / 2) % 2 == 0 {
+            image::Rgb([250, 250, 250])
+        } else {
+            image::Rgb([10, 10, 10])
+        }
+    })
+    .save(&photo)
+    .unwrap();
+    let render = |extra: &[&str], out: &PathBuf| {
+        let args = [
+            &[
+                "render",
+                "--height",
+                s(&h),
+                "--color",
+                s(&photo),
+                "--eye",
+                "8,2,36",
+                "--yaw",
+                "90",
+                "--pitch",
+                "50",
+                "--size",
+                "64x48",
+                "--out",
+                s(out),
+            ][..],
+            extra,
+        ]
+        .concat();
+        let (code, _, err) = sim(&args);
+        assert_eq!(code, 0, "{err}");
+        (image::open(out).unwrap().to_rgb8(), err)
+    };
+    let (kept, said) = render(&[], &temp("fine-kept.png"));
+    assert!(
+        said.contains("photo kept at 4 texels a grid spacing"),
+        "{said}"
+    );
+    let (reduced, said) = render(&["--photo-detail", "off"], &temp("fine-reduced.png"));
+    assert!(!said.contains("photo kept"), "{said}");
+    // Reduced, the terrain is the checker's gray; kept, its squares show
+    // near the eye.
+    let spread = |image: &image::RgbImage| {
+        let reds = image.pixels().map(|p| p[0]);
+        reds.clone().max().unwrap() - reds.min().unwrap()
+    };
+    assert!(
+        spread(&kept) > spread(&reduced) + 100,
+        "{} against {}",
+        spread(&kept),
+        spread(&reduced)
+    );
+}

@@ -76,7 +76,11 @@ fn packed_equals_maps(
     let out = temp(name);
     let input = pack_input(height, colors, scale, filter);
     let summary = pack(&input, &out, &mut |_, _| {}).unwrap();
-    let scene = load_scene_files(height, &input.colors, scale, 1).unwrap();
+    let mut scene = load_scene_files(height, &input.colors, scale, 1).unwrap();
+    // Tiles hold a color a grid point: a photo finer than the grid is
+    // packed as the mean of each point's texels, the grid's colors in
+    // memory too, without the texels themselves.
+    scene.details.clear();
     let kernel = scene.to_kernel_with(filter).unwrap();
     let pyramid = kernel.pyramid().unwrap();
     let mut file = TilesFile::open(&out).unwrap();

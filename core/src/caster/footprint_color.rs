@@ -27,6 +27,7 @@
 use super::fraction_256;
 use super::walk::lerp;
 use crate::config::{COORD_FRAC_BITS, WEIGHT_BITS};
+use crate::detail::{details_color, Detail};
 use crate::probe::Probe;
 use crate::surface::{Grid, Surface};
 use crate::view::ray::{Cursor, Ray};
@@ -52,22 +53,58 @@ pub(crate) fn footprint_color<T: Surface + ?Sized, P: Probe>(
     f: u32,
     probe: &mut P,
 ) -> Option<Rgb> {
-    let before = above.map_or(hit.k, |(k, _)| k);
-    // The crossing, in 1/256 of a sample.
-    let k = (i64::from(before) << 8) + i64::from(hit.k - before) * i64::from(f);
-    let distance = ray.distance_q8(k);
+    let (k, distance, steps) = crossing_along(ray, hit, above, f);
     // Near the eye (and at single resolution: `color_reach` is i64::MAX)
     // level 0 alone, unless the ray stepped on a coarser level.
     if distance < ray.color_reach && hit.level == 0 {
         return None;
     }
-    let width = narrower_side(distance, hit.k - before, above, below);
+    let width = narrower_side(distance, steps, above, below);
     let (level, t) = match color_level(width, ray.color_reach, ray.color_top) {
         Some((level, t)) if level >= hit.level => (level, t),
         _ if hit.level > 0 => (hit.level, 0),
         _ => return None,
     };
     levels_color(surface, level, t, ray.color_point(k, distance), probe)
+}
+
+/// The color of a hit on level 0 nearer than the color reach from the
+/// photos finer than level 0 ([`Detail::color_for`]), by the pixel's
+/// footprint as [`footprint_color`] finds it; `None` outside their
+/// rectangles and on a coarser level.
+#[inline(never)]
+pub(crate) fn detail_color<P: Probe>(
+    details: &[Detail<'_>],
+    ray: &Ray,
+    hit: &Cursor,
+    below: i32,
+    above: Option<(i32, i32)>,
+    f: u32,
+    probe: &mut P,
+) -> Option<Rgb> {
+    if hit.level > 0 {
+        return None;
+    }
+    let (k, distance, steps) = crossing_along(ray, hit, above, f);
+    let width = narrower_side(distance, steps, above, below);
+    let color = details_color(
+        details,
+        ray.color_point(k, distance),
+        width,
+        ray.color_reach,
+    )?;
+    probe.color(0, hit.base as usize);
+    Some(color)
+}
+
+/// Where a hit's crossing is, `f`/256 of the way from the sample before
+/// (`above`'s, when known) to `hit`: in 1/256 of a sample along the ray,
+/// its distance (Q16), and the samples between the two.
+#[inline(always)]
+fn crossing_along(ray: &Ray, hit: &Cursor, above: Option<(i32, i32)>, f: u32) -> (i64, i64, i32) {
+    let before = above.map_or(hit.k, |(k, _)| k);
+    let k = (i64::from(before) << 8) + i64::from(hit.k - before) * i64::from(f);
+    (k, ray.distance_q8(k), hit.k - before)
 }
 
 /// The color at world point `point` (Q16) of levels `level − 1` and

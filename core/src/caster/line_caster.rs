@@ -45,6 +45,7 @@ use super::walk::{along_weight, lerp, line_color};
 use super::{crossing_fraction, sky, Coherence, Frame, RenderOptions, Shading, VerticalSamples};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_WALK_LEVEL};
+use crate::detail::{details_color, Detail};
 use crate::divide::div_ceil;
 use crate::probe::Probe;
 use crate::surface::{Extent, Grid, Surface};
@@ -742,6 +743,21 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             // edge): its own level's grid line.
             return sample(self.coarse_color(walk, at, aside, elevation(), probe));
         }
+        let details = self.surface.details();
+        if !details.is_empty() {
+            let far = Far {
+                span,
+                above: above.map(|above| (at.before_k, above)),
+                below,
+                back,
+                distance,
+                drift,
+                color_reach,
+            };
+            if let Some(color) = self.detail_color(details, walk, at, &far, probe) {
+                return sample(color);
+            }
+        }
         let (on_hit, hit_cell) =
             self.line_color(walk, 0, (at.index, at.minor), aside, elevation(), probe);
         let color = if above.is_some() && t < 256 {
@@ -785,6 +801,28 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // The crossing, in 1/256 of a sample.
         let crossing = (i64::from(at.k) << 8) - i64::from(far.back);
         self.footprint(walk, crossing, far, (level, t), probe)
+    }
+
+    /// The color of a near hit from the photos finer than level 0, by its
+    /// footprint ([`Detail::color_for`]); `None` outside their
+    /// rectangles and where level 0 is fine enough. Out of line: only a
+    /// surface with a detail takes it.
+    #[inline(never)]
+    fn detail_color<P: Probe>(
+        &self,
+        details: &[Detail<'_>],
+        walk: &LineWalk,
+        at: &At,
+        near: &Far,
+        probe: &mut P,
+    ) -> Option<Rgb> {
+        let distance = i64::from(near.distance);
+        let width = narrower_side(distance, near.span, near.above, near.below);
+        let crossing = (i64::from(at.k) << 8) - i64::from(near.back);
+        let point = crossing_point(walk, crossing, near);
+        let color = details_color(details, point, width, near.color_reach)?;
+        probe.color(0, at.index as usize);
+        Some(color)
     }
 
     /// The color of `level` where the sample on its major grid line
@@ -872,21 +910,27 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         (level, t): (u8, u32),
         probe: &mut P,
     ) -> Option<Rgb> {
-        let (distance, drift) = (i64::from(far.distance), i64::from(far.drift));
-        let plane = &walk.plane;
-        let along = crossing << (COORD_FRAC_BITS - 8);
-        let major =
-            (plane.major0 << COORD_FRAC_BITS) + if plane.key.forward { along } else { -along };
-        let minor = plane.minor0
-            + ((crossing * plane.dminor) >> 8)
-            + ((drift * distance) >> COORD_FRAC_BITS);
-        let minor = minor.clamp(0, plane.minor_max);
-        let point = if plane.key.x_major {
-            [major, minor]
-        } else {
-            [minor, major]
-        };
+        let point = crossing_point(walk, crossing, far);
         levels_color(self.surface, level, t, point, probe)
+    }
+}
+
+/// The world point (Q16) of the crossing `crossing`/256 samples along
+/// `walk`'s line, the hit's distance (Q16) from the eye, looked up its
+/// drift aside (as `Ray::color_point` places it).
+#[inline(always)]
+fn crossing_point(walk: &LineWalk, crossing: i64, far: &Far) -> [i64; 2] {
+    let (distance, drift) = (i64::from(far.distance), i64::from(far.drift));
+    let plane = &walk.plane;
+    let along = crossing << (COORD_FRAC_BITS - 8);
+    let major = (plane.major0 << COORD_FRAC_BITS) + if plane.key.forward { along } else { -along };
+    let minor =
+        plane.minor0 + ((crossing * plane.dminor) >> 8) + ((drift * distance) >> COORD_FRAC_BITS);
+    let minor = minor.clamp(0, plane.minor_max);
+    if plane.key.x_major {
+        [major, minor]
+    } else {
+        [minor, major]
     }
 }
 

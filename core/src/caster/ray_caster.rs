@@ -10,7 +10,7 @@
 //! [`Coherence::Exact`]: super::Coherence::Exact
 
 use super::first_hit::first_hit;
-use super::footprint_color::footprint_color;
+use super::footprint_color::{detail_color, footprint_color};
 use super::line_caster::Fetches;
 use super::walk::{lerp, walk, Recent, Stage, Walk};
 use super::{crossing_fraction, sky, Frame, RenderOptions, Shading};
@@ -377,6 +377,14 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
                 let f = before.map_or(0, |(_, f)| f);
                 footprint_color(surface, ray, &hit, below, above, f, probe)
             };
+            let far = far.or_else(|| {
+                let details = surface.details();
+                if details.is_empty() {
+                    return None;
+                }
+                let f = before.map_or(0, |(_, f)| f);
+                detail_color(details, ray, &hit, below, above, f, probe)
+            });
             far.or_else(|| {
                 // Level 0 is fine enough: its colors on the hit's grid line and
                 // (when known) the one before, blended by where the ray crossed.

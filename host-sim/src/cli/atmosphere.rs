@@ -36,8 +36,9 @@ pub(super) struct AtmosphereArgs {
     relief: Option<ReliefArg>,
 }
 
+/// A setting that is on or off.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum Switch {
+pub(super) enum Switch {
     On,
     Off,
 }

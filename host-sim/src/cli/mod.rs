@@ -248,12 +248,19 @@ struct SceneArgs {
     #[arg(long, value_name = "H.png|H.hgt|H.tif")]
     height: Option<PathBuf>,
     /// Color map: RGB, RGBA, gray or palette PNG, or an 8-bit TIFF,
-    /// stretched over the height map; or GeoTIFF photos over a GeoTIFF
-    /// height map, placed by their georeference (give --color once for
-    /// each, later over earlier). Without it, real heights are colored by
-    /// height and slope.
+    /// stretched over the height map (one finer than the height grid is
+    /// kept at its own resolution: see --photo-detail); or GeoTIFF photos
+    /// over a GeoTIFF height map, placed by their georeference (give
+    /// --color once for each, later over earlier). Without it, real
+    /// heights are colored by height and slope.
     #[arg(long, value_name = "C.png|C.tif")]
     color: Vec<PathBuf>,
+    /// A color map stretched over the height map with more than 1.5
+    /// pixels a grid spacing: on, near hits take their colors from its
+    /// own texels (2 to 32 a spacing, the power of two at or above the
+    /// map's, resampled up to it); off, it is reduced to the height grid.
+    #[arg(long, value_enum, value_name = "on|off", default_value = "on")]
+    photo_detail: atmosphere::Switch,
     /// World height of one height-map unit, in voxels [default: 1; for an
     /// SRTM .hgt or a georeferenced GeoTIFF, one meter in voxels of its
     /// grid spacing].
@@ -803,10 +810,22 @@ fn load_scene(args: &SceneArgs) -> Result<Scene> {
 /// unless --procedural-size says otherwise.
 fn load_scene_or(args: &SceneArgs, default_side: u32) -> Result<Scene> {
     let mut scene = load_terrain(args, default_side)?;
+    if args.photo_detail == atmosphere::Switch::Off {
+        scene.details.clear();
+    }
     let plan = args.place.as_deref().map(ScenePlan::read).transpose()?;
     if plan.is_some() || args.objects {
         let seed = args.objects.then_some(args.seed);
         eprintln!("{}", scene.add_objects(plan.as_ref(), seed)?);
+    }
+    for detail in &scene.details {
+        eprintln!(
+            "photo kept at {} texels a grid spacing over {}x{} grid points ({:.1} MiB; --photo-detail off reduces it to the height grid)",
+            1 << detail.shift,
+            detail.size[0],
+            detail.size[1],
+            detail.bytes() as f64 / f64::from(1 << 20)
+        );
     }
     Ok(scene)
 }

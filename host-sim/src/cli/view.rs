@@ -21,8 +21,8 @@ use std::rc::Rc;
 use std::time::Instant;
 use terracast::config::DEFAULT_HFOV_DEG;
 use terracast::{
-    Camera, Governor, PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, StickLayer,
-    View, WithSticks, U8F8,
+    Camera, Detail, Governor, PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb,
+    StickLayer, View, WithDetail, WithSticks, U8F8,
 };
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
@@ -146,6 +146,7 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
                 flat: Box::new(Pyramid::flat(*full.base())),
                 full: Box::new(full),
                 sticks: scene.0.sticks()?,
+                details: scene.0.details()?,
                 eye: scene.1,
             }
         }
@@ -298,6 +299,8 @@ enum World<'s> {
         flat: Box<Pyramid<'s>>,
         /// Its objects (`--objects`), if any.
         sticks: Option<StickLayer<'s>>,
+        /// Its photos kept finer than the height grid.
+        details: Vec<Detail<'s>>,
         eye: [f32; 3],
     },
     /// A tiled terrain through the tile cache.
@@ -342,7 +345,11 @@ impl World<'_> {
         let size = pixels.size();
         match self {
             Self::Memory {
-                full, flat, sticks, ..
+                full,
+                flat,
+                sticks,
+                details,
+                ..
             } => {
                 let view = View::new(camera, size.0, size.1).map_err(view_error)?;
                 let surface: &Pyramid = if options.0.resolution == Resolution::Single
@@ -355,6 +362,10 @@ impl World<'_> {
                 Ok(match sticks {
                     Some(layer) => {
                         let surface = WithSticks::new(surface, *layer);
+                        render_pool(&surface, &view, options, rays, threads, pixels)
+                    }
+                    None if !details.is_empty() => {
+                        let surface = WithDetail::new(surface, details);
                         render_pool(&surface, &view, options, rays, threads, pixels)
                     }
                     None => render_pool(surface, &view, options, rays, threads, pixels),
@@ -383,12 +394,21 @@ impl World<'_> {
     ) -> Result<(u64, Vec<GovernedShare>)> {
         let size = pixels.size();
         match self {
-            Self::Memory { full, sticks, .. } => {
+            Self::Memory {
+                full,
+                sticks,
+                details,
+                ..
+            } => {
                 let view = View::new(camera, size.0, size.1).map_err(view_error)?;
                 let surface: &Pyramid = full;
                 Ok(match sticks {
                     Some(layer) => {
                         let surface = WithSticks::new(surface, *layer);
+                        render_governed(&surface, &view, options, governors, pixels)
+                    }
+                    None if !details.is_empty() => {
+                        let surface = WithDetail::new(surface, details);
                         render_governed(&surface, &view, options, governors, pixels)
                     }
                     None => render_governed(surface, &view, options, governors, pixels),

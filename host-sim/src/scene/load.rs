@@ -155,11 +155,27 @@ pub fn fill_voids(path: &Path, width: u32, depth: u32, heights: &mut [f32]) -> R
 /// the grid spacing when the image is finer (box filter) and bilinear when
 /// it is coarser.
 pub fn load_colors(path: &Path, width: u32, depth: u32) -> Result<Vec<Rgb>> {
-    let image = if super::geotiff::is_tiff(path) {
-        super::geotiff::read_photo(path)?
+    stretch_colors(&read_color_map(path)?, path, width, depth)
+}
+
+/// The photo or color map at `path` (PNG or any format `image` reads, or a
+/// GeoTIFF).
+pub fn read_color_map(path: &Path) -> Result<image::RgbImage> {
+    if super::geotiff::is_tiff(path) {
+        super::geotiff::read_photo(path)
     } else {
-        open_image(path, "color map")?.to_rgb8()
-    };
+        Ok(open_image(path, "color map")?.to_rgb8())
+    }
+}
+
+/// `image` (read from `path`) stretched over a `width` × `depth` height
+/// grid, its corners on the grid's (see [`load_colors`]).
+pub fn stretch_colors(
+    image: &image::RgbImage,
+    path: &Path,
+    width: u32,
+    depth: u32,
+) -> Result<Vec<Rgb>> {
     let (cw, cd) = image.dimensions();
     if (cw, cd) == (width, depth) {
         return Ok(image.pixels().map(|p| p.0).collect());

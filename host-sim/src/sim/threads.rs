@@ -7,7 +7,7 @@ use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
     render_line, Camera, LinePool, NoProbe, RenderOptions, Rgb, Sample, Sink, Surface, View, Wait,
-    WithSticks,
+    WithDetail, WithSticks,
 };
 
 /// A worker's pixels of one frame, as they come: a line's pixels are
@@ -57,9 +57,17 @@ pub fn render_threads(
         .iter()
         .map(|c| View::new(c, size.0, size.1).map_err(|e| Error::new(format!("bad view: {e}"))))
         .collect::<Result<Vec<_>>>()?;
+    let details = scene.details()?;
     Ok(match scene.sticks()? {
         Some(layer) => run(
             &WithSticks::new(&pyramid, layer),
+            &views,
+            size,
+            options,
+            threads,
+        ),
+        None if !details.is_empty() => run(
+            &WithDetail::new(&pyramid, &details),
             &views,
             size,
             options,

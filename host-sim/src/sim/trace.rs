@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::scene::KernelScene;
 use terracast::{
     level_side, render, Camera, FrameCost, Governor, Probe, RenderOptions, Sample, Sink, Surface,
-    View, WithSticks,
+    View, WithDetail, WithSticks,
 };
 
 /// A terrain tile: pyramid level and tile coordinates on that level (the
@@ -271,8 +271,12 @@ fn record(
         lines: Vec::with_capacity(view.lines() as usize),
         started: false,
     };
+    let details = scene.details()?;
     let cost = match sticks {
         Some(layer) => frame_render.run(&WithSticks::new(&pyramid, layer), &view, &mut lines),
+        None if !details.is_empty() => {
+            frame_render.run(&WithDetail::new(&pyramid, &details), &view, &mut lines)
+        }
         None => frame_render.run(&pyramid, &view, &mut lines),
     };
     let (footprint, tiles_tested) = footprint_tiles(
