@@ -332,6 +332,14 @@ fn geotiff_height_and_photo_files() {
     mutate("GeoTIFF", "h.tif", (&valid, 512), 400, |_, path| {
         let heights = load_heights(path, 1.0).is_ok();
         let photo = terracast_sim::scene::load_colors(path, 8, 8).is_ok();
-        heights || photo
+        // And strip by strip, as `pack` streams it.
+        let streamed = terracast_sim::scene::geotiff::TiffHeightRows::open(path)
+            .ok()
+            .flatten()
+            .is_some_and(|mut rows| {
+                let depth = rows.size().1;
+                (0..depth).all(|_| rows.next_row().is_ok())
+            });
+        heights || photo || streamed
     });
 }

@@ -302,6 +302,64 @@ fn several_photos_pack_as_render_drapes_them() {
 }
 
 #[test]
+fn geotiff_heights_stream_into_a_pack_and_a_void_is_filled_as_render_fills_it() {
+    use tiff::encoder::colortype;
+    // The odd-sized heights as a georeferenced float32 GeoTIFF, no photo:
+    // packed strip by strip.
+    let (scene, (w, d)) = (procedural(256, 3), ODD_SIZE);
+    let mut heights = odd_sized_float_heights(&scene);
+    let grid =
+        geotiff::<colortype::Gray32Float>("stream-h.tif", (w, d), &heights, [20.0, -34.0], 0.001);
+    packed_equals_maps(
+        &grid,
+        &[],
+        1.0,
+        HeightFilter::default(),
+        "geotiff-streamed.tiles",
+    );
+    // A block of no data: filled from its neighbours, which takes the
+    // whole map, as `render` loads it.
+    for y in 40..50 {
+        for x in 60..75 {
+            heights[(y * w + x) as usize] = f32::NAN;
+        }
+    }
+    let voids =
+        geotiff::<colortype::Gray32Float>("void-h.tif", (w, d), &heights, [20.0, -34.0], 0.001);
+    packed_equals_maps(
+        &voids,
+        &[],
+        1.0,
+        HeightFilter::default(),
+        "geotiff-voids.tiles",
+    );
+    // Tall, it holds a few strips of rows, not the map.
+    let (tw, td) = (96u32, 3000u32);
+    let tall: Vec<f32> = (0..tw * td)
+        .map(|i| ((i % tw) * 7 + (i / tw) * 13) as f32 % 900.0)
+        .collect();
+    let path =
+        geotiff::<colortype::Gray32Float>("stream-tall.tif", (tw, td), &tall, [20.0, -34.0], 0.001);
+    let summary = pack(
+        &pack_input(&path, &[], 1.0, HeightFilter::default()),
+        &temp("stream-tall.tiles"),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(summary.streamed);
+    let held = summary.rows_held_at_most;
+    assert!(held < 3000 / 3, "{held} rows held of 3000");
+    // The map with voids was loaded whole.
+    let summary = pack(
+        &pack_input(&voids, &[], 1.0, HeightFilter::default()),
+        &temp("void-again.tiles"),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(!summary.streamed);
+}
+
+#[test]
 fn pack_holds_a_few_strips_of_rows_however_tall_the_map() {
     // 96 x 300 and 96 x 3000: at most a strip of rows and one of bounds a
     // level (12 levels at 3000 rows), far fewer than the map's rows.

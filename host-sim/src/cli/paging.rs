@@ -60,13 +60,18 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
     })?;
     bar.finish_and_clear();
     println!(
-        "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}, {} bytes, at most {} rows held -> {}",
+        "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}, {} bytes, at most {} rows held, {} -> {}",
         summary.width,
         summary.depth,
         summary.levels,
         summary.tiles,
         summary.bytes,
         summary.rows_held_at_most,
+        if summary.streamed {
+            "streamed"
+        } else {
+            "loaded whole"
+        },
         args.out.display()
     );
     Ok(())

@@ -227,8 +227,30 @@ pub struct HeightRaster {
 /// Reads the heights of a single-band GeoTIFF.
 pub fn read_heights(path: &Path) -> Result<HeightRaster> {
     let what = "height map";
+    let (mut decoder, (width, depth), no_data) = open_heights(path)?;
+    let georef = georef(&mut decoder);
+    let image = decoder.read_image().map_err(|e| failed(path, what, e))?;
+    let values = heights_of(image, no_data, path)?;
+    if values.len() != width as usize * depth as usize {
+        return Err(failed(path, what, "fewer samples than its size"));
+    }
+    Ok(HeightRaster {
+        width,
+        depth,
+        values,
+        georef,
+    })
+}
+
+/// A TIFF decoder over a file.
+type FileDecoder = Decoder<BufReader<File>>;
+
+/// A single-band GeoTIFF of heights, opened: its decoder, its size and
+/// its no-data value.
+fn open_heights(path: &Path) -> Result<(FileDecoder, (u32, u32), Option<f64>)> {
+    let what = "height map";
     let mut decoder = open(path, what)?;
-    let (width, depth) = decoder.dimensions().map_err(|e| failed(path, what, e))?;
+    let size = decoder.dimensions().map_err(|e| failed(path, what, e))?;
     let color = decoder.colortype().map_err(|e| failed(path, what, e))?;
     if !matches!(color, ColorType::Gray(_)) {
         return Err(Error::new(format!(
@@ -242,9 +264,14 @@ pub fn read_heights(path: &Path) -> Result<HeightRaster> {
         .flatten()
         .and_then(|v| v.into_string().ok())
         .and_then(|s| s.trim().trim_end_matches('\0').parse().ok());
-    let georef = georef(&mut decoder);
-    let image = decoder.read_image().map_err(|e| failed(path, what, e))?;
-    let mut values: Vec<f32> = match image {
+    Ok((decoder, size, no_data))
+}
+
+/// Decoded height samples as `f32`, NaN where there is no data (the
+/// file's no-data value, for int16 without one SRTM's −32768, and
+/// infinities).
+fn heights_of(samples: DecodingResult, no_data: Option<f64>, path: &Path) -> Result<Vec<f32>> {
+    let mut values: Vec<f32> = match samples {
         DecodingResult::U8(v) => v.into_iter().map(f32::from).collect(),
         DecodingResult::U16(v) => v.into_iter().map(f32::from).collect(),
         DecodingResult::U32(v) => v.into_iter().map(|x| x as f32).collect(),
@@ -268,29 +295,90 @@ pub fn read_heights(path: &Path) -> Result<HeightRaster> {
             )))
         }
     };
-    if let Some(no_data) = no_data {
-        let no_data = no_data as f32;
-        for v in &mut values {
-            if *v == no_data {
-                *v = f32::NAN;
-            }
-        }
-    }
-    // Values no height can be (infinities) are no data too.
+    let no_data = no_data.map(|v| v as f32);
     for v in &mut values {
-        if v.is_infinite() {
+        // Values no height can be (infinities) are no data too.
+        if Some(*v) == no_data || v.is_infinite() {
             *v = f32::NAN;
         }
     }
-    if values.len() != width as usize * depth as usize {
-        return Err(failed(path, what, "fewer samples than its size"));
+    Ok(values)
+}
+
+/// A single-band GeoTIFF's heights row by row, top row first, decoded a
+/// strip at a time: what `pack` streams, in memory a strip's rows,
+/// whatever the file's size.
+pub struct TiffHeightRows {
+    decoder: FileDecoder,
+    path: std::path::PathBuf,
+    size: (u32, u32),
+    no_data: Option<f64>,
+    /// The current strip's rows, `size.0` samples each, and its first row.
+    strip: Vec<f32>,
+    strip_first: u32,
+    /// The next row, and the next strip to decode.
+    next: u32,
+    next_strip: u32,
+}
+
+impl std::fmt::Debug for TiffHeightRows {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TiffHeightRows")
+            .field("path", &self.path)
+            .field("size", &self.size)
+            .field("next", &self.next)
+            .finish_non_exhaustive()
     }
-    Ok(HeightRaster {
-        width,
-        depth,
-        values,
-        georef,
-    })
+}
+
+impl TiffHeightRows {
+    /// Opens the heights at `path`; `None` for a file stored in tiles
+    /// rather than strips (which is read whole).
+    pub fn open(path: &Path) -> Result<Option<Self>> {
+        let (decoder, size, no_data) = open_heights(path)?;
+        if decoder.get_chunk_type() != tiff::decoder::ChunkType::Strip {
+            return Ok(None);
+        }
+        Ok(Some(Self {
+            decoder,
+            path: path.to_owned(),
+            size,
+            no_data,
+            strip: Vec::new(),
+            strip_first: 0,
+            next: 0,
+            next_strip: 0,
+        }))
+    }
+
+    /// Samples a row and rows.
+    pub fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    /// The next row's heights in the file's units, NaN for no data.
+    pub fn next_row(&mut self) -> Result<&[f32]> {
+        let what = "height map";
+        let width = self.size.0 as usize;
+        if self.next >= self.size.1 {
+            return Err(failed(&self.path, what, "read past its last row"));
+        }
+        if (self.next - self.strip_first + 1) as usize * width > self.strip.len() {
+            let samples = self
+                .decoder
+                .read_chunk(self.next_strip)
+                .map_err(|e| failed(&self.path, what, e))?;
+            self.strip = heights_of(samples, self.no_data, &self.path)?;
+            if self.strip.is_empty() || self.strip.len() % width != 0 {
+                return Err(failed(&self.path, what, "a strip of part of a row"));
+            }
+            self.strip_first = self.next;
+            self.next_strip += 1;
+        }
+        let at = (self.next - self.strip_first) as usize * width;
+        self.next += 1;
+        Ok(&self.strip[at..at + width])
+    }
 }
 
 fn sample_kind(result: &DecodingResult) -> &'static str {

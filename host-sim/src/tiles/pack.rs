@@ -8,17 +8,19 @@
 //! as soon as its rows and bounds are complete. Memory is a few strips of
 //! [`TILE`] rows a level, whatever the map's size.
 //!
-//! PNG maps stream row by row. An SRTM `.hgt` or a GeoTIFF (heights or
-//! photo) is loaded whole, as `render` loads it ([`load_scene_files`]: its
-//! voids filled from their neighbours, which takes the rows around them;
-//! GeoTIFF photos placed by their georeference), and its rows are packed
-//! from memory: an `.hgt` tile is at most 3601 × 3601 samples.
+//! PNG maps stream row by row, and GeoTIFF heights stored in strips a
+//! strip at a time ([`TiffHeightRows`]). A GeoTIFF with voids or stored
+//! in tiles, an SRTM `.hgt` or GeoTIFF photos are loaded whole, as `render` loads them
+//! ([`load_scene_files`]: voids filled from their neighbours, which takes
+//! the rows around them; photos placed by their georeference), and their
+//! rows are packed from memory: an `.hgt` tile is at most 3601 × 3601
+//! samples.
 
 use super::file::{Header, TilesWriter};
 use super::TILE;
 use crate::error::{Error, Result};
 use crate::outputs::Outputs;
-use crate::scene::geotiff::is_tiff;
+use crate::scene::geotiff::{is_tiff, TiffHeightRows};
 use crate::scene::{
     load_scene_files, not_a_height_map, terrain_color, value_noise, HeightBands, Scene,
 };
@@ -68,6 +70,9 @@ pub struct PackSummary {
     /// Most rows (of points and of bounds, all levels) held at once: the
     /// streaming's memory, whatever the input's height.
     pub rows_held_at_most: usize,
+    /// Whether the input's rows were read as they were packed (else it
+    /// was loaded whole first: an `.hgt`, voids, TIFF photos).
+    pub streamed: bool,
 }
 
 /// Packs `input` into `out`, calling `progress(rows done, rows)` now and
@@ -95,34 +100,46 @@ pub fn pack(
         outputs.input("--color", color);
     }
     let out_id = outputs.output("--out", out)?;
-    let read_whole = |path: &Path| {
-        is_tiff(path)
-            || path
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("hgt"))
+    let is_hgt = |path: &Path| {
+        path.extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("hgt"))
     };
-    // A PNG height map with at most one PNG color map streams; anything
-    // else is draped as `render` drapes it, whole.
-    let streams = !read_whole(&input.height)
-        && input.colors.len() <= 1
-        && !input.colors.iter().any(|c| read_whole(c));
-    let loaded = if streams {
-        None
+    // A PNG height map with at most one PNG color map of its size streams,
+    // and so do GeoTIFF heights in strips without a color map (a photo
+    // over them is stretched or placed as `render` does it); anything
+    // else (an `.hgt`, a TIFF photo) is draped as `render` drapes it,
+    // whole.
+    let streams = if is_tiff(&input.height) {
+        input.colors.is_empty() && TiffHeightRows::open(&input.height)?.is_some()
     } else {
-        let scene = load_scene_files(&input.height, &input.colors, input.height_scale, input.seed)?;
-        Some(Arc::new(scene))
+        !is_hgt(&input.height)
+            && input.colors.len() <= 1
+            && !input.colors.iter().any(|c| is_tiff(c) || is_hgt(c))
     };
+    let load_whole = || -> Result<Arc<Scene>> {
+        let scene = load_scene_files(&input.height, &input.colors, input.height_scale, input.seed)?;
+        Ok(Arc::new(scene))
+    };
+    let mut loaded = if streams { None } else { Some(load_whole()?) };
     let mut heights = match &loaded {
-        Some(scene) => HeightRows::Loaded {
-            scene: scene.clone(),
-            y: 0,
-        },
+        Some(scene) => HeightRows::loaded(scene),
         None => HeightRows::open(&input.height, input.height_scale)?,
     };
     let (width, depth) = heights.size();
     // The whole range first: a height the kernel cannot hold is reported
     // before any tile is written, and colors by height need the range too.
-    let bands = height_range(&input.height, &mut heights, depth)?;
+    let bands = match height_range(&input.height, &mut heights, depth)? {
+        Some(bands) => bands,
+        None => {
+            // A GeoTIFF with voids: they are filled from the rows around
+            // them, so it is loaded whole after all.
+            let scene = load_whole()?;
+            heights = HeightRows::loaded(&scene);
+            loaded = Some(scene);
+            height_range(&input.height, &mut heights, depth)?
+                .ok_or_else(|| Error::new("voids left after filling them"))?
+        }
+    };
     heights.rewind()?;
     let world = World::new(width, depth, 0).ok_or_else(|| {
         Error::new(format!(
@@ -204,15 +221,20 @@ pub fn pack(
         tiles: header.tiles,
         bytes,
         rows_held_at_most,
+        streamed: loaded.is_none(),
     })
 }
 
 /// The lowest and highest height of the map, refusing the first one outside
-/// the kernel's range (with its grid point).
-fn height_range(path: &Path, rows: &mut HeightRows, depth: u32) -> Result<HeightBands> {
+/// the kernel's range (with its grid point); `None` at the first void (no
+/// data: only a GeoTIFF streamed has them, which must then be filled).
+fn height_range(path: &Path, rows: &mut HeightRows, depth: u32) -> Result<Option<HeightBands>> {
     let mut bands = HeightBands::default();
     for y in 0..depth {
         for (x, &h) in rows.next()?.iter().enumerate() {
+            if h.is_nan() {
+                return Ok(None);
+            }
             if Terrain::quantize_height(h).is_none() {
                 return Err(Error::new(format!(
                     "height map {}: height {h} at grid point ({x}, {y}) is outside the kernel's range 0..={} voxels (adjust --height-scale)",
@@ -223,12 +245,18 @@ fn height_range(path: &Path, rows: &mut HeightRows, depth: u32) -> Result<Height
             bands.add(h);
         }
     }
-    Ok(bands)
+    Ok(Some(bands))
 }
 
-/// Height rows, scaled, top row first: streamed from a PNG, or from a
-/// scene loaded whole.
+/// Height rows, scaled, top row first: streamed from a PNG or a GeoTIFF,
+/// or from a scene loaded whole.
 enum HeightRows {
+    Tiff {
+        rows: Box<TiffHeightRows>,
+        path: PathBuf,
+        row: Vec<f32>,
+        scale: f32,
+    },
     Png {
         reader: Box<png::Reader<BufReader<File>>>,
         path: PathBuf,
@@ -246,7 +274,28 @@ enum HeightRows {
 }
 
 impl HeightRows {
+    fn loaded(scene: &Arc<Scene>) -> Self {
+        Self::Loaded {
+            scene: scene.clone(),
+            y: 0,
+        }
+    }
+
     fn open(path: &Path, scale: f32) -> Result<Self> {
+        if is_tiff(path) {
+            let rows = TiffHeightRows::open(path)?.ok_or_else(|| {
+                Error::new(format!(
+                    "height map {}: a tiled TIFF is read whole",
+                    path.display()
+                ))
+            })?;
+            return Ok(Self::Tiff {
+                row: vec![0.0; rows.size().0 as usize],
+                rows: Box::new(rows),
+                path: path.to_owned(),
+                scale,
+            });
+        }
         let fail = |e: &dyn std::fmt::Display| {
             Error::new(format!("cannot read height map {}: {e}", path.display()))
         };
@@ -281,6 +330,7 @@ impl HeightRows {
     fn size(&self) -> (u32, u32) {
         match self {
             Self::Png { size, .. } => *size,
+            Self::Tiff { rows, .. } => rows.size(),
             Self::Loaded { scene, .. } => (scene.width, scene.depth),
         }
     }
@@ -288,7 +338,9 @@ impl HeightRows {
     /// Back to the first row.
     fn rewind(&mut self) -> Result<()> {
         match self {
-            Self::Png { path, scale, .. } => *self = Self::open(&path.clone(), *scale)?,
+            Self::Png { path, scale, .. } | Self::Tiff { path, scale, .. } => {
+                *self = Self::open(&path.clone(), *scale)?
+            }
             Self::Loaded { y, .. } => *y = 0,
         }
         Ok(())
@@ -320,6 +372,14 @@ impl HeightRows {
                         f32::from(px[0])
                     };
                     *v = raw * *scale;
+                }
+                Ok(row)
+            }
+            Self::Tiff {
+                rows, row, scale, ..
+            } => {
+                for (v, &h) in row.iter_mut().zip(rows.next_row()?) {
+                    *v = h * *scale;
                 }
                 Ok(row)
             }
