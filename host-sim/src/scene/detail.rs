@@ -6,12 +6,16 @@
 //! a spacing, `2^s` the smallest power of two at or above `r` and at most
 //! 32: resampled up (bilinear between the photo's pixels) where `r` is not
 //! a power of two, so that no pixel of the photo is lost, and down (each
-//! texel the mean of the pixels it covers) only past 32. The photo covers
-//! the map's voxels, pixel by area: pixel `(i, j)` is the square around
-//! `((i + ½)·w/cw − ½, (j + ½)·d/cd − ½)`. The height grid's colors are
-//! then the mean of each point's `2^s × 2^s` texels, the colors the
-//! pyramid filters on, so that the fine levels and level 0 agree where
-//! the caster passes from one to the other.
+//! texel the mean of the pixels it covers) only past 32.
+//!
+//! A photo stretched over the map ([`PhotoDetail::from_photo`]) covers its
+//! voxels, pixel by area: pixel `(i, j)` is the square around `((i + ½)·w/cw
+//! − ½, (j + ½)·d/cd − ½)`. A GeoTIFF photo placed by its georeference
+//! ([`PhotoDetail::placed`]) covers the rectangle of the grid points whose
+//! centers it covers. Either way the height grid's colors there are the
+//! mean of each point's `2^s × 2^s` texels, the colors the pyramid filters
+//! on, so that the fine levels and level 0 agree where the caster passes
+//! from one to the other.
 
 use super::geotiff::GeoRef;
 use image::RgbImage;
