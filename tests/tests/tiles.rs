@@ -136,6 +136,21 @@ fn packed_files_render_as_their_maps_bit_for_bit() {
     // Without a color map, colored by height and slope as `render` does.
     let default = HeightFilter::default();
     packed_equals_maps(&height, &[], 1.0 / 16.0, default, "odd-gray.tiles");
+    // A color map twice as fine: stretched as `render` stretches it (the
+    // mean of each point's texels), loaded whole.
+    let fine = temp("odd-c2.png");
+    let odd = image::open(&color).unwrap().to_rgb8();
+    image::imageops::resize(&odd, 406, 300, image::imageops::FilterType::Nearest)
+        .save(&fine)
+        .unwrap();
+    packed_equals_maps(&height, &[&fine], 1.0 / 16.0, default, "odd-fine.tiles");
+    let summary = pack(
+        &pack_input(&height, &[&fine], 1.0 / 16.0, default),
+        &temp("odd-fine-again.tiles"),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(!summary.streamed);
     if let Some(data) = terracast_tests::data_dir("the Comanche and SRTM packs") {
         let comanche = data.join("comanche");
         packed_equals_maps(

@@ -105,16 +105,16 @@ pub fn pack(
             .is_some_and(|e| e.eq_ignore_ascii_case("hgt"))
     };
     // A PNG height map with at most one PNG color map of its size streams,
-    // and so do GeoTIFF heights in strips without a color map (a photo
-    // over them is stretched or placed as `render` does it); anything
-    // else (an `.hgt`, a TIFF photo) is draped as `render` drapes it,
-    // whole.
+    // and so do GeoTIFF heights in strips without a color map; anything
+    // else (an `.hgt`, a TIFF photo, a color map of another size) is
+    // stretched or draped as `render` does it, whole.
     let streams = if is_tiff(&input.height) {
         input.colors.is_empty() && TiffHeightRows::open(&input.height)?.is_some()
     } else {
         !is_hgt(&input.height)
             && input.colors.len() <= 1
             && !input.colors.iter().any(|c| is_tiff(c) || is_hgt(c))
+            && input.colors.iter().all(|c| same_size(&input.height, c))
     };
     let load_whole = || -> Result<Arc<Scene>> {
         let scene = load_scene_files(&input.height, &input.colors, input.height_scale, input.seed)?;
@@ -223,6 +223,15 @@ pub fn pack(
         rows_held_at_most,
         streamed: loaded.is_none(),
     })
+}
+
+/// Whether the images at `a` and `b` have the same size (`false` when
+/// either cannot be read: the whole load then says why).
+fn same_size(a: &Path, b: &Path) -> bool {
+    matches!(
+        (image::image_dimensions(a), image::image_dimensions(b)),
+        (Ok(a), Ok(b)) if a == b
+    )
 }
 
 /// The lowest and highest height of the map, refusing the first one outside
