@@ -44,9 +44,9 @@ use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
     max_lines, pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines,
-    render_pixel_path, render_pixel_path_tabled, tabulate_pixel_ownership, Atmosphere, Camera,
-    Coherence, Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid, RenderOptions,
-    Resolution, Rgb, Shading, Stick, Surface, View, WithSticks, U8F8,
+    render_pixel_path, render_pixel_path_lean, render_pixel_path_tabled, tabulate_pixel_ownership,
+    Atmosphere, Camera, Coherence, Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid,
+    RenderOptions, Resolution, Rgb, Shading, Stick, Surface, View, WithSticks, U8F8,
 };
 use terracast_board::governed;
 use terracast_board::scene::{BoardScene, MAX_STICKS};
@@ -339,12 +339,34 @@ fn run() -> Result<(), &'static str> {
         MAP_DEPTH,
         pyramid_ticks
     );
-    // scripts/board-profile BOUND=path: the per-pixel path alone, each
-    // view once, and nothing else.
-    if option_env!("TERRACAST_BOARD_BOUND") == Some("path") {
+    // scripts/board-profile BOUND=path (or lean): the per-pixel path
+    // alone (or at its leanest), each view once, and nothing else.
+    let bound = option_env!("TERRACAST_BOARD_BOUND");
+    if bound == Some("path") || bound == Some("lean") {
         for camera in scene.header.views() {
             let view =
                 View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+            if bound == Some("lean") {
+                // SAFETY: as the statics above; borrowed only here.
+                let table: (&mut [u16], &mut [u32], &mut [u32]) = unsafe {
+                    (
+                        &mut *addr_of_mut!(LINE_OF),
+                        &mut *addr_of_mut!(ORDER),
+                        &mut *addr_of_mut!(STARTS),
+                    )
+                };
+                render_pixel_path_lean(
+                    pyramid.base(),
+                    &view,
+                    &RenderOptions::default(),
+                    table,
+                    frame,
+                )
+                .map_err(|_| "the pixel table is too small")?;
+                // The frame is read after: its colors are worked out.
+                core::hint::black_box(&mut *frame);
+                continue;
+            }
             let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
                 .map_err(|_| "framebuffer too small")?;
             render_pixel_path(
@@ -571,7 +593,8 @@ impl Renders {
 /// (`render_pixel_lines`), and by its per-pixel path alone
 /// (`render_pixel_path`: no step), stepped line by line and from a table
 /// of the frame's pixel ownership (`render_pixel_path_tabled`, into
-/// `table`): each render's ticks, over semihosting, for
+/// `table`), and that path with its rays set up in single words
+/// (`render_pixel_path_lean`): each render's ticks, over semihosting, for
 /// `scripts/board-bound`.
 fn level_bound(
     pyramid: &Pyramid,
@@ -651,15 +674,28 @@ fn level_bound(
         tabulate_pixel_ownership(&posed, (&mut *line_of, &mut *order, &mut *starts))
             .map_err(|_| "the pixel table is too small")?;
         let table_only = ticks() - start;
+        // Its rays set up in single words, written straight to the frame
+        // (the table's build counted).
+        let start = ticks();
+        render_pixel_path_lean(
+            pyramid.base(),
+            &posed,
+            &single,
+            (&mut *line_of, &mut *order, &mut *starts),
+            frame,
+        )
+        .map_err(|_| "the pixel table is too small")?;
+        let lean = ticks() - start;
         hprintln!(
-            "posed view {} kernel {} single {} lines {} path {} tabled {} table {}",
+            "posed view {} kernel {} single {} lines {} path {} tabled {} table {} lean {}",
             index,
             kernel,
             kernel_single,
             lines,
             path,
             tabled,
-            table_only
+            table_only,
+            lean
         );
     }
     Ok(())

@@ -203,15 +203,10 @@ fn the_per_pixel_path_alone_writes_every_pixel_once() {
     }
 }
 
-#[test]
-fn the_tabled_per_pixel_path_draws_the_stepped_ones_frame() {
-    let scene = procedural(128, 2);
-    let kernel_scene = scene.to_kernel().unwrap();
-    let terrain = kernel_scene.terrain().unwrap();
-    let top = scene.max_height();
-    let (width, height) = (80u32, 61u32);
-    let pixels = (width * height) as usize;
-    for (pitch, roll, yaw) in [
+/// The poses the tabled paths are checked at over a map whose highest
+/// point is `top`: level, pitched up to straight down, rolled, and up.
+fn table_cameras(top: f32) -> impl Iterator<Item = Camera> {
+    [
         (0.0, 0.0, 30.0),
         (2.0, 0.0, 70.0),
         (12.0, 0.0, 200.0),
@@ -220,12 +215,24 @@ fn the_tabled_per_pixel_path_draws_the_stepped_ones_frame() {
         (20.0, 30.0, 120.0),
         (0.0, -15.0, 300.0),
         (-30.0, 0.0, 45.0),
-    ] {
-        let camera = Camera {
-            pitch_deg: pitch,
-            roll_deg: roll,
-            ..Camera::looking([30.0, 40.0, top + 25.0], yaw, pitch)
-        };
+    ]
+    .into_iter()
+    .map(move |(pitch, roll, yaw)| Camera {
+        pitch_deg: pitch,
+        roll_deg: roll,
+        ..Camera::looking([30.0, 40.0, top + 25.0], yaw, pitch)
+    })
+}
+
+#[test]
+fn the_tabled_per_pixel_paths_draw_the_stepped_ones_frame() {
+    let scene = procedural(128, 2);
+    let kernel_scene = scene.to_kernel().unwrap();
+    let terrain = kernel_scene.terrain().unwrap();
+    let top = scene.max_height();
+    let (width, height) = (80u32, 61u32);
+    let pixels = (width * height) as usize;
+    for camera in table_cameras(top) {
         let view = View::new(&camera, width, height).unwrap();
         let mut stepped = SampleBuffer::new(width, height);
         terracast::render_pixel_path(&terrain, &view, &single(), &mut stepped);
@@ -251,8 +258,36 @@ fn the_tabled_per_pixel_path_draws_the_stepped_ones_frame() {
             tabled.samples == stepped.samples,
             "{camera:?}: not the stepped frame"
         );
+        // Written lean: the same frame but for the rounding of the slope,
+        // the drift and the offset. A color no pixel has shows any pixel
+        // left unwritten.
+        let mut lean = vec![[1, 2, 3]; pixels];
+        terracast::render_pixel_path_lean(
+            &terrain,
+            &view,
+            &single(),
+            (&mut line_of, &mut order, &mut starts),
+            &mut lean,
+        )
+        .unwrap();
+        let tabled = colors(&tabled);
+        assert!(
+            !lean.contains(&[1, 2, 3]),
+            "{camera:?}: a pixel left unwritten"
+        );
+        let close = lean
+            .iter()
+            .zip(&tabled)
+            .filter(|(a, b)| a.iter().zip(b.iter()).all(|(a, b)| a.abs_diff(*b) <= 4))
+            .count();
+        let db = psnr(&lean, &tabled);
+        println!("{camera:?}: lean against tabled {db:.2} dB, {close} of {pixels} within 4 levels");
+        assert!(
+            close * 100 >= pixels * 99 && db > 40.0,
+            "{camera:?}: {close} of {pixels} pixels within 4 levels, {db:.2} dB"
+        );
     }
-    // Storage short of a line: refused.
+    // Storage short of a line, a frame short of a pixel: refused.
     let view = View::new(&Camera::looking([30.0, 40.0, top], 0.0, 30.0), 16, 8).unwrap();
     let (mut line_of, mut order) = ([0u16; 128], [0u32; 128]);
     let mut starts = vec![0u32; view.lines() as usize];
@@ -262,6 +297,15 @@ fn the_tabled_per_pixel_path_draws_the_stepped_ones_frame() {
         &single(),
         (&mut line_of, &mut order, &mut starts),
         &mut SampleBuffer::new(16, 8),
+    );
+    assert_eq!(refused, Err(terracast::TableError::TooSmall));
+    let mut starts = vec![0u32; view.lines() as usize + 1];
+    let refused = terracast::render_pixel_path_lean(
+        &terrain,
+        &view,
+        &single(),
+        (&mut line_of, &mut order, &mut starts),
+        &mut [[0; 3]; 127],
     );
     assert_eq!(refused, Err(terracast::TableError::TooSmall));
 }

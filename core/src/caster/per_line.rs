@@ -48,13 +48,19 @@
 //! frame, and what the pixel costs when its line is looked up rather than
 //! stepped to ([`tabulate_pixel_ownership`] builds the table alone, to
 //! count it apart).
+//!
+//! [`render_pixel_path_lean`] is the tabled path written lean: every value
+//! of a ray in a word, its slope and drift from one reciprocal of its run,
+//! its hit shaded without a depth or an elevation, its color written
+//! straight into the frame. What is left is what the design's pixel
+//! costs: the table, the ray's set-up, four texels and three blends.
 
 use super::walk::lerp;
 use super::{crossing_fraction, sky, RenderOptions};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BITS};
 use crate::divide::div_trunc;
-use crate::view::lines::{Line, Owned, OwnedPixels, TableError};
+use crate::view::lines::{Line, Owned, RayWords, TableError};
 use crate::view::plane::{slope_quotient, Plane};
 use crate::{Sample, Sink, Terrain, View};
 use core::fmt;
@@ -145,15 +151,8 @@ pub fn render_pixel_path_tabled<S: Sink>(
     let table = view.tabulate_pixels(line_of, order, starts)?;
     let lines = FrameCaster::new(terrain, view, options);
     let top_row = view.height() as i32 - 1;
-    for (index, ends) in table.starts.windows(2).enumerate() {
-        let Some(pixels) = table.order.get(ends[0] as usize..ends[1] as usize) else {
-            continue;
-        };
-        // A line that owns no pixel is never set up.
-        if pixels.is_empty() {
-            continue;
-        }
-        let Some((line, _, plane, walk)) = lines.set_up(index as u32) else {
+    for (index, pixels) in table.owned_lines() {
+        let Some((line, plane, walk)) = lines.set_up(index) else {
             continue;
         };
         let owned = pixels
@@ -162,6 +161,188 @@ pub fn render_pixel_path_tabled<S: Sink>(
         lines.pixels_unwalked(&line, owned, &plane, &walk, sink);
     }
     Ok(())
+}
+
+/// Renders `view` of `terrain` as [`render_pixel_path_tabled`] does, in
+/// words throughout, its colors written straight into `frame` (row-major,
+/// y = 0 at the top; at least a pixel each): the per-pixel path written
+/// lean (see the module's notes). A ray's run and rise are multiply-adds
+/// on words and its offset from its line one long product, where the
+/// other paths carry them in 64-bit words; its slope and color drift come
+/// from one reciprocal of its run (one divide, where they divide twice);
+/// its hit is shaded from values in words, with no depth or elevation
+/// made. Its frame is the tabled path's to the rounding of the slope, the
+/// drift and the offset (tested). A measurement, not an image of the
+/// terrain. Never inlined, so that its count does not hang on its
+/// caller's code.
+#[inline(never)]
+pub fn render_pixel_path_lean(
+    terrain: &Terrain<'_>,
+    view: &View,
+    options: &RenderOptions,
+    (line_of, order, starts): (&mut [u16], &mut [u32], &mut [u32]),
+    frame: &mut [Rgb],
+) -> Result<(), TableError> {
+    let width = view.width() as usize;
+    let frame = frame
+        .get_mut(..width * view.height() as usize)
+        .ok_or(TableError::TooSmall)?;
+    let table = view.tabulate_pixels(line_of, order, starts)?;
+    let lines = FrameCaster::new(terrain, view, options);
+    let eye_z = view.eye[2].to_bits();
+    for (index, pixels) in table.owned_lines() {
+        let Some((line, plane, walk)) = lines.set_up(index) else {
+            continue;
+        };
+        let words = line.words(if plane.key.x_major { 0 } else { 1 }, view.height());
+        let ray_of = |p: u32| words.ray((p & 0xFFFF) as i32, (p >> 16) as i32);
+        let mut put = |ray: &RayWords, color: Rgb| {
+            if let Some(pixel) = frame.get_mut(ray.y as usize * width + ray.x as usize) {
+                *pixel = color;
+            }
+        };
+        if walk.first > walk.last {
+            for &p in pixels {
+                put(&ray_of(p), lines.sky.color);
+            }
+            continue;
+        }
+        let at = LeanAt::new(&lines.start(&plane, &walk), &walk, &plane, eye_z);
+        let across = Across::of(plane.across());
+        for &p in pixels {
+            let ray = ray_of(p);
+            let run = if plane.key.forward {
+                ray.major
+            } else {
+                ray.major.wrapping_neg()
+            }
+            .max(0) as u32;
+            let reciprocal = Reciprocal::of_word(run);
+            let dz = reciprocal.slope(ray.up);
+            let drift = across.drift(reciprocal, ray.offset);
+            put(&ray, lines.lean_color(&at, dz, drift));
+        }
+    }
+    Ok(())
+}
+
+/// A ray's run (its direction's major-axis component toward its plane's
+/// direction, as a word) as a reciprocal, `1/run ≈ inverse · 2^shift /
+/// 2^48`: the run's 16 leading bits divided into 2^32 once. A ray's slope
+/// and its color drift both divide by its run; with this they multiply
+/// (a 32 × 32-bit product each) and shift. A run of 0 (a vertical ray)
+/// has none: `inverse` 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Reciprocal {
+    inverse: u32,
+    shift: i32,
+}
+
+impl Reciprocal {
+    #[inline(always)]
+    fn of_word(run: u32) -> Self {
+        if run == 0 {
+            return Self {
+                inverse: 0,
+                shift: 0,
+            };
+        }
+        // run = leading · 2^(16 − shift), leading in [2^15, 2^16).
+        let shift = run.leading_zeros();
+        Self {
+            inverse: u32::MAX / ((run << shift) >> 16),
+            shift: shift as i32,
+        }
+    }
+
+    /// `up / run` in Q16 (`up` a word), within `MAX_RAY_SLOPE`, as
+    /// `slope_quotient` (to 2^−14 of it): `up`'s leading bits times the
+    /// inverse, shifted. A vertical ray takes the steepest slope.
+    #[inline(always)]
+    fn slope(&self, up: i32) -> i32 {
+        const MAX: u32 = (MAX_RAY_SLOPE as u32) << COORD_FRAC_BITS;
+        let size = up.unsigned_abs();
+        let magnitude = if self.inverse == 0 {
+            MAX
+        } else if size == 0 {
+            0
+        } else {
+            let leading_zeros = size.leading_zeros();
+            // In [2^15, 2^17): up's leading bits times the inverse.
+            let high = ((u64::from(size << leading_zeros) * u64::from(self.inverse)) >> 32) as u32;
+            // up · 2^16 / run = high · 2^(shift − leading zeros).
+            let exponent = self.shift - leading_zeros as i32;
+            if exponent >= 0 {
+                if exponent >= 14 || high > MAX >> exponent {
+                    MAX
+                } else {
+                    high << exponent
+                }
+            } else {
+                high.checked_shr(exponent.unsigned_abs()).unwrap_or(0)
+            }
+        };
+        if up < 0 {
+            -(magnitude as i32)
+        } else {
+            magnitude as i32
+        }
+    }
+}
+
+/// A plane's drift numerator ([`Plane::across`]) as its sign and its size
+/// `lead · 2^shift` (`lead` its 32 leading bits), once a line.
+#[derive(Debug, Clone, Copy)]
+struct Across {
+    negative: bool,
+    lead: u32,
+    shift: i32,
+}
+
+impl Across {
+    fn of(across: i64) -> Self {
+        let size = across.unsigned_abs();
+        let leading = size.leading_zeros();
+        Self {
+            negative: across < 0,
+            lead: size.checked_shl(leading).map_or(0, |v| (v >> 32) as u32),
+            shift: 32 - leading as i32,
+        }
+    }
+
+    /// The drift ([`Plane::drift`], to 2^−13 of it) of a ray whose run is
+    /// `run`, `offset` (Q16, within ±2^15) steps across the line, within
+    /// ±2^14: `across · offset / (run · 2^24)`, the leading bits times the
+    /// reciprocal, times the offset, in words.
+    #[inline(always)]
+    fn drift(&self, run: Reciprocal, offset: i32) -> i32 {
+        const LIMIT: u32 = 1 << 14;
+        if run.inverse == 0 || offset == 0 {
+            return 0;
+        }
+        // lead · inverse / 2^33 is below 2^16: its product with the offset
+        // fits a word.
+        let high = ((u64::from(self.lead) * u64::from(run.inverse)) >> 33) as u32;
+        let product = high * offset.unsigned_abs().min(1 << 15);
+        let exponent = self.shift + run.shift - 39;
+        let size = if exponent >= 0 {
+            if exponent >= 31 || product > LIMIT >> exponent {
+                LIMIT
+            } else {
+                product << exponent
+            }
+        } else {
+            product
+                .checked_shr(exponent.unsigned_abs())
+                .unwrap_or(0)
+                .min(LIMIT)
+        };
+        if self.negative != (offset < 0) {
+            -(size as i32)
+        } else {
+            size as i32
+        }
+    }
 }
 
 /// The table [`render_pixel_path_tabled`] builds, alone (a measurement).
@@ -193,6 +374,50 @@ struct At {
     minor: i64,
     height: i64,
     before: i64,
+}
+
+/// The line's first sample as the lean path shades every ray there
+/// ([`FrameCaster::lean_color`]), in words: where its two grid lines'
+/// colors are, how far it is, the heights either side of the crossing.
+struct LeanAt {
+    /// The eye's height and the sample's distance (Q16).
+    eye_z: i32,
+    delta0: i32,
+    distance: i32,
+    k: i32,
+    /// The hit's and the sample before's grid-line starts and minor
+    /// coordinates (Q16), and the step across the minor grid line.
+    index: usize,
+    minor: i32,
+    before_index: usize,
+    before_minor: i32,
+    across: usize,
+    minor_max: i32,
+    /// The blended heights at the sample and before it (Q16).
+    height: i32,
+    before: i32,
+}
+
+impl LeanAt {
+    /// `at`, the first sample of `walk` on `plane` (inside the map: its
+    /// values fit words), as if the sample before stood a voxel above the
+    /// surface (every ray takes the crossing's division).
+    fn new(at: &At, walk: &Walk, plane: &Plane, eye_z: i64) -> Self {
+        Self {
+            eye_z: eye_z as i32,
+            delta0: plane.delta0 as i32,
+            distance: (plane.delta0 + (at.k << COORD_FRAC_BITS)) as i32,
+            k: at.k as i32,
+            index: at.index as usize,
+            minor: at.minor as i32,
+            before_index: (at.index - walk.step) as usize,
+            before_minor: (at.minor - plane.dminor) as i32,
+            across: walk.across as usize,
+            minor_max: plane.minor_max as i32,
+            height: at.height as i32,
+            before: at.height as i32 + (1 << COORD_FRAC_BITS),
+        }
+    }
 }
 
 /// How a line's walk moves through the grid.
@@ -321,21 +546,21 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         }
     }
 
-    /// Image line `index` set up: the line, its pixels, its plane and how
-    /// its walk moves; `None` for a line that owns no pixel. The line's
-    /// rays cross the map when `walk.first <= walk.last`.
+    /// Image line `index` set up: the line, its plane and how its walk
+    /// moves; `None` for a line that owns no pixel. The line's rays cross
+    /// the map when `walk.first <= walk.last`. (Its pixels, stepped, are
+    /// `line.pixels(height)`: a tabled path has them already.)
     #[inline(always)]
-    fn set_up(&self, index: u32) -> Option<(Line, OwnedPixels, Plane, Walk)> {
+    fn set_up(&self, index: u32) -> Option<(Line, Plane, Walk)> {
         let view = self.view;
         if view.line_misses_image(index) {
             return None;
         }
         let line = view.line(index)?;
-        let pixels = line.pixels(view.height());
         let plane =
             Plane::new(view, &self.extent, &line.reference).with_across(&view.across(&line));
         let walk = Walk::new(&plane, self.width);
-        Some((line, pixels, plane, walk))
+        Some((line, plane, walk))
     }
 
     /// The ray of `pixel` on `line`: its run along the major axis (a
@@ -353,9 +578,10 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
 
     /// Renders image line `index` (see [`render_pixel_lines`]).
     fn line<S: Sink>(&self, index: u32, sink: &mut S) {
-        let Some((line, mut pixels, plane, walk)) = self.set_up(index) else {
+        let Some((line, plane, walk)) = self.set_up(index) else {
             return;
         };
+        let mut pixels = line.pixels(self.view.height());
         if walk.first <= walk.last {
             let eye_z = self.view.eye[2].to_bits();
             let (mut at, mut previous_dz) = (None, i64::MIN);
@@ -384,9 +610,10 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
     /// Renders image line `index` as [`FrameCaster::line`] does, each ray
     /// shaded at the line's first sample (see [`render_pixel_path`]).
     fn line_unwalked<S: Sink>(&self, index: u32, sink: &mut S) {
-        let Some((line, pixels, plane, walk)) = self.set_up(index) else {
+        let Some((line, plane, walk)) = self.set_up(index) else {
             return;
         };
+        let pixels = line.pixels(self.view.height());
         self.pixels_unwalked(&line, pixels, &plane, &walk, sink);
     }
 
@@ -415,6 +642,48 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
             let z = eye_z + ((plane.delta0 * dz) >> COORD_FRAC_BITS) + at.k * dz;
             let drift = plane.drift_of_word(run, pixel.offset);
             sink.put(pixel.x, pixel.y, self.hit(&at, z, dz, drift, walk, plane));
+        }
+    }
+
+    /// The color [`FrameCaster::hit`] gives a ray with slope `dz` (Q16) and
+    /// drift `drift` (Q16 a unit of distance) at `at`, in words (its
+    /// heights wrap as the wide sums' low words do): no sample, depth or
+    /// elevation made.
+    #[inline(always)]
+    fn lean_color(&self, at: &LeanAt, dz: i32, drift: i32) -> Rgb {
+        let z = at
+            .eye_z
+            .wrapping_add(((i64::from(at.delta0) * i64::from(dz)) >> COORD_FRAC_BITS) as i32)
+            .wrapping_add(at.k.wrapping_mul(dz));
+        let aside = ((i64::from(drift) * i64::from(at.distance)) >> COORD_FRAC_BITS) as i32;
+        let on_hit = self.lean_texels(at, at.index, at.minor.wrapping_add(aside));
+        let before = self.lean_texels(
+            at,
+            at.before_index,
+            at.before_minor.wrapping_add(aside.wrapping_sub(drift)),
+        );
+        let above = z.wrapping_sub(dz).wrapping_sub(at.before);
+        let below = z.wrapping_sub(at.height);
+        lerp(before, on_hit, crossing_fraction(above, below))
+    }
+
+    /// The two voxels across the minor grid line at `minor` (Q16, kept
+    /// inside the map) of the grid line starting at `index`, blended by
+    /// the subvoxel weight.
+    #[inline(always)]
+    fn lean_texels(&self, at: &LeanAt, index: usize, minor: i32) -> Rgb {
+        let minor = if minor as u32 <= at.minor_max as u32 {
+            minor
+        } else if minor < 0 {
+            0
+        } else {
+            at.minor_max
+        };
+        let i = index + at.across * (minor >> COORD_FRAC_BITS) as usize;
+        let weight = (minor >> (COORD_FRAC_BITS - WEIGHT_BITS)) as u32 & 0xFF;
+        match (self.colors.get(i), self.colors.get(i + at.across)) {
+            (Some(&a), Some(&b)) => lerp(a, b, weight),
+            _ => self.sky.color,
         }
     }
 
@@ -490,5 +759,57 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
             distance: (distance - (back << 8)).clamp(0, i64::from(Sample::SKY - 1)) as u32,
             elevation: (z - ((back * dz) >> 8)) as i32,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::view::plane::DIRECTION_WORD_SHIFT;
+    use crate::{Camera, Extent};
+    use proptest::prelude::*;
+
+    #[test]
+    fn the_lean_slope_is_within_its_precision_of_the_exact_quotient() {
+        let max = f64::from(MAX_RAY_SLOPE) * 65536.0;
+        proptest!(|(up in any::<i32>(), run in 0u32..=i32::MAX as u32)| {
+            let exact = if run == 0 {
+                max.copysign(f64::from(up))
+            } else {
+                (f64::from(up) * 65536.0 / f64::from(run)).clamp(-max, max)
+            };
+            let got = f64::from(Reciprocal::of_word(run).slope(up));
+            // The run's and up's 16 leading bits, and the product's.
+            prop_assert!(
+                (got - exact).abs() <= exact.abs() * 2f64.powi(-14) + 2.0,
+                "{up} / {run}: {got} against {exact}"
+            );
+        });
+    }
+
+    #[test]
+    fn the_lean_drift_is_within_its_precision_of_the_exact_quotient() {
+        let extent = Extent {
+            width: 64,
+            depth: 64,
+            max_height: 0,
+            real_edges: true,
+        };
+        let view = View::new(&Camera::looking([20.0, 20.0, 10.0], 30.0, 10.0), 64, 48).unwrap();
+        let base = Plane::new(&view, &extent, &[1 << 32, 1 << 31, 0]);
+        // Across steps of the sizes a view's pixels make, runs of words
+        // from 2^8 to 2^30, offsets within half a pixel.
+        proptest!(|(across in -(1i64 << 38)..1 << 38, run in 1u32 << 8..1 << 30, offset in -(1i32 << 15)..=1 << 15)| {
+            let plane = base.with_across(&[0, across, 0]);
+            let exact = (plane.across() as f64 * f64::from(offset)
+                / (f64::from(run) * 2f64.powi(16 + DIRECTION_WORD_SHIFT as i32)))
+            .clamp(-16384.0, 16384.0);
+            let got = f64::from(Across::of(plane.across()).drift(Reciprocal::of_word(run), offset));
+            // 2^−13 of the quotient, and a unit of its last place.
+            prop_assert!(
+                (got - exact).abs() <= exact.abs() * 2f64.powi(-13) + 1.0,
+                "{across} {run} {offset}: {got} against {exact}"
+            );
+        });
     }
 }

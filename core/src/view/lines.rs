@@ -401,6 +401,70 @@ pub(crate) struct Line {
     nearest_from: i64,
 }
 
+/// A line's per-ray set-up in 32-bit words: from a pixel's coordinates
+/// its image position, its ray's run and rise, and its offset from the
+/// line, by multiply-adds on single words (one 32 × 32 → 64-bit product
+/// for the offset and one for the rise beside the line). The same
+/// quantities as [`Line::owned_at`], [`Line::direction_words`] and
+/// [`Line::up_word`], rounded to words: what the lean per-pixel path
+/// (`render_pixel_path_lean`) costs a ray.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LineWords {
+    /// The direction's major-axis and vertical components at the far edge,
+    /// and their change a row (or column), as words.
+    major: [i32; 2],
+    up: [i32; 2],
+    /// The vertical component's step across the line, in 2^16 direction
+    /// bits.
+    across_up: i32,
+    /// The line's anchor point (axis coordinate Q8, cross coordinate Q16)
+    /// and its cross coordinate's change a unit of axis (Q16).
+    s_anchor: i32,
+    t_anchor: i32,
+    lean: i32,
+    s_ref: i32,
+    along_rows: bool,
+    top_row: i32,
+}
+
+/// A pixel's ray in words (see [`LineWords::ray`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RayWords {
+    /// Image position, y = 0 at the top.
+    pub x: u32,
+    pub y: u32,
+    /// The direction's major-axis component and its vertical component
+    /// through the pixel's center, as words.
+    pub major: i32,
+    pub up: i32,
+    /// The pixel's center less its line's point, Q16 pixels.
+    pub offset: i32,
+}
+
+impl LineWords {
+    /// The ray of the pixel at cross coordinate `t`, axis coordinate `s`.
+    #[inline(always)]
+    pub(crate) fn ray(&self, t: i32, s: i32) -> RayWords {
+        let (x, row) = if self.along_rows { (t, s) } else { (s, t) };
+        let along = s - self.s_ref;
+        // Q16 lean times Q8 distance: within 2^36, one long product.
+        let point = self.t_anchor
+            + ((i64::from(self.lean) * i64::from((s << IMG_FRAC) - self.s_anchor)) >> IMG_FRAC)
+                as i32;
+        let offset = (t << COORD_FRAC_BITS).wrapping_sub(point);
+        let beside = (i64::from(self.across_up) * i64::from(offset)) >> DIRECTION_WORD_SHIFT;
+        RayWords {
+            x: x as u32,
+            y: (self.top_row - row) as u32,
+            major: self.major[0].wrapping_add(self.major[1].wrapping_mul(along)),
+            up: self.up[0]
+                .wrapping_add(self.up[1].wrapping_mul(along))
+                .wrapping_add(beside as i32),
+            offset,
+        }
+    }
+}
+
 /// A pixel a line owns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Owned {
@@ -619,6 +683,26 @@ impl Line {
         up.wrapping_add(beside as i32)
     }
 
+    /// The line's per-ray set-up in 32-bit words (see [`LineWords`]), the
+    /// direction's major-axis component taken from component `axis`.
+    pub(crate) fn words(&self, axis: usize, height: u32) -> LineWords {
+        let word = |v: i64| (v >> DIRECTION_WORD_SHIFT) as i32;
+        let (s_anchor, t_anchor) = self.anchor();
+        LineWords {
+            major: [word(self.reference[axis]), word(self.per_axis[axis])],
+            up: [word(self.reference[2]), word(self.per_axis[2])],
+            // Below 2^24: |across_up| < 2^40.
+            across_up: (self.across_up >> COORD_FRAC_BITS) as i32,
+            s_anchor: s_anchor as i32,
+            t_anchor: (t_anchor << (COORD_FRAC_BITS - IMG_FRAC)) as i32,
+            // Within ±1 a row inside the sector, Q16.
+            lean: (self.slope >> 16) as i32,
+            s_ref: self.sector.s_ref,
+            along_rows: self.sector.along_rows,
+            top_row: height as i32 - 1,
+        }
+    }
+
     /// Components `which` of [`Line::direction`], and only those.
     #[inline(always)]
     pub(crate) fn direction_component<const N: usize>(
@@ -773,6 +857,20 @@ impl core::error::Error for TableError {}
 pub(crate) struct PixelTable<'a> {
     pub order: &'a [u32],
     pub starts: &'a [u32],
+}
+
+impl<'a> PixelTable<'a> {
+    /// Each line that owns a pixel, by index, with its pixels (packed as
+    /// in `order`): a line that owns none need not be set up.
+    pub(crate) fn owned_lines(&self) -> impl Iterator<Item = (u32, &'a [u32])> + '_ {
+        self.starts
+            .windows(2)
+            .enumerate()
+            .filter_map(|(index, ends)| {
+                let pixels = self.order.get(ends[0] as usize..ends[1] as usize)?;
+                (!pixels.is_empty()).then_some((index as u32, pixels))
+            })
+    }
 }
 
 impl View {

@@ -155,6 +155,13 @@ impl Plane {
         )
     }
 
+    /// The drift's numerator, `across_minor − dminor·across_major`
+    /// ([`Plane::drift`]): what every ray of the plane divides by its run.
+    #[inline]
+    pub fn across(&self) -> i64 {
+        self.across
+    }
+
     /// [`Plane::drift`] from the direction's major-axis component alone.
     #[inline]
     pub fn drift_of(&self, major: i64, offset: i64) -> i64 {
