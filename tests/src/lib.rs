@@ -109,6 +109,124 @@ pub struct Georeference {
     pub geographic: bool,
 }
 
+/// A float32 GeoTIFF of `samples` (`w` × `d`) stored in `tile` × `tile`
+/// tiles (a multiple of 16; the tiles past the edges padded with 0),
+/// georeferenced by `at`: how GDAL writes a tiled or cloud-optimized
+/// elevation model, uncompressed, in memory. (The `tiff` crate writes
+/// strips only, so the file is laid out here.)
+pub fn tiled_float_tiff(
+    (w, d): (u32, u32),
+    samples: &[f32],
+    tile: u32,
+    at: Georeference,
+) -> Vec<u8> {
+    const SHORT: u16 = 3;
+    const LONG: u16 = 4;
+    const DOUBLE: u16 = 12;
+    let (across, down) = (w.div_ceil(tile), d.div_ceil(tile));
+    let tiles = (across * down) as usize;
+    let tile_bytes = (tile * tile * 4) as usize;
+    // Header, then the directory, then its values too long for an
+    // entry, then the tiles.
+    let mut entries: Vec<(u16, u16, Vec<u8>)> = vec![
+        (256, LONG, w.to_le_bytes().to_vec()),
+        (257, LONG, d.to_le_bytes().to_vec()),
+        (258, SHORT, 32u16.to_le_bytes().to_vec()),
+        (259, SHORT, 1u16.to_le_bytes().to_vec()),
+        (262, SHORT, 1u16.to_le_bytes().to_vec()),
+        (277, SHORT, 1u16.to_le_bytes().to_vec()),
+        (284, SHORT, 1u16.to_le_bytes().to_vec()),
+        (322, LONG, tile.to_le_bytes().to_vec()),
+        (323, LONG, tile.to_le_bytes().to_vec()),
+        // The tiles' offsets: placeholders, filled in below.
+        (324, LONG, vec![0; tiles * 4]),
+        (
+            325,
+            LONG,
+            (0..tiles)
+                .flat_map(|_| (tile_bytes as u32).to_le_bytes())
+                .collect(),
+        ),
+        (339, SHORT, 3u16.to_le_bytes().to_vec()),
+        (
+            33550,
+            DOUBLE,
+            [at.pixel, at.pixel, 0.0]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect(),
+        ),
+        (
+            33922,
+            DOUBLE,
+            [0.0, 0.0, 0.0, at.origin[0], at.origin[1], 0.0]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect(),
+        ),
+    ];
+    if at.geographic {
+        // One key: GTModelTypeGeoKey (1024) = 2, geographic.
+        let keys: [u16; 8] = [1, 1, 0, 1, 1024, 0, 1, 2];
+        entries.push((
+            34735,
+            SHORT,
+            keys.iter().flat_map(|k| k.to_le_bytes()).collect(),
+        ));
+    }
+    let size_of = |kind: u16| match kind {
+        SHORT => 2,
+        LONG => 4,
+        _ => 8,
+    };
+    let directory = 8 + 2 + entries.len() * 12 + 4;
+    let values: usize = entries
+        .iter()
+        .map(|(_, _, v)| if v.len() > 4 { v.len() } else { 0 })
+        .sum();
+    let first_tile = directory + values;
+    let offsets: Vec<u8> = (0..tiles)
+        .flat_map(|i| ((first_tile + i * tile_bytes) as u32).to_le_bytes())
+        .collect();
+    entries[9].2 = offsets;
+    let mut out = b"II".to_vec();
+    out.extend(42u16.to_le_bytes());
+    out.extend(8u32.to_le_bytes());
+    out.extend((entries.len() as u16).to_le_bytes());
+    let mut extra: Vec<u8> = Vec::new();
+    for (tag, kind, value) in &entries {
+        out.extend(tag.to_le_bytes());
+        out.extend(kind.to_le_bytes());
+        out.extend(((value.len() / size_of(*kind)) as u32).to_le_bytes());
+        if value.len() <= 4 {
+            let mut inline = value.clone();
+            inline.resize(4, 0);
+            out.extend(inline);
+        } else {
+            out.extend(((directory + extra.len()) as u32).to_le_bytes());
+            extra.extend(value);
+        }
+    }
+    out.extend(0u32.to_le_bytes());
+    out.extend(extra);
+    assert_eq!(out.len(), first_tile);
+    for ty in 0..down {
+        for tx in 0..across {
+            for y in ty * tile..(ty + 1) * tile {
+                for x in tx * tile..(tx + 1) * tile {
+                    let v = if x < w && y < d {
+                        samples[(y * w + x) as usize]
+                    } else {
+                        0.0
+                    };
+                    out.extend(v.to_le_bytes());
+                }
+            }
+        }
+    }
+    out
+}
+
 /// A GeoTIFF of `samples` (`w` × `d` of color type `C`), georeferenced by
 /// `at`, with GDAL_NODATA `nodata` when given: what GDAL writes for an
 /// elevation model or a photo, in memory.

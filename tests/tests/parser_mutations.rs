@@ -310,7 +310,7 @@ fn srtm_height_files() {
 
 #[test]
 fn geotiff_height_and_photo_files() {
-    use terracast_tests::{georeferenced_tiff, Georeference};
+    use terracast_tests::{georeferenced_tiff, tiled_float_tiff, Georeference};
     use tiff::encoder::colortype;
     // A 64 × 64 int16 GeoTIFF with its georeference, a no-data value and a
     // void, as an SRTM export comes.
@@ -333,13 +333,23 @@ fn geotiff_height_and_photo_files() {
         let heights = load_heights(path, 1.0).is_ok();
         let photo = terracast_sim::scene::load_colors(path, 8, 8).is_ok();
         // And strip by strip, as `pack` streams it.
-        let streamed = terracast_sim::scene::geotiff::TiffHeightRows::open(path)
-            .ok()
-            .flatten()
-            .is_some_and(|mut rows| {
-                let depth = rows.size().1;
-                (0..depth).all(|_| rows.next_row().is_ok())
-            });
-        heights || photo || streamed
+        heights || photo || streams(path)
     });
+    // Float heights stored in 16 x 16 tiles, streamed a row of tiles at a
+    // time.
+    let floats: Vec<f32> = heights.iter().map(|&h| f32::from(h)).collect();
+    let tiled = tiled_float_tiff((64, 64), &floats, 16, at);
+    mutate("tiled GeoTIFF", "t.tif", (&tiled, 512), 200, |_, path| {
+        load_heights(path, 1.0).is_ok() || streams(path)
+    });
+}
+
+/// Whether `path` reads as heights row by row, as `pack` streams them.
+fn streams(path: &Path) -> bool {
+    terracast_sim::scene::geotiff::TiffHeightRows::open(path)
+        .ok()
+        .is_some_and(|mut rows| {
+            let depth = rows.size().1;
+            (0..depth).all(|_| rows.next_row().is_ok())
+        })
 }

@@ -14,7 +14,7 @@ use terracast_sim::scene::{load_scene_files, procedural, Scene};
 use terracast_sim::tiles::{
     pack, page_flight, render_tiled, PackInput, PageOptions, ProceduralSource, TilesFile, TILE,
 };
-use terracast_tests::{georeferenced_tiff, Georeference};
+use terracast_tests::{georeferenced_tiff, tiled_float_tiff, Georeference};
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("terracast-tiles-{}", std::process::id()));
@@ -372,6 +372,49 @@ fn geotiff_heights_stream_into_a_pack_and_a_void_is_filled_as_render_fills_it() 
     )
     .unwrap();
     assert!(!summary.streamed);
+}
+
+#[test]
+fn a_geotiff_stored_in_tiles_streams_into_a_pack_a_row_of_tiles_at_a_time() {
+    // The odd-sized heights (203 x 150) in 16 x 16 tiles, the last
+    // column and row of tiles cut by the edges: packed tile for tile as
+    // `render` loads the file, streamed.
+    let (scene, (w, d)) = (procedural(256, 3), ODD_SIZE);
+    let heights = odd_sized_float_heights(&scene);
+    let at = Georeference {
+        origin: [20.0, -34.0],
+        pixel: 0.001,
+        geographic: true,
+    };
+    let path = temp("tiled-h.tif");
+    std::fs::write(&path, tiled_float_tiff((w, d), &heights, 16, at)).unwrap();
+    let decoder = tiff::decoder::Decoder::new(std::fs::File::open(&path).unwrap()).unwrap();
+    assert_eq!(decoder.get_chunk_type(), tiff::decoder::ChunkType::Tile);
+    packed_equals_maps(
+        &path,
+        &[],
+        1.0,
+        HeightFilter::default(),
+        "geotiff-tiled.tiles",
+    );
+    let summary = pack(
+        &pack_input(&path, &[], 1.0, HeightFilter::default()),
+        &temp("geotiff-tiled-again.tiles"),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(summary.streamed);
+    // Row by row, each row is the file's.
+    let mut rows = terracast_sim::scene::geotiff::TiffHeightRows::open(&path).unwrap();
+    for y in 0..d as usize {
+        let row = rows.next_row().unwrap();
+        assert_eq!(
+            row,
+            &heights[y * w as usize..(y + 1) * w as usize],
+            "row {y}"
+        );
+    }
+    assert!(rows.next_row().is_err());
 }
 
 #[test]

@@ -8,7 +8,7 @@
 use crate::error::{Error, Result};
 use image::RgbImage;
 use std::fs::File;
-use std::io::BufReader;
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 use tiff::decoder::{Decoder, DecodingResult};
 use tiff::tags::Tag;
@@ -71,10 +71,101 @@ impl GeoRef {
 }
 
 fn open(path: &Path, what: &str) -> Result<Decoder<BufReader<File>>> {
-    let file = File::open(path)
+    let mut file = File::open(path)
         .map_err(|e| Error::new(format!("cannot open {what} {}: {e}", path.display())))?;
-    Decoder::new(BufReader::new(file))
-        .map_err(|e| Error::new(format!("cannot read {what} {}: {e}", path.display())))
+    let length = file.metadata().map(|m| m.len()).unwrap_or(0);
+    check_first_directory(&mut file, length)
+        .and_then(|()| file.seek(SeekFrom::Start(0)).map(|_| ()))
+        .map_err(|e| Error::new(format!("cannot read {what} {}: {e}", path.display())))?;
+    let decoder = Decoder::new(BufReader::new(file))
+        .map_err(|e| Error::new(format!("cannot read {what} {}: {e}", path.display())))?;
+    // A tile is decoded whole, padding and all, before its samples are
+    // cut out: one far larger than the file can hold (a damaged tile
+    // size) is refused before it is allocated. Real tiles (GDAL's 256 or
+    // 512 a side) are far below this.
+    if decoder.get_chunk_type() == tiff::decoder::ChunkType::Tile {
+        let (width, height) = decoder.chunk_dimensions();
+        let bytes = u64::from(width) * u64::from(height) * 8;
+        if bytes > 16 * length + (16 << 20) {
+            return Err(failed(
+                path,
+                what,
+                format!("{width} x {height} tiles in a {length}-byte file"),
+            ));
+        }
+    }
+    Ok(decoder)
+}
+
+/// Refuses a TIFF (`length` bytes) whose first directory declares more
+/// values for a tag than the file holds. The decoder makes room for a
+/// tag's values, a few dozen bytes each, before it reads them: a damaged
+/// count would have it allocate many times the file. A file too short or
+/// not a TIFF is left to the decoder to name.
+fn check_first_directory(file: &mut File, length: u64) -> std::io::Result<()> {
+    // Whether `buffer` was filled: a file that ends first is the
+    // decoder's to name.
+    let fill = |file: &mut File, buffer: &mut [u8]| match file.read_exact(buffer) {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => Ok(false),
+        Err(e) => Err(e),
+    };
+    let mut header = [0u8; 16];
+    if !fill(file, &mut header[..8])? {
+        return Ok(());
+    }
+    let little = &header[..2] == b"II";
+    let number = |bytes: &[u8]| {
+        // Up to 8 bytes in the file's byte order.
+        let mut value = 0u64;
+        for i in 0..bytes.len() {
+            let byte = if little {
+                bytes[bytes.len() - 1 - i]
+            } else {
+                bytes[i]
+            };
+            value = (value << 8) | u64::from(byte);
+        }
+        value
+    };
+    // Classic TIFF: a 2-byte entry count and 12-byte entries with 4-byte
+    // value counts; BigTIFF: 8, 20 and 8.
+    let (big, directory) = match number(&header[2..4]) {
+        42 => (false, number(&header[4..8])),
+        43 if fill(file, &mut header[8..16])? => (true, number(&header[8..16])),
+        _ => return Ok(()),
+    };
+    let (count_bytes, entry_bytes, values_bytes) = if big { (8, 20, 8) } else { (2, 12, 4) };
+    let mut count = [0u8; 8];
+    file.seek(SeekFrom::Start(directory))?;
+    if !fill(file, &mut count[..count_bytes])? {
+        return Ok(());
+    }
+    let mut entry = [0u8; 20];
+    for _ in 0..number(&count[..count_bytes]).min(length / entry_bytes as u64) {
+        if !fill(file, &mut entry[..entry_bytes])? {
+            return Ok(());
+        }
+        let size: u64 = match number(&entry[2..4]) {
+            1 | 2 | 6 | 7 => 1,
+            3 | 8 => 2,
+            4 | 9 | 11 | 13 => 4,
+            _ => 8,
+        };
+        let values = number(&entry[4..4 + values_bytes]);
+        // At least two bytes a value: the decoder's room for them stays
+        // within 16 times the file.
+        if values.saturating_mul(size.max(2)) > length {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "tag {} declares {values} values, more than the file holds",
+                    number(&entry[..2])
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn failed(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
@@ -306,17 +397,21 @@ fn heights_of(samples: DecodingResult, no_data: Option<f64>, path: &Path) -> Res
 }
 
 /// A single-band GeoTIFF's heights row by row, top row first, decoded a
-/// strip at a time: what `pack` streams, in memory a strip's rows,
+/// strip at a time, or for a file stored in tiles a row of tiles at a
+/// time: what `pack` streams, in memory a strip's (or a tile's) rows,
 /// whatever the file's size.
 pub struct TiffHeightRows {
     decoder: FileDecoder,
     path: std::path::PathBuf,
     size: (u32, u32),
     no_data: Option<f64>,
-    /// The current strip's rows, `size.0` samples each, and its first row.
+    /// Tiles across and each tile's width, for a file stored in tiles.
+    tiles: Option<(u32, u32)>,
+    /// The current strip's (or row of tiles') rows, `size.0` samples
+    /// each, and its first row.
     strip: Vec<f32>,
     strip_first: u32,
-    /// The next row, and the next strip to decode.
+    /// The next row, and the next strip (or row of tiles) to decode.
     next: u32,
     next_strip: u32,
 }
@@ -332,23 +427,30 @@ impl std::fmt::Debug for TiffHeightRows {
 }
 
 impl TiffHeightRows {
-    /// Opens the heights at `path`; `None` for a file stored in tiles
-    /// rather than strips (which is read whole).
-    pub fn open(path: &Path) -> Result<Option<Self>> {
+    /// Opens the heights at `path`, stored in strips or in tiles.
+    pub fn open(path: &Path) -> Result<Self> {
         let (decoder, size, no_data) = open_heights(path)?;
-        if decoder.get_chunk_type() != tiff::decoder::ChunkType::Strip {
-            return Ok(None);
-        }
-        Ok(Some(Self {
+        let tiles = match decoder.get_chunk_type() {
+            tiff::decoder::ChunkType::Strip => None,
+            tiff::decoder::ChunkType::Tile => {
+                let (width, _) = decoder.chunk_dimensions();
+                if width == 0 {
+                    return Err(failed(path, "height map", "tiles 0 samples wide"));
+                }
+                Some((size.0.div_ceil(width), width))
+            }
+        };
+        Ok(Self {
             decoder,
             path: path.to_owned(),
             size,
             no_data,
+            tiles,
             strip: Vec::new(),
             strip_first: 0,
             next: 0,
             next_strip: 0,
-        }))
+        })
     }
 
     /// Samples a row and rows.
@@ -364,11 +466,16 @@ impl TiffHeightRows {
             return Err(failed(&self.path, what, "read past its last row"));
         }
         if (self.next - self.strip_first + 1) as usize * width > self.strip.len() {
-            let samples = self
-                .decoder
-                .read_chunk(self.next_strip)
-                .map_err(|e| failed(&self.path, what, e))?;
-            self.strip = heights_of(samples, self.no_data, &self.path)?;
+            self.strip = match self.tiles {
+                None => {
+                    let samples = self
+                        .decoder
+                        .read_chunk(self.next_strip)
+                        .map_err(|e| failed(&self.path, what, e))?;
+                    heights_of(samples, self.no_data, &self.path)?
+                }
+                Some((across, tile_width)) => self.tile_row(self.next_strip, across, tile_width)?,
+            };
             if self.strip.is_empty() || self.strip.len() % width != 0 {
                 return Err(failed(&self.path, what, "a strip of part of a row"));
             }
@@ -378,6 +485,57 @@ impl TiffHeightRows {
         let at = (self.next - self.strip_first) as usize * width;
         self.next += 1;
         Ok(&self.strip[at..at + width])
+    }
+
+    /// Row `row` of the file's tiles (`across` of them, `tile_width`
+    /// samples wide, the last cut at the image's edge) as whole image rows.
+    fn tile_row(&mut self, row: u32, across: u32, tile_width: u32) -> Result<Vec<f32>> {
+        let what = "height map";
+        let width = self.size.0 as usize;
+        let count = self
+            .decoder
+            .tile_count()
+            .map_err(|e| failed(&self.path, what, e))?;
+        // The row's tiles are all in the file before its rows are made.
+        if row.saturating_add(1).saturating_mul(across) > count {
+            return Err(failed(&self.path, what, "fewer tiles than its size"));
+        }
+        let mut rows = Vec::new();
+        for column in 0..across {
+            let index = row
+                .checked_mul(across)
+                .and_then(|i| i.checked_add(column))
+                .filter(|&i| i < count)
+                .ok_or_else(|| failed(&self.path, what, "fewer tiles than its size"))?;
+            let (data_width, data_height) = self.decoder.chunk_data_dimensions(index);
+            let samples = self
+                .decoder
+                .read_chunk(index)
+                .map_err(|e| failed(&self.path, what, e))?;
+            let tile = heights_of(samples, self.no_data, &self.path)?;
+            let (data_width, data_height) = (data_width as usize, data_height as usize);
+            let x = (column * tile_width) as usize;
+            if rows.is_empty() {
+                rows = vec![f32::NAN; data_height * width];
+            }
+            if tile.len() < data_width * data_height
+                || x + data_width > width
+                || rows.len() != data_height * width
+            {
+                return Err(failed(
+                    &self.path,
+                    what,
+                    "a tile of another size than its row's",
+                ));
+            }
+            for (line, samples) in rows
+                .chunks_exact_mut(width)
+                .zip(tile.chunks_exact(data_width))
+            {
+                line[x..x + data_width].copy_from_slice(samples);
+            }
+        }
+        Ok(rows)
     }
 }
 

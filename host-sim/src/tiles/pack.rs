@@ -8,9 +8,9 @@
 //! as soon as its rows and bounds are complete. Memory is a few strips of
 //! [`TILE`] rows a level, whatever the map's size.
 //!
-//! PNG maps stream row by row, and GeoTIFF heights stored in strips a
-//! strip at a time ([`TiffHeightRows`]). A GeoTIFF with voids or stored
-//! in tiles, an SRTM `.hgt` or GeoTIFF photos are loaded whole, as `render` loads them
+//! PNG maps stream row by row, and GeoTIFF heights a strip (or a row of
+//! tiles) at a time ([`TiffHeightRows`]). A GeoTIFF with voids, an SRTM
+//! `.hgt` or GeoTIFF photos are loaded whole, as `render` loads them
 //! ([`load_scene_files`]: voids filled from their neighbours, which takes
 //! the rows around them; photos placed by their georeference), and their
 //! rows are packed from memory: an `.hgt` tile is at most 3601 × 3601
@@ -105,11 +105,11 @@ pub fn pack(
             .is_some_and(|e| e.eq_ignore_ascii_case("hgt"))
     };
     // A PNG height map with at most one PNG color map of its size streams,
-    // and so do GeoTIFF heights in strips without a color map; anything
+    // and so do GeoTIFF heights without a color map; anything
     // else (an `.hgt`, a TIFF photo, a color map of another size) is
     // stretched or draped as `render` does it, whole.
     let streams = if is_tiff(&input.height) {
-        input.colors.is_empty() && TiffHeightRows::open(&input.height)?.is_some()
+        input.colors.is_empty()
     } else {
         !is_hgt(&input.height)
             && input.colors.len() <= 1
@@ -292,12 +292,7 @@ impl HeightRows {
 
     fn open(path: &Path, scale: f32) -> Result<Self> {
         if is_tiff(path) {
-            let rows = TiffHeightRows::open(path)?.ok_or_else(|| {
-                Error::new(format!(
-                    "height map {}: a tiled TIFF is read whole",
-                    path.display()
-                ))
-            })?;
+            let rows = TiffHeightRows::open(path)?;
             return Ok(Self::Tiff {
                 row: vec![0.0; rows.size().0 as usize],
                 rows: Box::new(rows),
