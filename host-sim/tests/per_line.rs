@@ -204,10 +204,13 @@ fn the_per_pixel_path_alone_writes_every_pixel_once() {
 }
 
 /// The poses the tabled paths are checked at over a map whose highest
-/// point is `top`: level, pitched up to straight down, rolled, and up.
+/// point is `top`: level, pitched up to straight down (the least pitch
+/// with its vanishing point thousands of pixels off the image), rolled,
+/// and up.
 fn table_cameras(top: f32) -> impl Iterator<Item = Camera> {
     [
         (0.0, 0.0, 30.0),
+        (0.05, 0.0, 15.0),
         (2.0, 0.0, 70.0),
         (12.0, 0.0, 200.0),
         (45.0, 0.0, 10.0),

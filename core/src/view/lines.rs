@@ -417,10 +417,10 @@ pub(crate) struct LineWords {
     /// The vertical component's step across the line, in 2^16 direction
     /// bits.
     across_up: i32,
-    /// The line's anchor point (axis coordinate Q8, cross coordinate Q16)
-    /// and its cross coordinate's change a unit of axis (Q16).
-    s_anchor: i32,
-    t_anchor: i32,
+    /// The line's point on the far edge's row (cross coordinate `K`,
+    /// Q16), its cross coordinate's change a row (Q24: within ±1), and
+    /// that row.
+    t_far: i32,
     lean: i32,
     s_ref: i32,
     along_rows: bool,
@@ -447,10 +447,12 @@ impl LineWords {
     pub(crate) fn ray(&self, t: i32, s: i32) -> RayWords {
         let (x, row) = if self.along_rows { (t, s) } else { (s, t) };
         let along = s - self.s_ref;
-        // Q16 lean times Q8 distance: within 2^36, one long product.
-        let point = self.t_anchor
-            + ((i64::from(self.lean) * i64::from((s << IMG_FRAC) - self.s_anchor)) >> IMG_FRAC)
-                as i32;
+        // Q24 lean times rows from the far edge: one long product. (From
+        // the far edge, not from a vanishing point far off the image, the
+        // lean's rounding moves the point by under 2^−11 pixel.)
+        let point = self
+            .t_far
+            .wrapping_add(((i64::from(self.lean) * i64::from(along)) >> 8) as i32);
         let offset = (t << COORD_FRAC_BITS).wrapping_sub(point);
         let beside = (i64::from(self.across_up) * i64::from(offset)) >> DIRECTION_WORD_SHIFT;
         RayWords {
@@ -687,16 +689,15 @@ impl Line {
     /// direction's major-axis component taken from component `axis`.
     pub(crate) fn words(&self, axis: usize, height: u32) -> LineWords {
         let word = |v: i64| (v >> DIRECTION_WORD_SHIFT) as i32;
-        let (s_anchor, t_anchor) = self.anchor();
         LineWords {
             major: [word(self.reference[axis]), word(self.per_axis[axis])],
             up: [word(self.reference[2]), word(self.per_axis[2])],
             // Below 2^24: |across_up| < 2^40.
             across_up: (self.across_up >> COORD_FRAC_BITS) as i32,
-            s_anchor: s_anchor as i32,
-            t_anchor: (t_anchor << (COORD_FRAC_BITS - IMG_FRAC)) as i32,
-            // Within ±1 a row inside the sector, Q16.
-            lean: (self.slope >> 16) as i32,
+            // Line K goes through the far edge's point K.
+            t_far: self.k << COORD_FRAC_BITS,
+            // Within ±1 a row inside the sector: Q32 to Q24.
+            lean: (self.slope >> 8) as i32,
             s_ref: self.sector.s_ref,
             along_rows: self.sector.along_rows,
             top_row: height as i32 - 1,
