@@ -679,9 +679,14 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         } else {
             at.minor_max
         };
-        let i = index + at.across * (minor >> COORD_FRAC_BITS) as usize;
+        // Wrapping: the sample before the first may lie off the map (an
+        // index below 0, as a huge one), which `get` then refuses.
+        let i = index.wrapping_add(at.across.wrapping_mul((minor >> COORD_FRAC_BITS) as usize));
         let weight = (minor >> (COORD_FRAC_BITS - WEIGHT_BITS)) as u32 & 0xFF;
-        match (self.colors.get(i), self.colors.get(i + at.across)) {
+        match (
+            self.colors.get(i),
+            self.colors.get(i.wrapping_add(at.across)),
+        ) {
             (Some(&a), Some(&b)) => lerp(a, b, weight),
             _ => self.sky.color,
         }
