@@ -415,6 +415,18 @@ fn a_geotiff_stored_in_tiles_streams_into_a_pack_a_row_of_tiles_at_a_time() {
         );
     }
     assert!(rows.next_row().is_err());
+    // Tiles of length 0 (the directory's ninth entry, TileLength): refused
+    // in a line naming the file, by the streaming reader and by `render`'s.
+    let mut zero = tiled_float_tiff((w, d), &heights, 16, at);
+    assert_eq!(&zero[10 + 8 * 12..10 + 8 * 12 + 2], &323u16.to_le_bytes());
+    zero[10 + 8 * 12 + 8..10 + 8 * 12 + 12].copy_from_slice(&0u32.to_le_bytes());
+    let path = temp("tiled-zero-h.tif");
+    std::fs::write(&path, zero).unwrap();
+    let e = terracast_sim::scene::geotiff::TiffHeightRows::open(&path)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("tiled-zero-h.tif") && !e.contains('\n'), "{e}");
+    assert!(terracast_sim::scene::load_heights(&path, 1.0).is_err());
 }
 
 #[test]

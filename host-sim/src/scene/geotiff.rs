@@ -86,7 +86,8 @@ fn open(path: &Path, what: &str) -> Result<Decoder<BufReader<File>>> {
     if decoder.get_chunk_type() == tiff::decoder::ChunkType::Tile {
         let (width, height) = decoder.chunk_dimensions();
         let bytes = u64::from(width) * u64::from(height) * 8;
-        if bytes > 16 * length + (16 << 20) {
+        // (The decoder divides by a tile's sides.)
+        if bytes == 0 || bytes > 16 * length + (16 << 20) {
             return Err(failed(
                 path,
                 what,
@@ -432,12 +433,10 @@ impl TiffHeightRows {
         let (decoder, size, no_data) = open_heights(path)?;
         let tiles = match decoder.get_chunk_type() {
             tiff::decoder::ChunkType::Strip => None,
+            // (`open` refused tiles with a side of 0.)
             tiff::decoder::ChunkType::Tile => {
                 let (width, _) = decoder.chunk_dimensions();
-                if width == 0 {
-                    return Err(failed(path, "height map", "tiles 0 samples wide"));
-                }
-                Some((size.0.div_ceil(width), width))
+                Some((size.0.div_ceil(width.max(1)), width))
             }
         };
         Ok(Self {
