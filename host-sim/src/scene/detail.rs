@@ -150,28 +150,11 @@ impl PhotoDetail {
         let shift = shift_for(ratio);
         let (pw, ph) = (f64::from(photo.width()), f64::from(photo.height()));
         // A grid coordinate (points, fractional) in photo pixels (their
-        // centers at whole numbers), and back; model y runs north, rows
-        // south.
-        let u_of = |x: f64| {
-            (grid_at.origin[0] + (x + 0.5) * grid_at.pixel[0] - photo_at.origin[0])
-                / photo_at.pixel[0]
-                - 0.5
-        };
-        let v_of = |y: f64| {
-            (photo_at.origin[1] - grid_at.origin[1] + (y + 0.5) * grid_at.pixel[1])
-                / photo_at.pixel[1]
-                - 0.5
-        };
-        let x_of = |u: f64| {
-            ((u + 0.5) * photo_at.pixel[0] + photo_at.origin[0] - grid_at.origin[0])
-                / grid_at.pixel[0]
-                - 0.5
-        };
-        let y_of = |v: f64| {
-            (grid_at.origin[1] - photo_at.origin[1] + (v + 0.5) * photo_at.pixel[1])
-                / grid_at.pixel[1]
-                - 0.5
-        };
+        // centers at whole numbers), and back.
+        let u_of = |x: f64| grid_at.pixel_in(photo_at, [x, 0.0])[0];
+        let v_of = |y: f64| grid_at.pixel_in(photo_at, [0.0, y])[1];
+        let x_of = |u: f64| photo_at.pixel_in(grid_at, [u, 0.0])[0];
+        let y_of = |v: f64| photo_at.pixel_in(grid_at, [0.0, v])[1];
         let span = |low: f64, high: f64, n: u32| -> Option<(u32, u32)> {
             let first = low.ceil().max(0.0);
             let last = high.floor().min(f64::from(n) - 1.0);

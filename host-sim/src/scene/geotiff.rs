@@ -33,6 +33,16 @@ pub struct GeoRef {
 const METERS_PER_DEGREE: f64 = 111_132.0;
 
 impl GeoRef {
+    /// Where pixel position `[x, y]` of this raster (fractional, pixel
+    /// centers at whole numbers) falls among `other`'s pixels, in the same
+    /// terms: model x runs east, model y north, rows south.
+    pub fn pixel_in(&self, other: &GeoRef, [x, y]: [f64; 2]) -> [f64; 2] {
+        [
+            (self.origin[0] + (x + 0.5) * self.pixel[0] - other.origin[0]) / other.pixel[0] - 0.5,
+            (other.origin[1] - self.origin[1] + (y + 0.5) * self.pixel[1]) / other.pixel[1] - 0.5,
+        ]
+    }
+
     /// Meters between samples east-west and north-south; a geographic
     /// raster's east-west spacing is taken at its middle latitude.
     pub fn spacing_m(&self, height: u32) -> (f64, f64) {
