@@ -104,16 +104,179 @@ impl fmt::Display for DetailError {
 
 impl core::error::Error for DetailError {}
 
-/// A color grid finer than level 0 over a rectangle of the map, and its
-/// levels (see the module).
-#[derive(Debug, Clone, Copy)]
-pub struct Detail<'a> {
+/// Where a [`Detail`] lies and how fine it is: a rectangle of grid points
+/// of level 0 and its texels a voxel, without the texels. A detail held in
+/// memory ([`Detail`]) and one paged through a tile cache
+/// ([`crate::tiles::TiledSurface::with_photos`]) look their colors up the
+/// same way, through this.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DetailArea {
     /// Fine level 0's texels a voxel on each side: `2^shift`.
     shift: u8,
     /// The rectangle's first grid point.
     origin: [u32; 2],
     /// Its grid points on each axis.
     size: [u32; 2],
+}
+
+impl DetailArea {
+    /// The area of `size` grid points from `origin`, `2^shift` times
+    /// finer than level 0, on a map up to `max_side` points a side.
+    pub fn new(
+        origin: [u32; 2],
+        size: [u32; 2],
+        shift: u32,
+        max_side: u32,
+    ) -> Result<Self, DetailError> {
+        if shift == 0 || shift > MAX_DETAIL_SHIFT {
+            return Err(DetailError::Shift);
+        }
+        let past =
+            |axis: usize| u64::from(origin[axis]) + u64::from(size[axis]) > u64::from(max_side);
+        if size.contains(&0) || past(0) || past(1) {
+            return Err(DetailError::Rectangle);
+        }
+        Ok(Self {
+            shift: shift as u8,
+            origin,
+            size,
+        })
+    }
+
+    /// Fine level 0's texels a voxel on each side, as a shift.
+    pub fn shift(&self) -> u32 {
+        u32::from(self.shift)
+    }
+
+    /// The rectangle's first grid point.
+    pub fn origin(&self) -> [u32; 2] {
+        self.origin
+    }
+
+    /// The rectangle's grid points on each axis.
+    pub fn size(&self) -> [u32; 2] {
+        self.size
+    }
+
+    /// Fine level `level`'s texels a row and rows.
+    pub fn level_size(&self, level: u32) -> (usize, usize) {
+        level_size(self.size, self.shift(), level.min(self.shift()))
+    }
+
+    /// Fine level `level`'s color at world point `point` (Q16 voxels),
+    /// its texel `(x, y)` from `texel`: the four texels around the point
+    /// blended by the point's fraction of their spacing (the last row and
+    /// column repeat past the rectangle's edge); `None` outside the
+    /// rectangle, or where `texel` has none.
+    #[inline]
+    pub fn color_with(
+        &self,
+        level: u32,
+        point: [i64; 2],
+        texel: impl Fn(usize, usize) -> Option<Rgb>,
+    ) -> Option<Rgb> {
+        let shift = self.shift();
+        let level = level.min(shift);
+        let finer = shift - level;
+        let (w, d) = level_size(self.size, shift, level);
+        // The texel whose center is at fine coordinate `i` lies at world
+        // `origin + (i + ½)/2^finer − ½`: the point's coordinate in texels
+        // of this level (Q16), half a texel in.
+        let half_in = ((1i64 << finer) - 1) << (COORD_FRAC_BITS - 1);
+        let mut cell = [0usize; 2];
+        let mut weight = [0u32; 2];
+        for axis in 0..2 {
+            let from_origin = point[axis] - (i64::from(self.origin[axis]) << COORD_FRAC_BITS);
+            let fine = (from_origin << finer) + half_in;
+            let limit = [w, d][axis] as i64;
+            // Outside the rectangle's voxels (half a texel of this level
+            // past its first and last centers): not this detail's.
+            let half = 1 << (COORD_FRAC_BITS - 1);
+            if fine < -half || fine >= (limit << COORD_FRAC_BITS) - half {
+                return None;
+            }
+            let fine = fine.max(0);
+            let whole = (fine >> COORD_FRAC_BITS) as usize;
+            cell[axis] = whole.min(limit as usize - 1);
+            weight[axis] = if whole + 1 < limit as usize {
+                ((fine >> (COORD_FRAC_BITS - WEIGHT_BITS)) & ((1 << WEIGHT_BITS) - 1)) as u32
+            } else {
+                0
+            };
+        }
+        let (x, y) = (cell[0], cell[1]);
+        let (x1, y1) = ((x + 1).min(w - 1), (y + 1).min(d - 1));
+        Some(lerp(
+            lerp(texel(x, y)?, texel(x1, y)?, weight[0]),
+            lerp(texel(x, y1)?, texel(x1, y1)?, weight[0]),
+            weight[1],
+        ))
+    }
+
+    /// The color at world point `point` (Q16) for a footprint `width` (a
+    /// depth, Q16) on a ray whose colors reach level 1 at `reach`, from
+    /// `color` (fine level, point → its color, as [`DetailArea::color_with`]):
+    /// fine level 0 alone under `reach / 2^shift`, then each next fine
+    /// level blended in as a texel of the one before gets narrower than
+    /// the footprint, as the pyramid's levels are past `reach`; `None`
+    /// outside the rectangle or at or past the reach (where level 0 and
+    /// the pyramid take over).
+    #[inline]
+    pub fn color_for_with(
+        &self,
+        point: [i64; 2],
+        width: i64,
+        reach: i64,
+        color: impl Fn(u32, [i64; 2]) -> Option<Rgb>,
+    ) -> Option<Rgb> {
+        if width >= reach {
+            return None;
+        }
+        let shift = self.shift();
+        // Fine level f is all there at `reach >> (shift − f)`.
+        let mut level = 0;
+        while level < shift && width >= reach >> (shift - level) {
+            level += 1;
+        }
+        if level == 0 {
+            return color(0, point);
+        }
+        let begins = reach >> (shift - level + 1);
+        let span = (reach >> (shift - level)) - begins;
+        let t = if span > 0 {
+            (((width - begins) << WEIGHT_BITS) / span).clamp(0, 1 << WEIGHT_BITS) as u32
+        } else {
+            1 << WEIGHT_BITS
+        };
+        let finer = color(level - 1, point)?;
+        let coarser = color(level, point)?;
+        Some(lerp(finer, coarser, t))
+    }
+
+    /// How far (in the unit of `reach`, the depth where colors reach
+    /// level 1) fine level `level` is read: [`DetailArea::color_for_with`]
+    /// blends fine levels `f − 1` and `f` for footprints narrower than
+    /// `reach >> (shift − f)`, so fine level `f` is read for footprints
+    /// narrower than `reach >> (shift − f − 1)`, and the last two out to
+    /// `reach`. What a tile cache's footprint of the detail needs.
+    pub fn reaches(&self, level: u32, reach: f64) -> f64 {
+        let shift = self.shift();
+        reach / f64::from(1u32 << shift.saturating_sub(level.min(shift) + 1))
+    }
+
+    /// Whether the rectangle lies inside a map of `extent`.
+    fn fits(&self, extent: &Extent) -> bool {
+        let end = |axis: usize| u64::from(self.origin[axis]) + u64::from(self.size[axis]);
+        end(0) <= u64::from(extent.width) && end(1) <= u64::from(extent.depth)
+    }
+}
+
+/// A color grid finer than level 0 over a rectangle of the map, and its
+/// levels (see the module).
+#[derive(Debug, Clone, Copy)]
+pub struct Detail<'a> {
+    /// Where it lies.
+    area: DetailArea,
     /// Fine levels 0 to `shift`, one after the other, row by row.
     texels: &'a [Rgb],
 }
@@ -168,17 +331,13 @@ impl<'a> Detail<'a> {
         texels: &'a [Rgb],
     ) -> Result<Self, DetailError> {
         check(size, shift, texels.len())?;
-        let past_a_map =
-            |axis: usize| u64::from(origin[axis]) + u64::from(size[axis]) > u64::from(MAX_MAP_SIDE);
-        if past_a_map(0) || past_a_map(1) {
-            return Err(DetailError::Rectangle);
-        }
-        Ok(Self {
-            shift: shift as u8,
-            origin,
-            size,
-            texels,
-        })
+        let area = DetailArea::new(origin, size, shift, MAX_MAP_SIDE)?;
+        Ok(Self { area, texels })
+    }
+
+    /// Where it lies and how fine it is.
+    pub fn area(&self) -> DetailArea {
+        self.area
     }
 
     /// Bytes of its texels, all levels.
@@ -188,7 +347,20 @@ impl<'a> Detail<'a> {
 
     /// Fine level 0's texels a voxel on each side, as a shift.
     pub fn shift(&self) -> u32 {
-        u32::from(self.shift)
+        self.area.shift()
+    }
+
+    /// Fine level `level`'s texels, row by row ([`DetailArea::level_size`]).
+    pub fn level(&self, level: u32) -> &'a [Rgb] {
+        let level = level.min(self.shift());
+        let start = (0..level)
+            .map(|l| {
+                let (w, d) = self.area.level_size(l);
+                w * d
+            })
+            .sum::<usize>();
+        let (w, d) = self.area.level_size(level);
+        self.texels.get(start..start + w * d).unwrap_or(&[])
     }
 
     /// Fine level `level`'s color at world point `point` (Q16 voxels):
@@ -197,101 +369,26 @@ impl<'a> Detail<'a> {
     /// rectangle's edge); `None` outside the rectangle.
     #[inline]
     pub fn color(&self, level: u32, point: [i64; 2]) -> Option<Rgb> {
-        let shift = self.shift();
-        let level = level.min(shift);
-        let finer = shift - level;
-        let (w, d) = level_size(self.size, shift, level);
-        // The texel whose center is at fine coordinate `i` lies at world
-        // `origin + (i + ½)/2^finer − ½`: the point's coordinate in texels
-        // of this level (Q16), half a texel in.
-        let half_in = ((1i64 << finer) - 1) << (COORD_FRAC_BITS - 1);
-        let mut cell = [0usize; 2];
-        let mut weight = [0u32; 2];
-        for axis in 0..2 {
-            let from_origin = point[axis] - (i64::from(self.origin[axis]) << COORD_FRAC_BITS);
-            let fine = (from_origin << finer) + half_in;
-            let limit = [w, d][axis] as i64;
-            // Outside the rectangle's voxels (half a texel of this level
-            // past its first and last centers): not this detail's.
-            let half = 1 << (COORD_FRAC_BITS - 1);
-            if fine < -half || fine >= (limit << COORD_FRAC_BITS) - half {
-                return None;
-            }
-            let fine = fine.max(0);
-            let whole = (fine >> COORD_FRAC_BITS) as usize;
-            cell[axis] = whole.min(limit as usize - 1);
-            weight[axis] = if whole + 1 < limit as usize {
-                ((fine >> (COORD_FRAC_BITS - WEIGHT_BITS)) & ((1 << WEIGHT_BITS) - 1)) as u32
-            } else {
-                0
-            };
-        }
-        let start = (0..level)
-            .map(|l| {
-                let (w, d) = level_size(self.size, shift, l);
-                w * d
-            })
-            .sum::<usize>();
-        let texels = self.texels.get(start..start + w * d)?;
-        let at = |x: usize, y: usize| texels[y * w + x];
-        let (x, y) = (cell[0], cell[1]);
-        let (x1, y1) = ((x + 1).min(w - 1), (y + 1).min(d - 1));
-        Some(lerp(
-            lerp(at(x, y), at(x1, y), weight[0]),
-            lerp(at(x, y1), at(x1, y1), weight[0]),
-            weight[1],
-        ))
+        let texels = self.level(level);
+        let (w, _) = self.area.level_size(level);
+        self.area
+            .color_with(level, point, |x, y| texels.get(y * w + x).copied())
     }
 
     /// The color at world point `point` (Q16) for a footprint `width` (a
-    /// depth, Q16) on a ray whose colors reach level 1 at `reach`: fine
-    /// level 0 alone under `reach / 2^shift`, then each next fine level
-    /// blended in as a texel of the one before gets narrower than the
-    /// footprint, as the pyramid's levels are past `reach`; `None` outside
-    /// the rectangle or at or past the reach (where level 0 and the
-    /// pyramid take over).
+    /// depth, Q16) on a ray whose colors reach level 1 at `reach`
+    /// ([`DetailArea::color_for_with`] over this detail's texels).
     #[inline]
     pub fn color_for(&self, point: [i64; 2], width: i64, reach: i64) -> Option<Rgb> {
-        if width >= reach {
-            return None;
-        }
-        let shift = self.shift();
-        // Fine level f is all there at `reach >> (shift − f)`.
-        let mut level = 0;
-        while level < shift && width >= reach >> (shift - level) {
-            level += 1;
-        }
-        if level == 0 {
-            return self.color(0, point);
-        }
-        let begins = reach >> (shift - level + 1);
-        let span = (reach >> (shift - level)) - begins;
-        let t = if span > 0 {
-            (((width - begins) << WEIGHT_BITS) / span).clamp(0, 1 << WEIGHT_BITS) as u32
-        } else {
-            1 << WEIGHT_BITS
-        };
-        let finer = self.color(level - 1, point)?;
-        let coarser = self.color(level, point)?;
-        Some(lerp(finer, coarser, t))
-    }
-
-    /// Whether the rectangle lies inside a map of `extent`.
-    fn fits(&self, extent: &Extent) -> bool {
-        let end = |axis: usize| u64::from(self.origin[axis]) + u64::from(self.size[axis]);
-        end(0) <= u64::from(extent.width) && end(1) <= u64::from(extent.depth)
+        self.area
+            .color_for_with(point, width, reach, |level, point| self.color(level, point))
     }
 }
 
 /// Refused when `shift` or `size` is out of range, or `len` is not the
 /// storage they need.
 fn check(size: [u32; 2], shift: u32, len: usize) -> Result<(), DetailError> {
-    if shift == 0 || shift > MAX_DETAIL_SHIFT {
-        return Err(DetailError::Shift);
-    }
-    if size.contains(&0) || size.iter().any(|&side| side > MAX_MAP_SIDE) {
-        return Err(DetailError::Rectangle);
-    }
+    DetailArea::new([0, 0], size, shift, MAX_MAP_SIDE)?;
     if len != detail_points(size[0], size[1], shift) {
         return Err(DetailError::StorageLength);
     }
@@ -323,7 +420,7 @@ impl<'s, T: Surface + ?Sized> WithDetail<'s, T> {
     /// past the surface's map.
     pub fn checked(surface: &'s T, details: &'s [Detail<'s>]) -> Result<Self, DetailError> {
         let extent = surface.extent();
-        if !details.iter().all(|detail| detail.fits(&extent)) {
+        if !details.iter().all(|detail| detail.area.fits(&extent)) {
             return Err(DetailError::OutsideMap);
         }
         Ok(Self::new(surface, details))
@@ -361,8 +458,12 @@ impl<'s, T: Surface + ?Sized> Surface for WithDetail<'s, T> {
     }
     crate::surface::lend_surface!(surface);
     #[inline(always)]
-    fn details(&self) -> &[Detail<'_>] {
-        self.details
+    fn has_details(&self) -> bool {
+        !self.details.is_empty()
+    }
+    #[inline]
+    fn detail_color(&self, point: [i64; 2], width: i64, reach: i64) -> Option<Rgb> {
+        details_color(self.details, point, width, reach)
     }
 }
 

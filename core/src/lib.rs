@@ -67,7 +67,7 @@ pub use atmosphere::{
     PreparedAtmosphere, Sun, VISIBILITY_CONTRAST,
 };
 pub use color::Rgb;
-pub use detail::{detail_points, Detail, DetailError, WithDetail};
+pub use detail::{detail_points, Detail, DetailArea, DetailError, WithDetail};
 
 pub use caster::{
     render, render_by_footprint, render_level_columns, render_line, render_line_by_footprint,

@@ -9,7 +9,6 @@
 //! compiles to the same slice indexing as before the trait existed.
 
 use crate::color::Rgb;
-use crate::detail::Detail;
 
 /// The size of level 0 and its highest height: what clipping a ray to the
 /// map needs.
@@ -121,12 +120,21 @@ pub trait Surface {
     /// the cell for the probe. `None` when unknown: the caller must assume
     /// the worst.
     fn bound(&self, level: u8, x: i64, y: i64) -> Option<(u16, usize)>;
-    /// Photos finer than level 0, each over part of the map, whose colors
-    /// a hit nearer than the color reach takes ([`crate::WithDetail`]);
+    /// Whether photos finer than level 0 lie over part of the map
+    /// ([`crate::WithDetail`], [`crate::tiles::TiledSurface::with_photos`]);
     /// none by default.
     #[inline(always)]
-    fn details(&self) -> &[Detail<'_>] {
-        &[]
+    fn has_details(&self) -> bool {
+        false
+    }
+    /// The color a hit nearer than the color reach takes from the photos
+    /// finer than level 0 at world point `point` (Q16) for a footprint
+    /// `width` on a ray whose colors reach level 1 at `reach`
+    /// ([`crate::DetailArea::color_for_with`]); `None` outside them.
+    #[inline(always)]
+    fn detail_color(&self, point: [i64; 2], width: i64, reach: i64) -> Option<Rgb> {
+        let _ = (point, width, reach);
+        None
     }
 }
 

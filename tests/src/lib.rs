@@ -33,6 +33,39 @@ pub fn data_dir(test: &str) -> Option<PathBuf> {
     Some(dir)
 }
 
+/// The Swellendam set in the shared data folder `data`: its SRTM heights
+/// (float32 GeoTIFF, degrees) and its two 2.5 m photos.
+pub fn swellendam_files(data: &Path) -> (PathBuf, [PathBuf; 2]) {
+    let dir = data.join("swellendam");
+    (
+        dir.join("srtm_41_19_4326.tif"),
+        [
+            dir.join("3320D_2010_315_RGB_LATLNG.tif"),
+            dir.join("3420B_2010_328_RGB_LATLNG.tif"),
+        ],
+    )
+}
+
+/// A near view: the point it is over, its height above the ground there,
+/// yaw and pitch (degrees).
+pub type NearView = ([f32; 2], f32, f32, f32);
+
+/// Two near views over each photo kept finer than `scene`'s grid: from
+/// its middle along its long side, 3 voxels up, and from past its first
+/// corner, 5 up.
+pub fn near_photo_views(scene: &Scene) -> Vec<NearView> {
+    let mut views = Vec::new();
+    for detail in &scene.details {
+        let [ox, oy] = detail.origin.map(|v| v as f32);
+        let [w, d] = detail.size.map(|v| v as f32);
+        let (cx, cy) = (ox + w / 2.0, oy + d / 2.0);
+        let along = if d >= w { 90.0 } else { 0.0 };
+        views.push(([cx, cy], 3.0, along, 30.0));
+        views.push(([ox + 2.0, oy + 2.0], 5.0, 45.0, 40.0));
+    }
+    views
+}
+
 /// Loads Comanche color map `C{color}.png` over height map `D{height}.png`
 /// from the shared data folder `data`.
 pub fn comanche(data: &Path, color: &str, height: &str) -> Scene {

@@ -14,13 +14,11 @@ use terracast::{Camera, RenderOptions};
 use terracast_sim::metrics::psnr;
 use terracast_sim::reference::Reference;
 use terracast_sim::scene::{derived_height_scale, load_scene_files, KernelScene, Scene};
-use terracast_tests::{comanche, data_dir, kernel_render, reference_view};
+use terracast_tests::{
+    comanche, data_dir, kernel_render, near_photo_views, reference_view, swellendam_files, NearView,
+};
 
 const SIZE: (u32, u32) = (640, 360);
-
-/// A near view: the eye over (x, y), `above` voxels over the ground
-/// there; yaw and pitch.
-type NearView = ([f32; 2], f32, f32, f32);
 
 /// The best time of `render` in milliseconds, the two kernels' renders
 /// taking turns five times.
@@ -99,26 +97,10 @@ fn photos_kept_finer_than_the_grid_win_on_every_near_view() {
         ],
     );
 
-    let dir = data.join("swellendam");
-    let height = dir.join("srtm_41_19_4326.tif");
-    let photos = [
-        dir.join("3320D_2010_315_RGB_LATLNG.tif"),
-        dir.join("3420B_2010_328_RGB_LATLNG.tif"),
-    ];
+    let (height, photos) = swellendam_files(&data);
     let (scale, _) = derived_height_scale(&height).unwrap().unwrap();
     let swellendam = load_scene_files(&height, &photos, scale, 1).unwrap();
     assert_eq!(swellendam.details.len(), 2);
     assert!(swellendam.details.iter().all(|d| d.shift == 5));
-    // Over each photo's rectangle: from its middle along its long side,
-    // and from past its first corner.
-    let mut views = Vec::new();
-    for detail in &swellendam.details {
-        let [ox, oy] = detail.origin.map(|v| v as f32);
-        let [w, d] = detail.size.map(|v| v as f32);
-        let (cx, cy) = (ox + w / 2.0, oy + d / 2.0);
-        let along = if d >= w { 90.0 } else { 0.0 };
-        views.push(([cx, cy], 3.0, along, 30.0));
-        views.push(([ox + 2.0, oy + 2.0], 5.0, 45.0, 40.0));
-    }
-    texels_against_reduced("Swellendam", &swellendam, &views);
+    texels_against_reduced("Swellendam", &swellendam, &near_photo_views(&swellendam));
 }

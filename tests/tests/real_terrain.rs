@@ -21,12 +21,7 @@ fn swellendam_renders_with_its_photos_where_they_lie() {
     let Some(data) = data_dir("swellendam_renders_with_its_photos_where_they_lie") else {
         return;
     };
-    let dir = data.join("swellendam");
-    let height = dir.join("srtm_41_19_4326.tif");
-    let photos = [
-        dir.join("3320D_2010_315_RGB_LATLNG.tif"),
-        dir.join("3420B_2010_328_RGB_LATLNG.tif"),
-    ];
+    let (height, photos) = terracast_tests::swellendam_files(&data);
     let (scale, why) = derived_height_scale(&height).unwrap().unwrap();
     assert!(why.contains("latitude -34"), "{why}");
     // 90 m samples: a meter is about a 85th of a voxel.

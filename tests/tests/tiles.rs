@@ -7,7 +7,10 @@
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-use terracast::tiles::{cut_tile, Tile, TileError, TileKey, TileSource, World};
+use terracast::tiles::{
+    cut_photo_tile, cut_tile, photo_tiles as photo_tiles_of, PhotoKey, PhotoTile, Tile, TileError,
+    TileKey, TileSource, World,
+};
 use terracast::{Camera, HeightFilter, RenderOptions};
 use terracast_sim::kernel::{render_kernel, PixelRays};
 use terracast_sim::scene::{load_scene_files, procedural, Scene};
@@ -76,11 +79,7 @@ fn packed_equals_maps(
     let out = temp(name);
     let input = pack_input(height, colors, scale, filter);
     let summary = pack(&input, &out, &mut |_, _| {}).unwrap();
-    let mut scene = load_scene_files(height, &input.colors, scale, 1).unwrap();
-    // Tiles hold a color a grid point: a photo finer than the grid is
-    // packed as the mean of each point's texels, the grid's colors in
-    // memory too, without the texels themselves.
-    scene.details.clear();
+    let scene = load_scene_files(height, &input.colors, scale, 1).unwrap();
     let kernel = scene.to_kernel_with(filter).unwrap();
     let pyramid = kernel.pyramid().unwrap();
     let mut file = TilesFile::open(&out).unwrap();
@@ -106,6 +105,39 @@ fn packed_equals_maps(
         }
     }
     assert_eq!(tiles, summary.tiles);
+    // A photo finer than the grid is packed at its own resolution: every
+    // photo tile as the kernel's detail in memory cuts it.
+    let details = kernel.details().unwrap();
+    assert_eq!(
+        file.photos(),
+        details.iter().map(|d| d.area()).collect::<Vec<_>>(),
+        "{name}"
+    );
+    let (mut from_file, mut cut) = (
+        Box::new(PhotoTile::<TILE>::EMPTY),
+        Box::new(PhotoTile::EMPTY),
+    );
+    let mut photo_tiles = 0;
+    for (photo, detail) in details.iter().enumerate() {
+        for level in 0..=detail.shift() {
+            let (tx, ty) = photo_tiles_of(&detail.area(), level, TILE as u32);
+            for y in 0..ty {
+                for x in 0..tx {
+                    let key = PhotoKey {
+                        photo: photo as u8,
+                        level: level as u8,
+                        x,
+                        y,
+                    };
+                    file.load_photo(key, &mut from_file).unwrap();
+                    assert!(cut_photo_tile(detail, key, &mut cut));
+                    assert!(from_file == cut, "{name}: photo tile {key:?} differs");
+                    photo_tiles += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(photo_tiles, summary.photo_tiles);
     let top = scene.max_height();
     for camera in views(scene.width as f32, scene.depth as f32, top) {
         let options = RenderOptions::default();
@@ -114,15 +146,15 @@ fn packed_equals_maps(
             render_tiled(&mut file, &camera, 96, 72, &options, PixelRays::Fixed).unwrap();
         assert!(from_maps.colors == from_tiles.colors, "{name}: {camera:?}");
         assert_eq!(
-            (tiled.misses, tiled.degraded_samples),
-            (0, 0),
+            (tiled.misses, tiled.photo_misses, tiled.degraded_samples),
+            (0, 0, 0),
             "{name}: {camera:?}"
         );
         assert!(tiled.resident_bytes > 0 && tiled.tiles_loaded as usize == tiled.footprint_tiles);
     }
     println!(
-        "{name}: {}x{}, {} levels, {} tiles, {} bytes, {filter:?} heights: every tile and view identical",
-        summary.width, summary.depth, summary.levels, summary.tiles, summary.bytes
+        "{name}: {}x{}, {} levels, {} tiles and {} photo tiles, {} bytes, {filter:?} heights: every tile and view identical",
+        summary.width, summary.depth, summary.levels, summary.tiles, summary.photo_tiles, summary.bytes
     );
 }
 
@@ -136,8 +168,9 @@ fn packed_files_render_as_their_maps_bit_for_bit() {
     // Without a color map, colored by height and slope as `render` does.
     let default = HeightFilter::default();
     packed_equals_maps(&height, &[], 1.0 / 16.0, default, "odd-gray.tiles");
-    // A color map twice as fine: stretched as `render` stretches it (the
-    // mean of each point's texels), loaded whole.
+    // A color map twice as fine: kept at its own resolution as `render`
+    // keeps it, in photo tiles, and the grid's colors the mean of each
+    // point's texels; loaded whole.
     let fine = temp("odd-c2.png");
     let odd = image::open(&color).unwrap().to_rgb8();
     image::imageops::resize(&odd, 406, 300, image::imageops::FilterType::Nearest)
@@ -317,6 +350,66 @@ fn several_photos_pack_as_render_drapes_them() {
 }
 
 #[test]
+fn swellendams_photos_pack_at_their_own_resolution_and_page_as_a_near_view_needs() {
+    let Some(data) = terracast_tests::data_dir("swellendams_photos_pack_at_their_own_resolution")
+    else {
+        return;
+    };
+    let (height, photos) = terracast_tests::swellendam_files(&data);
+    let (scale, _) = terracast_sim::scene::derived_height_scale(&height)
+        .unwrap()
+        .unwrap();
+    let out = temp("swellendam.tiles");
+    let input = PackInput {
+        height: height.clone(),
+        colors: photos.to_vec(),
+        height_scale: scale,
+        filter: HeightFilter::default(),
+        seed: 1,
+    };
+    let summary = pack(&input, &out, &mut |_, _| {}).unwrap();
+    let scene = load_scene_files(&height, &photos, scale, 1).unwrap();
+    let kernel = scene.to_kernel().unwrap();
+    let in_memory: usize = kernel.details().unwrap().iter().map(|d| d.bytes()).sum();
+    let mut file = TilesFile::open(&out).unwrap();
+    assert_eq!(file.photos().len(), 2);
+    println!(
+        "Swellendam packed: {} tiles and {} photo tiles, {:.1} MiB; the photos' fine levels {:.1} MiB in memory",
+        summary.tiles,
+        summary.photo_tiles,
+        summary.bytes as f64 / 1048576.0,
+        in_memory as f64 / 1048576.0
+    );
+    // Near views over each photo (as the photo-detail accuracy test's):
+    // from the file through the caches as from the scene in memory, with
+    // a small part of the photos resident.
+    {
+        for ([x, y], above, yaw, pitch) in terracast_tests::near_photo_views(&scene) {
+            let ground = scene.height_at(f64::from(x), f64::from(y)) as f32;
+            let camera = Camera::looking([x, y, ground + above], yaw, pitch);
+            let options = RenderOptions::default();
+            let (from_memory, _) = render_kernel(&kernel, &camera, 320, 240, &options).unwrap();
+            let (from_tiles, _, tiled) =
+                render_tiled(&mut file, &camera, 320, 240, &options, PixelRays::Fixed).unwrap();
+            let photo_bytes = tiled.photo_tiles * PhotoTile::<TILE>::BYTES;
+            println!(
+                "  eye {x:.0}, {y:.0}, {:.1}: {} photo tiles resident ({:.1} MiB), {} degraded samples",
+                ground + above,
+                tiled.photo_tiles,
+                photo_bytes as f64 / 1048576.0,
+                tiled.degraded_samples
+            );
+            assert_eq!(tiled.photo_misses, 0, "{camera:?}");
+            assert!(from_memory.colors == from_tiles.colors, "{camera:?}");
+            assert!(
+                (tiled.photo_tiles as u64) < summary.photo_tiles,
+                "{camera:?}: every photo tile"
+            );
+        }
+    }
+}
+
+#[test]
 fn geotiff_heights_stream_into_a_pack_and_a_void_is_filled_as_render_fills_it() {
     use tiff::encoder::colortype;
     // The odd-sized heights as a georeferenced float32 GeoTIFF, no photo:
@@ -483,6 +576,25 @@ fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
     std::fs::write(&versioned, &newer).unwrap();
     let e = TilesFile::open(&versioned).unwrap_err().to_string();
     assert!(e.contains("format version 9"), "{e}");
+    // A version-1 file (no photo section) reads as one without photos.
+    let tiles_end = bytes.len() - 8;
+    let mut older = bytes[..tiles_end].to_vec();
+    older[8] = 1;
+    let header_crc = crc32fast::hash(&older[..40]);
+    older[40..44].copy_from_slice(&header_crc.to_le_bytes());
+    let old = temp("older.tiles");
+    std::fs::write(&old, &older).unwrap();
+    assert!(TilesFile::open(&old).unwrap().photos().is_empty());
+    // A damaged photo table, and one cut short: refused in one line.
+    let mut table = bytes.clone();
+    table[tiles_end] ^= 0x01;
+    let damaged_table = temp("photo-table.tiles");
+    std::fs::write(&damaged_table, &table).unwrap();
+    let e = TilesFile::open(&damaged_table).unwrap_err().to_string();
+    assert!(e.contains("photo") && !e.contains('\n'), "{e}");
+    std::fs::write(&damaged_table, &bytes[..tiles_end + 2]).unwrap();
+    let e = TilesFile::open(&damaged_table).unwrap_err().to_string();
+    assert!(e.contains("truncated") && !e.contains('\n'), "{e}");
 
     // One byte of the first level-0 tile's record flipped: that tile is
     // rejected, reported, and drawn from level 1; the frame completes.
@@ -746,11 +858,11 @@ fn a_thousand_frames_from_a_misbehaving_source_are_all_drawn_none_with_a_bad_til
 #[test]
 fn a_resident_cache_on_many_threads_draws_what_a_fresh_one_does() {
     use terracast::View;
-    use terracast_sim::tiles::{new_slots, TiledViewer};
+    use terracast_sim::tiles::{new_photo_slots, new_slots, TiledViewer};
     use terracast_sim::viewer::{render_pool, Pixels};
     let source = || ProceduralSource::new(8192, 5).unwrap();
-    let mut slots = new_slots();
-    let mut viewer = TiledViewer::new(source(), &mut slots);
+    let (mut slots, mut photo_slots) = (new_slots(), new_photo_slots());
+    let mut viewer = TiledViewer::new(source(), &mut slots, &mut photo_slots);
     let options = RenderOptions::default();
     let size = (96, 72);
     let top = f32::from(source().world().max_height) / 16.0;

@@ -27,7 +27,6 @@
 use super::fraction_256;
 use super::walk::lerp;
 use crate::config::{COORD_FRAC_BITS, WEIGHT_BITS};
-use crate::detail::{details_color, Detail};
 use crate::probe::Probe;
 use crate::surface::{Grid, Surface};
 use crate::view::ray::{Cursor, Ray};
@@ -69,12 +68,12 @@ pub(crate) fn footprint_color<T: Surface + ?Sized, P: Probe>(
 }
 
 /// The color of a hit on level 0 nearer than the color reach from the
-/// photos finer than level 0 ([`Detail::color_for`]), by the pixel's
+/// photos finer than level 0 ([`crate::Detail::color_for`]), by the pixel's
 /// footprint as [`footprint_color`] finds it; `None` outside their
 /// rectangles and on a coarser level.
 #[inline(never)]
-pub(crate) fn detail_color<P: Probe>(
-    details: &[Detail<'_>],
+pub(crate) fn detail_color<T: Surface + ?Sized, P: Probe>(
+    surface: &T,
     ray: &Ray,
     hit: &Cursor,
     below: i32,
@@ -87,12 +86,7 @@ pub(crate) fn detail_color<P: Probe>(
     }
     let (k, distance, steps) = crossing_along(ray, hit, above, f);
     let width = narrower_side(distance, steps, above, below);
-    let color = details_color(
-        details,
-        ray.color_point(k, distance),
-        width,
-        ray.color_reach,
-    )?;
+    let color = surface.detail_color(ray.color_point(k, distance), width, ray.color_reach)?;
     probe.color(0, hit.base as usize);
     Some(color)
 }

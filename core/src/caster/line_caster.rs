@@ -45,7 +45,6 @@ use super::walk::{along_weight, lerp, line_color};
 use super::{crossing_fraction, sky, Coherence, Frame, RenderOptions, Shading, VerticalSamples};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_WALK_LEVEL};
-use crate::detail::{details_color, Detail};
 use crate::divide::div_ceil;
 use crate::probe::Probe;
 use crate::surface::{Extent, Grid, Surface};
@@ -743,8 +742,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             // edge): its own level's grid line.
             return sample(self.coarse_color(walk, at, aside, elevation(), probe));
         }
-        let details = self.surface.details();
-        if !details.is_empty() {
+        if self.surface.has_details() {
             let far = Far {
                 span,
                 above: above.map(|above| (at.before_k, above)),
@@ -754,7 +752,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 drift,
                 color_reach,
             };
-            if let Some(color) = self.detail_color(details, walk, at, &far, probe) {
+            if let Some(color) = self.detail_color(walk, at, &far, probe) {
                 return sample(color);
             }
         }
@@ -804,13 +802,12 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     }
 
     /// The color of a near hit from the photos finer than level 0, by its
-    /// footprint ([`Detail::color_for`]); `None` outside their
+    /// footprint ([`crate::Detail::color_for`]); `None` outside their
     /// rectangles and where level 0 is fine enough. Out of line: only a
     /// surface with a detail takes it.
     #[inline(never)]
     fn detail_color<P: Probe>(
         &self,
-        details: &[Detail<'_>],
         walk: &LineWalk,
         at: &At,
         near: &Far,
@@ -820,7 +817,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         let width = narrower_side(distance, near.span, near.above, near.below);
         let crossing = (i64::from(at.k) << 8) - i64::from(near.back);
         let point = crossing_point(walk, crossing, near);
-        let color = details_color(details, point, width, near.color_reach)?;
+        let color = self.surface.detail_color(point, width, near.color_reach)?;
         probe.color(0, at.index as usize);
         Some(color)
     }

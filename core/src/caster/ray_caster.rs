@@ -378,12 +378,11 @@ impl<'s, 'v, T: Surface + ?Sized> RayCaster<'s, 'v, T> {
                 footprint_color(surface, ray, &hit, below, above, f, probe)
             };
             let far = far.or_else(|| {
-                let details = surface.details();
-                if details.is_empty() {
+                if !surface.has_details() {
                     return None;
                 }
                 let f = before.map_or(0, |(_, f)| f);
-                detail_color(details, ray, &hit, below, above, f, probe)
+                detail_color(surface, ray, &hit, below, above, f, probe)
             });
             far.or_else(|| {
                 // Level 0 is fine enough: its colors on the hit's grid line and

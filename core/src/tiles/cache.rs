@@ -2,7 +2,7 @@
 //! directory from tile key to slot, and least-recently-used eviction that
 //! never evicts a tile pinned by the frame being rendered.
 
-use super::{Tile, TileError, TileKey, TileSource, World};
+use super::{PhotoKey, PhotoTile, Tile, TileError, TileKey, TileSource, World};
 use core::hash::BuildHasherDefault;
 use heapless::index_map::IndexMap;
 use heapless::Vec;
@@ -11,7 +11,70 @@ use rustc_hash::FxHasher;
 /// The directory's map. Fx hashes a tile key in three multiplies where FNV
 /// takes one a byte (nine); the caster looks a key up for every height
 /// pair and color pair it reads.
-type Directory<const N: usize> = IndexMap<TileKey, u16, BuildHasherDefault<FxHasher>, N>;
+type Directory<K, const N: usize> = IndexMap<K, u16, BuildHasherDefault<FxHasher>, N>;
+
+/// What a cache slot holds: a tile of a pyramid level ([`Tile`]), or of
+/// a photo's fine level ([`PhotoTile`]). One cache holds one kind.
+pub trait Payload<const T: usize> {
+    /// The key that names one.
+    type Key: Copy + Eq + core::hash::Hash + core::fmt::Debug;
+    /// Bytes of terrain it holds.
+    const BYTES: usize;
+    /// Whether `key` may name one of `world`'s: a load of any other is
+    /// refused before a slot is given up for it.
+    fn exists(world: &World, key: &Self::Key) -> bool;
+    /// Fills `into` with `key` from `source`; returns the bytes read.
+    fn load<S: TileSource<T> + ?Sized>(
+        source: &mut S,
+        key: Self::Key,
+        into: &mut Self,
+    ) -> Result<usize, TileError>;
+    /// The highest height bound it holds (0 where it has none).
+    fn peak(&self) -> u16;
+}
+
+impl<const T: usize> Payload<T> for Tile<T> {
+    type Key = TileKey;
+    const BYTES: usize = Tile::<T>::BYTES;
+    fn exists(world: &World, key: &TileKey) -> bool {
+        world.contains(*key, T as u32)
+    }
+    fn load<S: TileSource<T> + ?Sized>(
+        source: &mut S,
+        key: TileKey,
+        into: &mut Self,
+    ) -> Result<usize, TileError> {
+        source.load(key, into)
+    }
+    fn peak(&self) -> u16 {
+        self.bounds.iter().flatten().copied().max().unwrap_or(0)
+    }
+}
+
+impl<const T: usize> Payload<T> for PhotoTile<T> {
+    type Key = PhotoKey;
+    const BYTES: usize = PhotoTile::<T>::BYTES;
+    fn exists(_: &World, _: &PhotoKey) -> bool {
+        // The world does not know the photos: the source refuses a key
+        // it has no tile for.
+        true
+    }
+    fn load<S: TileSource<T> + ?Sized>(
+        source: &mut S,
+        key: PhotoKey,
+        into: &mut Self,
+    ) -> Result<usize, TileError> {
+        source.load_photo(key, into)
+    }
+    fn peak(&self) -> u16 {
+        0
+    }
+}
+
+/// A cache of photo tiles ([`TileCache`] of [`PhotoTile`]s): the texels of
+/// photos finer than level 0, paged by fine level as the pyramid's tiles
+/// are by level.
+pub type PhotoCache<'a, const T: usize, const N: usize> = TileCache<'a, T, N, PhotoTile<T>>;
 
 /// What the cache has done since it was made.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -28,7 +91,8 @@ pub struct CacheStats {
     pub bytes_read: u64,
 }
 
-/// `N` tile slots with `O(1)` lookup by key.
+/// `N` tile slots with `O(1)` lookup by key: of pyramid tiles by default,
+/// of photo tiles as a [`PhotoCache`].
 ///
 /// # Eviction
 /// Each slot is stamped with the last frame that used it: pinned by
@@ -42,19 +106,19 @@ pub struct CacheStats {
 ///
 /// `N` must be a power of two (the directory's hash table) and below 65536.
 #[derive(Debug)]
-pub struct TileCache<'a, const T: usize, const N: usize> {
-    slots: &'a mut [Tile<T>; N],
-    keys: [Option<TileKey>; N],
+pub struct TileCache<'a, const T: usize, const N: usize, P: Payload<T> = Tile<T>> {
+    slots: &'a mut [P; N],
+    keys: [Option<P::Key>; N],
     stamps: [u32; N],
     /// The highest bound of each slot's tile (0 for level 0).
     peaks: [u16; N],
-    directory: Directory<N>,
+    directory: Directory<P::Key, N>,
     frame: u32,
     world: World,
     stats: CacheStats,
 }
 
-impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
+impl<'a, const T: usize, const N: usize, P: Payload<T>> TileCache<'a, T, N, P> {
     const VALID: () = assert!(
         T.is_power_of_two() && T >= 2 && N < 65_536,
         "tile side must be a power of two of at least 2, and the slots fewer than 65536"
@@ -62,7 +126,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
 
     /// An empty cache for `world`, its tiles kept in `slots` (a `static`
     /// on a board, a boxed array on a host).
-    pub fn new(world: World, slots: &'a mut [Tile<T>; N]) -> Self {
+    pub fn new(world: World, slots: &'a mut [P; N]) -> Self {
         #[allow(clippy::let_unit_value)]
         let () = Self::VALID;
         Self {
@@ -89,47 +153,30 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
 
     /// The slot holding `key`, if resident.
     #[inline]
-    fn slot(&self, key: &TileKey) -> Option<usize> {
+    fn slot(&self, key: &P::Key) -> Option<usize> {
         self.directory.get(key).map(|&s| usize::from(s))
     }
 
     /// The tile `key`, if resident.
     #[inline]
-    pub fn get(&self, key: &TileKey) -> Option<&Tile<T>> {
+    pub fn get(&self, key: &P::Key) -> Option<&P> {
         self.lookup(key).map(|(_, tile)| tile)
     }
 
     /// The slot and tile of `key`, if resident.
     #[inline]
-    pub(crate) fn lookup(&self, key: &TileKey) -> Option<(usize, &Tile<T>)> {
+    pub(crate) fn lookup(&self, key: &P::Key) -> Option<(usize, &P)> {
         let slot = self.slot(key)?;
         Some((slot, self.slots.get(slot)?))
     }
 
-    /// The highest height (U12.4) of levels `0..=key.level` in tile
-    /// `key`'s area and one cell around it, from the resident tiles of the
-    /// level above (their bounds); `None` when one of them is not resident
-    /// or `key` is on the top level. Lets [`super::footprint_under`] cut
-    /// the footprint to the terrain that is really there.
-    pub fn ceiling(&self, key: TileKey) -> Option<u16> {
-        let parents = ceiling_tiles::<T>(&self.world, key);
-        if parents.is_empty() {
-            return None;
-        }
-        let mut peak = 0u16;
-        for parent in &parents {
-            peak = peak.max(self.peaks[self.slot(parent)?]);
-        }
-        Some(peak)
-    }
-
     /// Whether `key` is resident.
-    pub fn contains(&self, key: &TileKey) -> bool {
+    pub fn contains(&self, key: &P::Key) -> bool {
         self.directory.contains_key(key)
     }
 
     /// Pins `key` for the current frame if it is resident; false if not.
-    pub fn pin(&mut self, key: TileKey) -> bool {
+    pub fn pin(&mut self, key: P::Key) -> bool {
         match self.slot(&key) {
             Some(s) => {
                 self.stamps[s] = self.frame;
@@ -143,7 +190,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
     /// from `source` if needed.
     pub fn require<S: TileSource<T> + ?Sized>(
         &mut self,
-        key: TileKey,
+        key: P::Key,
         source: &mut S,
     ) -> Result<(), TileError> {
         self.fetch(key, source, self.frame)
@@ -154,7 +201,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
     /// resident tile is left as it is.
     pub fn prefetch<S: TileSource<T> + ?Sized>(
         &mut self,
-        key: TileKey,
+        key: P::Key,
         source: &mut S,
     ) -> Result<(), TileError> {
         if self.contains(&key) {
@@ -165,7 +212,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
 
     fn fetch<S: TileSource<T> + ?Sized>(
         &mut self,
-        key: TileKey,
+        key: P::Key,
         source: &mut S,
         stamp: u32,
     ) -> Result<(), TileError> {
@@ -173,7 +220,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
             self.stamps[s] = self.stamps[s].max(stamp);
             return Ok(());
         }
-        if !self.world.contains(key, T as u32) {
+        if !P::exists(&self.world, &key) {
             return Err(TileError::Missing);
         }
         let slot = self.victim().ok_or(TileError::CacheFull)?;
@@ -181,7 +228,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
             self.directory.remove(&old);
             self.stats.evictions += 1;
         }
-        match source.load(key, &mut self.slots[slot]) {
+        match P::load(source, key, &mut self.slots[slot]) {
             Ok(bytes) => {
                 self.stats.loads += 1;
                 self.stats.bytes_read += bytes as u64;
@@ -189,13 +236,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
                 // keys of the N slots, one of which was just freed.
                 let _ = self.directory.insert(key, slot as u16);
                 self.keys[slot] = Some(key);
-                self.peaks[slot] = self.slots[slot]
-                    .bounds
-                    .iter()
-                    .flatten()
-                    .copied()
-                    .max()
-                    .unwrap_or(0);
+                self.peaks[slot] = self.slots[slot].peak();
                 self.stamps[slot] = stamp;
                 Ok(())
             }
@@ -224,7 +265,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
     /// Drops every tile neither pinned by the current frame nor kept by
     /// `keep`: what a cache does to hold no more than the view needs
     /// (its footprint and prefetch).
-    pub fn retain(&mut self, mut keep: impl FnMut(&TileKey) -> bool) {
+    pub fn retain(&mut self, mut keep: impl FnMut(&P::Key) -> bool) {
         for slot in 0..N {
             let Some(key) = self.keys[slot] else {
                 continue;
@@ -244,7 +285,7 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
 
     /// Bytes of terrain resident now.
     pub fn resident_bytes(&self) -> usize {
-        self.resident() * Tile::<T>::BYTES
+        self.resident() * P::BYTES
     }
 
     /// Tiles pinned by the current frame.
@@ -259,6 +300,25 @@ impl<'a, const T: usize, const N: usize> TileCache<'a, T, N> {
     /// What the cache has done so far.
     pub fn stats(&self) -> CacheStats {
         self.stats
+    }
+}
+
+impl<const T: usize, const N: usize> TileCache<'_, T, N> {
+    /// The highest height (U12.4) of levels `0..=key.level` in tile
+    /// `key`'s area and one cell around it, from the resident tiles of the
+    /// level above (their bounds); `None` when one of them is not resident
+    /// or `key` is on the top level. Lets [`super::footprint_under`] cut
+    /// the footprint to the terrain that is really there.
+    pub fn ceiling(&self, key: TileKey) -> Option<u16> {
+        let parents = ceiling_tiles::<T>(&self.world, key);
+        if parents.is_empty() {
+            return None;
+        }
+        let mut peak = 0u16;
+        for parent in &parents {
+            peak = peak.max(self.peaks[self.slot(parent)?]);
+        }
+        Some(peak)
     }
 }
 

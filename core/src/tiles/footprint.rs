@@ -23,7 +23,8 @@
 //! tile a ray reads. Float math, once a frame.
 
 use super::cache::ceiling_tiles;
-use super::{TileKey, World};
+use super::{PhotoKey, TileKey, World};
+use crate::detail::DetailArea;
 use crate::view::Camera;
 use glam::DVec3;
 use heapless::Vec;
@@ -113,45 +114,16 @@ pub fn footprint_under<const T: usize, const F: usize>(
     ceiling: &dyn Fn(TileKey) -> Option<u16>,
     out: &mut Vec<TileKey, F>,
 ) -> Result<u8, FootprintFull> {
-    let FootprintView {
-        camera,
-        width,
-        height,
-        pixel_to_voxel,
-        widen_deg,
-    } = *view;
-    let camera = &camera;
+    let camera = &view.camera;
     let (origin, top) = window_origin(world, camera.eye);
-    let [forward, right, up] = camera.axes();
-    let eye = DVec3::new(
-        f64::from(camera.eye[0]),
-        f64::from(camera.eye[1]),
-        f64::from(camera.eye[2]),
-    );
-    let half = f64::from(camera.hfov_deg).to_radians() / 2.0;
-    let tan_v = libm::tan(half) * f64::from(height.max(1)) / f64::from(width.max(1));
-    let widened = half + f64::from(widen_deg.max(0.0)).to_radians();
-    // Inside where every normal's dot with (point − eye) is >= 0.
-    let mut planes: Vec<DVec3, 4> = Vec::new();
-    if widened < core::f64::consts::FRAC_PI_2 - 1e-6 {
-        let tan_h = libm::tan(widened);
-        let _ = planes.push(forward * tan_h - right);
-        let _ = planes.push(forward * tan_h + right);
-    }
-    let _ = planes.push(forward * tan_v - up);
-    let _ = planes.push(forward * tan_v + up);
-    let focal = f64::from(width.max(1)) / (2.0 * libm::tan(half));
-    let level1 = focal / f64::from(pixel_to_voxel).max(1.0 / 256.0);
-    let top_z = f64::from(world.max_height) / 16.0;
-    // A point at depth d in the frustum is at most `d·corner` from the eye.
-    let corner = {
-        let tan_h = if widened < core::f64::consts::FRAC_PI_2 - 1e-6 {
-            libm::tan(widened)
-        } else {
-            f64::INFINITY
-        };
-        libm::sqrt(1.0 + tan_h * tan_h + tan_v * tan_v)
-    };
+    let Frustum {
+        eye,
+        forward,
+        planes,
+        level1,
+        top_z,
+        corner,
+    } = Frustum::of(view, world);
     let window = [
         origin[0],
         origin[1],
@@ -263,16 +235,172 @@ pub fn footprint_under<const T: usize, const F: usize>(
             }
         }
     }
-    out.sort_unstable();
-    dedup(out);
-    if full {
-        Err(FootprintFull)
-    } else {
-        Ok(top)
+    sort_and_dedup(out, full).map(|()| top)
+}
+
+/// A frame's frustum as the footprints test tiles against it.
+struct Frustum {
+    eye: DVec3,
+    forward: DVec3,
+    /// Inside where every normal's dot with (point − eye) is >= 0.
+    planes: Vec<DVec3, 4>,
+    /// The depth where level 1 begins (and colors reach level 1, or
+    /// farther: the terrain fit only moves the heights' farther).
+    level1: f64,
+    /// The world's highest height, voxels.
+    top_z: f64,
+    /// A point at depth d in the frustum is at most `d·corner` from the eye.
+    corner: f64,
+}
+
+impl Frustum {
+    fn of(view: &FootprintView, world: &World) -> Self {
+        let FootprintView {
+            camera,
+            width,
+            height,
+            pixel_to_voxel,
+            widen_deg,
+        } = *view;
+        let [forward, right, up] = camera.axes();
+        let eye = DVec3::new(
+            f64::from(camera.eye[0]),
+            f64::from(camera.eye[1]),
+            f64::from(camera.eye[2]),
+        );
+        let half = f64::from(camera.hfov_deg).to_radians() / 2.0;
+        let tan_v = libm::tan(half) * f64::from(height.max(1)) / f64::from(width.max(1));
+        let widened = half + f64::from(widen_deg.max(0.0)).to_radians();
+        let mut planes: Vec<DVec3, 4> = Vec::new();
+        let tan_h = if widened < core::f64::consts::FRAC_PI_2 - 1e-6 {
+            let tan_h = libm::tan(widened);
+            let _ = planes.push(forward * tan_h - right);
+            let _ = planes.push(forward * tan_h + right);
+            tan_h
+        } else {
+            f64::INFINITY
+        };
+        let _ = planes.push(forward * tan_v - up);
+        let _ = planes.push(forward * tan_v + up);
+        let focal = f64::from(width.max(1)) / (2.0 * libm::tan(half));
+        Self {
+            eye,
+            forward,
+            planes,
+            level1: focal / f64::from(pixel_to_voxel).max(1.0 / 256.0),
+            top_z: f64::from(world.max_height) / 16.0,
+            corner: libm::sqrt(1.0 + tan_h * tan_h + tan_v * tan_v),
+        }
+    }
+
+    /// Whether the box `bx × by`, from the ground to the highest height,
+    /// may meet the frustum no deeper than `far`.
+    fn holds(&self, far: f64, bx: [f64; 2], by: [f64; 2]) -> bool {
+        box_in_frustum(
+            self.eye,
+            self.forward,
+            &self.planes,
+            far,
+            bx,
+            by,
+            [0.0, self.top_z],
+        )
     }
 }
 
-fn dedup<const F: usize>(keys: &mut Vec<TileKey, F>) {
+/// Appends to `out` the photo tiles (of side `T`) of the photos over
+/// `areas` (a source's [`super::TileSource::photos`], in world
+/// coordinates) that `view` needs; sorted, without duplicates (with what
+/// `out` held before). Of each photo's fine level, the tiles in the
+/// frustum nearer than the depth to which the level is read
+/// ([`DetailArea::reaches`], from the depth where colors reach level 1),
+/// with the margin the pyramid's levels get; and, at any depth, those
+/// within twice that of the eye horizontally, and no farther than the
+/// eye is high: a steep ray's footprint is narrower than its depth (the
+/// clearances change by its own slope), so under the eye a fine level is
+/// read out to about its reach from the nadir, however high the eye, by
+/// rays that drop more than they run. A hit on a surface steeper than its ray
+/// reads a fine level farther out still (a cliff's footprint is narrower
+/// on the map than its depth): there a missing tile reads the next
+/// coarser fine level, and is counted as a degraded sample.
+pub fn photo_footprint<const T: usize, const F: usize>(
+    world: &World,
+    areas: &[DetailArea],
+    view: &FootprintView,
+    out: &mut Vec<PhotoKey, F>,
+) -> Result<(), FootprintFull> {
+    let frustum = Frustum::of(view, world);
+    let eye = frustum.eye;
+    let mut full = false;
+    for (photo, area) in areas.iter().enumerate().take(usize::from(u8::MAX) + 1) {
+        for level in 0..=area.shift() {
+            // Texels a voxel on this level; texel i's center lies at
+            // world `origin − ½ + (i + ½)/scale`.
+            let scale = f64::from(1u32 << (area.shift() - level));
+            let far = area.reaches(level, frustum.level1) * 1.125 + 2.0;
+            let nadir = (2.0 * far).min(eye.z.max(0.0));
+            let reach = (far * frustum.corner).max(nadir);
+            let (w, d) = area.level_size(level);
+            let origin = area.origin().map(|o| f64::from(o) - 0.5);
+            // Tiles whose texels lie within reach of the eye, each way.
+            let span = |e: f64, o: f64, n: usize| -> Option<(u32, u32)> {
+                let lo = ((e - reach - o) * scale - 1.0).max(0.0);
+                let hi = ((e + reach - o) * scale + 1.0).min(n as f64 - 1.0);
+                (lo <= hi).then(|| (lo as u32 / T as u32, hi as u32 / T as u32))
+            };
+            let (Some((x0, x1)), Some((y0, y1))) =
+                (span(eye.x, origin[0], w), span(eye.y, origin[1], d))
+            else {
+                continue;
+            };
+            let side = T as f64 / scale;
+            for ty in y0..=y1 {
+                for tx in x0..=x1 {
+                    // The tile's texels and one more each side (a color
+                    // blends a texel with its neighbour).
+                    let bx = [
+                        origin[0] + f64::from(tx) * side - 1.0 / scale,
+                        origin[0] + f64::from(tx + 1) * side + 1.0 / scale,
+                    ];
+                    let by = [
+                        origin[1] + f64::from(ty) * side - 1.0 / scale,
+                        origin[1] + f64::from(ty + 1) * side + 1.0 / scale,
+                    ];
+                    let (dx, dy) = (
+                        (bx[0] - eye.x).max(eye.x - bx[1]).max(0.0),
+                        (by[0] - eye.y).max(eye.y - by[1]).max(0.0),
+                    );
+                    let depth_limit = if libm::sqrt(dx * dx + dy * dy) <= nadir {
+                        f64::INFINITY
+                    } else {
+                        far
+                    };
+                    if !frustum.holds(depth_limit, bx, by) {
+                        continue;
+                    }
+                    let key = PhotoKey {
+                        photo: photo as u8,
+                        level: level as u8,
+                        x: tx,
+                        y: ty,
+                    };
+                    if out.push(key).is_err() {
+                        full = true;
+                    }
+                }
+            }
+        }
+    }
+    sort_and_dedup(out, full)
+}
+
+/// Sorts `keys` and drops repeats; [`FootprintFull`] when some did not
+/// fit (`full`).
+fn sort_and_dedup<K: Ord + Copy, const F: usize>(
+    keys: &mut Vec<K, F>,
+    full: bool,
+) -> Result<(), FootprintFull> {
+    keys.sort_unstable();
     let mut kept = 0;
     for i in 0..keys.len() {
         if kept == 0 || keys[i] != keys[kept - 1] {
@@ -281,6 +409,11 @@ fn dedup<const F: usize>(keys: &mut Vec<TileKey, F>) {
         }
     }
     keys.truncate(kept);
+    if full {
+        Err(FootprintFull)
+    } else {
+        Ok(())
+    }
 }
 
 /// Whether the box `bx × by × bz` may meet the frustum of planes `planes`

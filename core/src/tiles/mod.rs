@@ -45,14 +45,15 @@ mod cache;
 mod footprint;
 mod surface;
 
-pub use cache::{CacheStats, TileCache};
+pub use cache::{CacheStats, Payload, PhotoCache, TileCache};
 pub use footprint::{
-    footprint, footprint_under, window_origin, FootprintFull, FootprintView, WINDOW_SIDE,
-    WINDOW_TOP,
+    footprint, footprint_under, photo_footprint, window_origin, FootprintFull, FootprintView,
+    WINDOW_SIDE, WINDOW_TOP,
 };
 pub use surface::{TiledGrid, TiledSurface};
 
 use crate::color::Rgb;
+use crate::detail::{Detail, DetailArea};
 use crate::pyramid::level_side;
 use core::fmt;
 
@@ -160,6 +161,80 @@ impl<const T: usize> Tile<T> {
     pub const BYTES: usize = T * T * (2 + 3 + 2);
 }
 
+/// A tile of a photo finer than level 0 ([`crate::Detail`]): the photo's
+/// place among the source's ([`TileSource::photos`]), its fine level, and
+/// the tile's column and row among that level's tiles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct PhotoKey {
+    /// Which photo.
+    pub photo: u8,
+    /// Fine level: 0 is the photo's own texels, each next one the mean of
+    /// four of the one before, up to the level of a texel a voxel.
+    pub level: u8,
+    /// Tile column: the tile holds texels `x·T .. x·T + T` of the level.
+    pub x: u32,
+    /// Tile row.
+    pub y: u32,
+}
+
+/// One tile of `T × T` texels of a photo's fine level. Texels past the
+/// level's far edge hold the edge's.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PhotoTile<const T: usize> {
+    /// Texels, `[row][column]`.
+    pub texels: [[Rgb; T]; T],
+}
+
+impl<const T: usize> PhotoTile<T> {
+    /// A tile of black texels.
+    pub const EMPTY: Self = Self {
+        texels: [[[0; 3]; T]; T],
+    };
+    /// Bytes of texels a tile holds.
+    pub const BYTES: usize = T * T * 3;
+}
+
+/// The tiles of side `T` of fine level `level` of a photo over `area`:
+/// columns and rows.
+pub fn photo_tiles(area: &DetailArea, level: u32, tile: u32) -> (u32, u32) {
+    let (w, d) = area.level_size(level);
+    let tiles = |n: usize| {
+        (n as u64)
+            .div_ceil(u64::from(tile))
+            .min(u64::from(u32::MAX)) as u32
+    };
+    (tiles(w), tiles(d))
+}
+
+/// Fills `tile` with photo tile `key`'s texels of `detail` (the key's
+/// photo): a source for a photo already in memory, and the definition of
+/// what a packed file's photo tiles must hold. False (and `tile`
+/// untouched) when the detail has no such tile.
+pub fn cut_photo_tile<const T: usize>(
+    detail: &Detail<'_>,
+    key: PhotoKey,
+    tile: &mut PhotoTile<T>,
+) -> bool {
+    let level = u32::from(key.level);
+    if level > detail.shift() {
+        return false;
+    }
+    let (w, d) = detail.area().level_size(level);
+    let (x0, y0) = (key.x as usize * T, key.y as usize * T);
+    if x0 >= w || y0 >= d {
+        return false;
+    }
+    let texels = detail.level(level);
+    for (j, row) in tile.texels.iter_mut().enumerate() {
+        let y = (y0 + j).min(d - 1);
+        for (i, texel) in row.iter_mut().enumerate() {
+            let x = (x0 + i).min(w - 1);
+            *texel = texels.get(y * w + x).copied().unwrap_or([0; 3]);
+        }
+    }
+    true
+}
+
 /// Why a tile did not arrive.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TileError {
@@ -194,6 +269,17 @@ pub trait TileSource<const T: usize> {
     /// Fills `tile` with tile `key`; returns the bytes read to do it.
     /// On an error `tile`'s contents are unspecified (the cache drops it).
     fn load(&mut self, key: TileKey, tile: &mut Tile<T>) -> Result<usize, TileError>;
+    /// The photos finer than level 0 the source has tiles of, in the
+    /// order they lie over each other (the last on top); none by default.
+    fn photos(&self) -> &[DetailArea] {
+        &[]
+    }
+    /// Fills `tile` with photo tile `key` ([`PhotoKey`]), as
+    /// [`TileSource::load`] does a pyramid tile.
+    fn load_photo(&mut self, key: PhotoKey, tile: &mut PhotoTile<T>) -> Result<usize, TileError> {
+        let _ = (key, tile);
+        Err(TileError::Missing)
+    }
 }
 
 /// Fills `tile` with tile `key` of `pyramid`: a source for a map already in
@@ -241,7 +327,7 @@ mod tests {
     use crate::surface::Grid;
     use crate::{
         pyramid_cells, pyramid_points, render, Camera, CountingProbe, Framebuffer, HeightFilter,
-        Pyramid, RenderOptions, Terrain, View,
+        NoProbe, Pyramid, RenderOptions, Surface, Terrain, View,
     };
     use std::vec;
 
@@ -310,6 +396,17 @@ mod tests {
         }
     }
 
+    /// A 64 x 48 frame from `camera` over `world` with `options`.
+    fn frame_64x48(camera: Camera, world: &World, options: &RenderOptions) -> FootprintView {
+        FootprintView {
+            camera,
+            width: 64,
+            height: 48,
+            pixel_to_voxel: options.level_bias(world.roughness),
+            widen_deg: 0.0,
+        }
+    }
+
     #[test]
     fn rendering_from_tiles_equals_rendering_from_the_pyramid() {
         let built = Built::hills(203, 150);
@@ -327,13 +424,7 @@ mod tests {
             let camera = Camera::looking(eye, yaw, pitch);
             let mut needed = heapless::Vec::<TileKey, 512>::new();
             let options = RenderOptions::default();
-            let frame = FootprintView {
-                camera,
-                width: 64,
-                height: 48,
-                pixel_to_voxel: options.level_bias(source.world().roughness),
-                widen_deg: 0.0,
-            };
+            let frame = frame_64x48(camera, &source.world(), &options);
             footprint::<16, 512>(&source.world(), &frame, &mut needed).unwrap();
             cache.begin_frame();
             for key in &needed {
@@ -369,6 +460,183 @@ mod tests {
             // The footprint held every tile the frame read.
             assert_eq!(surface.degraded_samples(), 0, "{camera:?}");
         }
+    }
+
+    /// Tiles and photo tiles cut from a pyramid and photos in memory.
+    struct CutWithPhotos<'p> {
+        pyramid: &'p Pyramid<'p>,
+        details: &'p [Detail<'p>],
+        areas: vec::Vec<DetailArea>,
+    }
+
+    impl TileSource<16> for CutWithPhotos<'_> {
+        fn world(&self) -> World {
+            Cut(self.pyramid).world()
+        }
+        fn load(&mut self, key: TileKey, tile: &mut Tile<16>) -> Result<usize, TileError> {
+            Cut(self.pyramid).load(key, tile)
+        }
+        fn photos(&self) -> &[DetailArea] {
+            &self.areas
+        }
+        fn load_photo(
+            &mut self,
+            key: PhotoKey,
+            tile: &mut PhotoTile<16>,
+        ) -> Result<usize, TileError> {
+            let detail = self
+                .details
+                .get(usize::from(key.photo))
+                .ok_or(TileError::Missing)?;
+            cut_photo_tile(detail, key, tile)
+                .then_some(PhotoTile::<16>::BYTES)
+                .ok_or(TileError::Missing)
+        }
+    }
+
+    /// Fine level 0 of a photo `2^shift` times finer over `size` points:
+    /// stripes and checks no level of the map shows.
+    fn photo_texels(size: [u32; 2], shift: u32) -> vec::Vec<Rgb> {
+        let mut texels = vec![[0u8; 3]; crate::detail_points(size[0], size[1], shift)];
+        let row = (size[0] << shift) as usize;
+        for (i, texel) in texels
+            .iter_mut()
+            .take(row * (size[1] << shift) as usize)
+            .enumerate()
+        {
+            let (x, y) = (i % row, i / row);
+            *texel = if (x / 3 + y / 2) % 2 == 0 {
+                [230, (x * 5) as u8, 40]
+            } else {
+                [30, 90, (y * 7) as u8]
+            };
+        }
+        texels
+    }
+
+    #[test]
+    fn photos_paged_through_a_cache_render_as_photos_in_memory() {
+        let built = Built::hills(203, 150);
+        let pyramid = built.pyramid();
+        // Two photos, the second partly over the first.
+        let (mut first, mut second) = (photo_texels([60, 50], 2), photo_texels([40, 40], 3));
+        let details = [
+            Detail::build([40, 30], [60, 50], 2, &mut first).unwrap(),
+            Detail::build([80, 60], [40, 40], 3, &mut second).unwrap(),
+        ];
+        let mut source = CutWithPhotos {
+            pyramid: &pyramid,
+            details: &details,
+            areas: details.iter().map(Detail::area).collect(),
+        };
+        let in_memory = crate::WithDetail::checked(&pyramid, &details).unwrap();
+        let mut slots = vec![Tile::<16>::EMPTY; 256].into_boxed_slice();
+        let slots: &mut [Tile<16>; 256] = (&mut slots[..]).try_into().unwrap();
+        let mut photo_slots = vec![PhotoTile::<16>::EMPTY; 1024].into_boxed_slice();
+        let photo_slots: &mut [PhotoTile<16>; 1024] = (&mut photo_slots[..]).try_into().unwrap();
+        let mut cache = TileCache::<16, 256>::new(source.world(), slots);
+        let mut photo_cache = PhotoCache::<16, 1024>::new(source.world(), photo_slots);
+        for (eye, yaw, pitch) in [
+            ([70.0, 20.0, 70.0], 90.0, 30.0),
+            ([100.0, 40.0, 80.0], 100.0, 45.0),
+            ([60.0, 90.0, 60.0], 0.0, 20.0),
+            ([95.0, 75.0, 120.0], 10.0, 90.0),
+        ] {
+            let camera = Camera::looking(eye, yaw, pitch);
+            let options = RenderOptions::default();
+            let frame = frame_64x48(camera, &source.world(), &options);
+            let mut needed = heapless::Vec::<TileKey, 512>::new();
+            footprint::<16, 512>(&source.world(), &frame, &mut needed).unwrap();
+            let mut photos = heapless::Vec::<PhotoKey, 1024>::new();
+            photo_footprint::<16, 1024>(&source.world(), source.photos(), &frame, &mut photos)
+                .unwrap();
+            assert!(!photos.is_empty(), "{camera:?}");
+            cache.begin_frame();
+            photo_cache.begin_frame();
+            for key in &needed {
+                cache.require(*key, &mut source).unwrap();
+            }
+            for key in &photos {
+                photo_cache.require(*key, &mut source).unwrap();
+            }
+            let areas = source.areas.clone();
+            let surface =
+                TiledSurface::around(&cache, camera.eye).with_photos(&photo_cache, &areas);
+            let view = View::new(&surface.local(&camera), 64, 48).unwrap();
+            let draw = |s: &dyn Fn(&mut Framebuffer<'_>)| {
+                let mut pixels = vec![[0u8; 3]; 64 * 48];
+                s(&mut Framebuffer::new(&mut pixels, 64, 48).unwrap());
+                pixels
+            };
+            let from_tiles = draw(&|f| render(&surface, &view, &options, f, &mut NoProbe));
+            let from_memory = draw(&|f| render(&in_memory, &view, &options, f, &mut NoProbe));
+            let bare = draw(&|f| render(&pyramid, &view, &options, f, &mut NoProbe));
+            assert_eq!(surface.degraded_samples(), 0, "{camera:?}");
+            assert!(from_tiles == from_memory, "{camera:?}");
+            // The photos show: the view is not the map's own colors.
+            assert!(from_tiles != bare, "{camera:?}");
+        }
+    }
+
+    #[test]
+    fn a_missing_photo_tile_reads_the_next_coarser_fine_level() {
+        let built = Built::hills(64, 64);
+        let pyramid = built.pyramid();
+        let mut texels = photo_texels([32, 32], 2);
+        let details = [Detail::build([16, 16], [32, 32], 2, &mut texels).unwrap()];
+        let mut source = CutWithPhotos {
+            pyramid: &pyramid,
+            details: &details,
+            areas: details.iter().map(Detail::area).collect(),
+        };
+        let mut slots = vec![Tile::<16>::EMPTY; 64].into_boxed_slice();
+        let cache = all_but_one_tile(&pyramid, (&mut slots[..]).try_into().unwrap());
+        let mut photo_slots = vec![PhotoTile::<16>::EMPTY; 128].into_boxed_slice();
+        let photo_slots: &mut [PhotoTile<16>; 128] = (&mut photo_slots[..]).try_into().unwrap();
+        let mut photo_cache = PhotoCache::<16, 128>::new(source.world(), photo_slots);
+        photo_cache.begin_frame();
+        // Fine level 0 (128 x 128 texels: 8 x 8 tiles) but its first
+        // tile, and every tile of levels 1 and 2.
+        for (level, tiles) in [(0u8, 8u32), (1, 4), (2, 2)] {
+            for y in 0..tiles {
+                for x in 0..tiles {
+                    if (level, x, y) != (0, 0, 0) {
+                        let key = PhotoKey {
+                            photo: 0,
+                            level,
+                            x,
+                            y,
+                        };
+                        photo_cache.require(key, &mut source).unwrap();
+                    }
+                }
+            }
+        }
+        let areas = source.areas.clone();
+        let surface = TiledSurface::around(&cache, [0.0; 3]).with_photos(&photo_cache, &areas);
+        let one = 1i64 << 16;
+        let reach = 64 * one;
+        // A footprint that reads fine level 0 alone, in its missing first
+        // tile (texels 0..16 are points 16 to 20): fine level 1's color
+        // instead, counted.
+        let point = [17 * one + one / 3, 18 * one];
+        let before = surface.degraded_samples();
+        let level1 = details[0].color(1, point);
+        assert_eq!(surface.detail_color(point, reach / 16, reach), level1);
+        assert!(surface.degraded_samples() > before);
+        // In a resident tile, fine level 0's own, not counted.
+        let point = [30 * one + one / 3, 40 * one];
+        let before = surface.degraded_samples();
+        assert_eq!(
+            surface.detail_color(point, reach / 16, reach),
+            details[0].color(0, point)
+        );
+        assert_eq!(surface.degraded_samples(), before);
+        // Outside the photo: none.
+        assert_eq!(
+            surface.detail_color([2 * one, 2 * one], reach / 16, reach),
+            None
+        );
     }
 
     /// The tiles of a 64 x 64 map's levels 0 and 1, but for level 0's

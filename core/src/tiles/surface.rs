@@ -2,8 +2,10 @@
 //! read through the cache, with coarser tiles standing in for missing ones.
 
 use super::footprint::{window_origin, WINDOW_SIDE};
-use super::{Tile, TileCache, TileKey, World};
+use super::{PhotoCache, PhotoKey, Tile, TileCache, TileKey, World};
 use crate::color::Rgb;
+use crate::config::COORD_FRAC_BITS;
+use crate::detail::DetailArea;
 use crate::surface::{Extent, Grid, Surface};
 use crate::Camera;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -21,10 +23,14 @@ const STRIDE_LOG2: u32 = 15;
 /// best resident coarser level there (and is counted in
 /// [`TiledSurface::degraded_samples`]); with none, the ray ends there.
 /// Renders from a world that fits the window are the same, bit for bit, as
-/// from a [`crate::Pyramid`] of the same levels.
+/// from a [`crate::Pyramid`] of the same levels; with photos finer than
+/// level 0 paged through a [`PhotoCache`] ([`TiledSurface::with_photos`],
+/// `M` its slots), as from a [`crate::WithDetail`] of the same photos.
 #[derive(Debug)]
-pub struct TiledSurface<'c, 'a, const T: usize, const N: usize> {
+pub struct TiledSurface<'c, 'a, const T: usize, const N: usize, const M: usize = 0> {
     cache: &'c TileCache<'a, T, N>,
+    /// The photos' tiles and where each photo lies (world coordinates).
+    photos: Option<(&'c PhotoCache<'a, T, M>, &'c [DetailArea])>,
     origin: [u32; 2],
     extent: Extent,
     top: u8,
@@ -52,9 +58,36 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
             world_levels: world.levels(),
             degraded: AtomicU32::new(0),
             touched: core::array::from_fn(|_| AtomicBool::new(false)),
+            photos: None,
         }
     }
 
+    /// This window with the photos over `areas` (world coordinates: a
+    /// source's [`super::TileSource::photos`]) read through `cache`: a
+    /// hit nearer than its color reach takes their colors, as from a
+    /// [`crate::WithDetail`]. A texel whose tile is not resident reads
+    /// the next coarser fine level whose tiles are (and is counted in
+    /// [`TiledSurface::degraded_samples`]); with none, the hit takes
+    /// level 0's colors.
+    pub fn with_photos<const M: usize>(
+        self,
+        cache: &'c PhotoCache<'a, T, M>,
+        areas: &'c [DetailArea],
+    ) -> TiledSurface<'c, 'a, T, N, M> {
+        TiledSurface {
+            cache: self.cache,
+            photos: Some((cache, areas)),
+            origin: self.origin,
+            extent: self.extent,
+            top: self.top,
+            world_levels: self.world_levels,
+            degraded: self.degraded,
+            touched: self.touched,
+        }
+    }
+}
+
+impl<'c, 'a, const T: usize, const N: usize, const M: usize> TiledSurface<'c, 'a, T, N, M> {
     /// The world point at window point (0, 0).
     pub fn origin(&self) -> [u32; 2] {
         self.origin
@@ -134,6 +167,36 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
         }
     }
 
+    /// Fine level `level`'s color of photo `photo` over `area` at world
+    /// point `point` (Q16), its texels from `cache`; where one of them is
+    /// not resident, the next coarser fine level's, counted as degraded.
+    fn photo_color(
+        &self,
+        cache: &PhotoCache<'_, T, M>,
+        photo: u8,
+        area: &DetailArea,
+        level: u32,
+        point: [i64; 2],
+    ) -> Option<Rgb> {
+        let shift = T.trailing_zeros();
+        let mask = T - 1;
+        (level..=area.shift()).find_map(|at| {
+            let color = area.color_with(at, point, |x, y| {
+                let key = PhotoKey {
+                    photo,
+                    level: at as u8,
+                    x: (x >> shift) as u32,
+                    y: (y >> shift) as u32,
+                };
+                cache.get(&key).map(|tile| tile.texels[y & mask][x & mask])
+            });
+            if color.is_some() && at != level {
+                self.degraded.fetch_add(1, Ordering::Relaxed);
+            }
+            color
+        })
+    }
+
     /// Row and column of point `(x, y)` of a level inside its tile.
     #[inline(always)]
     fn place(x: u32, y: u32) -> (usize, usize) {
@@ -163,8 +226,8 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
 
 /// One level of a [`TiledSurface`].
 #[derive(Debug, Clone, Copy)]
-pub struct TiledGrid<'s, 'c, 'a, const T: usize, const N: usize> {
-    surface: &'s TiledSurface<'c, 'a, T, N>,
+pub struct TiledGrid<'s, 'c, 'a, const T: usize, const N: usize, const M: usize = 0> {
+    surface: &'s TiledSurface<'c, 'a, T, N, M>,
     level: u8,
     /// log2 of the row stride.
     shift: u32,
@@ -177,7 +240,7 @@ pub struct TiledGrid<'s, 'c, 'a, const T: usize, const N: usize> {
     near: Option<(&'s Tile<T>, u32, u32)>,
 }
 
-impl<'s, const T: usize, const N: usize> TiledGrid<'s, '_, '_, T, N> {
+impl<'s, const T: usize, const N: usize, const M: usize> TiledGrid<'s, '_, '_, T, N, M> {
     /// The tile resolved ahead ([`Grid::near`]), if it holds world point
     /// `(x, y)`.
     #[inline(always)]
@@ -205,7 +268,7 @@ impl<'s, const T: usize, const N: usize> TiledGrid<'s, '_, '_, T, N> {
     fn read<V>(&self, index: isize, field: impl Fn(&Tile<T>, usize, usize) -> V) -> Option<V> {
         let (x, y) = self.at(index)?;
         if let Some(tile) = self.near_tile((x, y)) {
-            let (row, column) = TiledSurface::<T, N>::place(x, y);
+            let (row, column) = TiledSurface::<T, N, M>::place(x, y);
             return Some(field(tile, row, column));
         }
         let (tile, row, column) = self.surface.point(self.level, x, y)?;
@@ -224,8 +287,8 @@ impl<'s, const T: usize, const N: usize> TiledGrid<'s, '_, '_, T, N> {
     ) -> Option<(V, V)> {
         let (a, b) = (self.at(index)?, self.at(index + across)?);
         if let (Some(tile), Some(_)) = (self.near_tile(a), self.near_tile(b)) {
-            let (r0, c0) = TiledSurface::<T, N>::place(a.0, a.1);
-            let (r1, c1) = TiledSurface::<T, N>::place(b.0, b.1);
+            let (r0, c0) = TiledSurface::<T, N, M>::place(a.0, a.1);
+            let (r1, c1) = TiledSurface::<T, N, M>::place(b.0, b.1);
             return Some((field(tile, r0, c0), field(tile, r1, c1)));
         }
         match self.surface.pair_in_one_tile(self.level, a, b) {
@@ -238,7 +301,7 @@ impl<'s, const T: usize, const N: usize> TiledGrid<'s, '_, '_, T, N> {
     }
 }
 
-impl<const T: usize, const N: usize> Grid for TiledGrid<'_, '_, '_, T, N> {
+impl<const T: usize, const N: usize, const M: usize> Grid for TiledGrid<'_, '_, '_, T, N, M> {
     #[inline(always)]
     fn stride(&self) -> isize {
         1 << self.shift
@@ -277,9 +340,11 @@ impl<const T: usize, const N: usize> Grid for TiledGrid<'_, '_, '_, T, N> {
     }
 }
 
-impl<'c, 'a, const T: usize, const N: usize> Surface for TiledSurface<'c, 'a, T, N> {
+impl<'c, 'a, const T: usize, const N: usize, const M: usize> Surface
+    for TiledSurface<'c, 'a, T, N, M>
+{
     type Grid<'s>
-        = TiledGrid<'s, 'c, 'a, T, N>
+        = TiledGrid<'s, 'c, 'a, T, N, M>
     where
         Self: 's;
 
@@ -345,5 +410,20 @@ impl<'c, 'a, const T: usize, const N: usize> Surface for TiledSurface<'c, 'a, T,
         let bound = tile.bounds[(wy & mask) as usize][(wx & mask) as usize];
         let stride_log2 = STRIDE_LOG2 - u32::from(level);
         Some((bound, ((y as usize) << stride_log2) + x as usize))
+    }
+    #[inline]
+    fn has_details(&self) -> bool {
+        self.photos.is_some_and(|(_, areas)| !areas.is_empty())
+    }
+    #[inline]
+    fn detail_color(&self, point: [i64; 2], width: i64, reach: i64) -> Option<Rgb> {
+        let (cache, areas) = self.photos?;
+        let origin = self.origin.map(|o| i64::from(o) << COORD_FRAC_BITS);
+        let point = [point[0] + origin[0], point[1] + origin[1]];
+        areas.iter().enumerate().rev().find_map(|(photo, area)| {
+            area.color_for_with(point, width, reach, |level, point| {
+                self.photo_color(cache, photo as u8, area, level, point)
+            })
+        })
     }
 }

@@ -59,8 +59,16 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
         bar.set_position(u64::from(done));
     })?;
     bar.finish_and_clear();
+    let photos = if summary.photo_tiles > 0 {
+        format!(
+            " and {} photo tiles (photos finer than the height grid, at their own resolution)",
+            summary.photo_tiles
+        )
+    } else {
+        String::new()
+    };
     println!(
-        "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}, {} bytes, at most {} rows held, {} -> {}",
+        "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}{photos}, {} bytes, at most {} rows held, {} -> {}",
         summary.width,
         summary.depth,
         summary.levels,
@@ -148,6 +156,12 @@ pub(super) fn render_tiled_command(
         eprintln!(
             "warning: {} of {} footprint tiles could not be loaded ({} rejected for bad checksums); drawn from coarser levels",
             tiled.misses, tiled.footprint_tiles, tiled.rejected
+        );
+    }
+    if tiled.photo_misses > 0 {
+        eprintln!(
+            "warning: {} of {} photo tiles could not be loaded; drawn from coarser fine levels of the photos",
+            tiled.photo_misses, tiled.photo_tiles
         );
     }
     Ok(())

@@ -7,7 +7,7 @@ use super::{load_scene, view_error, CameraArgs, KernelArgs, SceneArgs, DEFAULT_Y
 use crate::error::{Error, Result};
 use crate::kernel::PixelRays;
 use crate::outputs::Outputs;
-use crate::tiles::{new_slots, Terrain, TiledViewer};
+use crate::tiles::{new_photo_slots, new_slots, Terrain, TiledViewer};
 use crate::viewer::{
     describe_camera, draw_line_of_text, fly_step, ground_under, keep_above, render_arguments,
     render_governed, render_pool, shell_word, threads_or_cores, turn_by, FrameBudget, FrameFigures,
@@ -126,8 +126,12 @@ pub(super) fn view_command(args: ViewArgs) -> Result<()> {
                     )));
                 }
             }
-            slots = new_slots();
-            World::Tiled(Box::new(TiledViewer::new(terrain, &mut slots)))
+            slots = (new_slots(), new_photo_slots());
+            World::Tiled(Box::new(TiledViewer::new(
+                terrain,
+                &mut slots.0,
+                &mut slots.1,
+            )))
         }
         None => {
             let mut scene = load_scene(&args.scene)?;

@@ -18,26 +18,43 @@
 //! | 4 | CRC-32 of the 40 bytes before it |
 //! | 4 × count | CRC-32 of each tile record |
 //! | record × count | tile records |
+//! | 4 | photo count (version 2) |
+//! | 20 × photos | each photo's first grid point (x, y), grid points (x, y), texels a voxel as a shift |
+//! | 4 | CRC-32 of the photo count and table |
+//! | 4 × photo tiles | CRC-32 of each photo tile record |
+//! | photo record × photo tiles | photo tile records |
 //!
 //! Tiles are ordered by level, then row, then column. A record is the
 //! tile's heights (`u16`, row by row), colors (RGB), and cell bounds
-//! (`u16`): see [`terracast::tiles::Tile`].
+//! (`u16`): see [`terracast::tiles::Tile`]. Photo tiles (photos finer than
+//! the height grid, [`terracast::tiles::PhotoTile`]) are ordered by photo,
+//! then fine level (the photo's texels first), then row, then column; a
+//! record is the tile's texels (RGB). A version-1 file is read as one
+//! without photos.
 
 use super::TILE;
 use crate::error::{Error, Result};
 use std::fs::File;
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use terracast::tiles::{Tile, TileError, TileKey, TileSource, World};
-use terracast::HeightFilter;
+use terracast::tiles::{
+    photo_tiles, PhotoKey, PhotoTile, Tile, TileError, TileKey, TileSource, World,
+};
+use terracast::{DetailArea, HeightFilter};
 
-/// The format version this build reads and writes.
-pub const FORMAT_VERSION: u32 = 1;
+/// The format version this build writes (it reads version 1 too).
+pub const FORMAT_VERSION: u32 = 2;
 
 const MAGIC: &[u8; 8] = b"TCTILES\0";
 const HEADER_BYTES: u64 = 44;
 /// Bytes of one tile record.
 pub(crate) const RECORD_BYTES: usize = TILE * TILE * 7;
+/// Bytes of one photo tile record.
+const PHOTO_RECORD_BYTES: usize = TILE * TILE * 3;
+/// Bytes of a photo's entry in the photo table.
+const PHOTO_ENTRY_BYTES: usize = 20;
+/// Photos a file holds at most (a [`PhotoKey`] names one in a byte).
+pub(crate) const MAX_PHOTOS: u64 = 256;
 
 /// The header's byte for a height filter.
 fn filter_code(filter: HeightFilter) -> u8 {
@@ -128,6 +145,79 @@ impl Header {
     }
 }
 
+/// The photo section of a file: where each photo lies and where its
+/// tiles are.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub(crate) struct Photos {
+    pub areas: Vec<DetailArea>,
+    /// Each photo's and fine level's first tile among the photo tiles.
+    firsts: Vec<Vec<u64>>,
+    /// Photo tiles in all.
+    pub tiles: u64,
+}
+
+impl Photos {
+    pub fn new(areas: Vec<DetailArea>) -> Self {
+        let mut tiles = 0u64;
+        let firsts = areas
+            .iter()
+            .map(|area| {
+                (0..=area.shift())
+                    .map(|level| {
+                        let first = tiles;
+                        let (x, y) = photo_tiles(area, level, TILE as u32);
+                        tiles += u64::from(x) * u64::from(y);
+                        first
+                    })
+                    .collect()
+            })
+            .collect();
+        Self {
+            areas,
+            firsts,
+            tiles,
+        }
+    }
+
+    /// Index of a photo tile among the file's photo tiles.
+    pub fn index(&self, key: PhotoKey) -> Option<u64> {
+        let area = self.areas.get(usize::from(key.photo))?;
+        let first = *self.firsts[usize::from(key.photo)].get(usize::from(key.level))?;
+        let (tx, ty) = photo_tiles(area, u32::from(key.level), TILE as u32);
+        (key.x < tx && key.y < ty)
+            .then(|| first + u64::from(key.y) * u64::from(tx) + u64::from(key.x))
+    }
+
+    /// Bytes of the photo count and table.
+    fn table_bytes(&self) -> u64 {
+        4 + (PHOTO_ENTRY_BYTES * self.areas.len()) as u64
+    }
+
+    /// The photo count and table, and their CRC-32.
+    fn table(&self) -> Vec<u8> {
+        let mut b = (self.areas.len() as u32).to_le_bytes().to_vec();
+        for area in &self.areas {
+            for v in [area.origin(), area.size()].concat() {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+            b.extend_from_slice(&area.shift().to_le_bytes());
+        }
+        let crc = crc32fast::hash(&b);
+        b.extend_from_slice(&crc.to_le_bytes());
+        b
+    }
+
+    /// Offset of photo tile record `index`, the section starting at `start`.
+    fn record_offset(&self, start: u64, index: u64) -> u64 {
+        start + self.table_bytes() + 4 + 4 * self.tiles + index * PHOTO_RECORD_BYTES as u64
+    }
+
+    /// Bytes of the section.
+    fn bytes(&self) -> u64 {
+        self.record_offset(0, self.tiles)
+    }
+}
+
 /// A packed terrain file opened for reading: a [`TileSource`].
 #[derive(Debug)]
 pub struct TilesFile {
@@ -136,6 +226,8 @@ pub struct TilesFile {
     header: Header,
     checksums: Vec<u32>,
     record: Vec<u8>,
+    photos: Photos,
+    photo_checksums: Vec<u32>,
 }
 
 impl TilesFile {
@@ -160,9 +252,9 @@ impl TilesFile {
         }
         let u32_at = |i: usize| u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
         let version = u32_at(8);
-        if version != FORMAT_VERSION {
+        if version != FORMAT_VERSION && version != 1 {
             return Err(fail(&format!(
-                "format version {version}, this build reads version {FORMAT_VERSION}"
+                "format version {version}, this build reads versions 1 and {FORMAT_VERSION}"
             )));
         }
         if crc32fast::hash(&b[..40]) != u32_at(40) {
@@ -194,16 +286,20 @@ impl TilesFile {
         let mut table = vec![0u8; 4 * header.tiles as usize];
         file.read_exact(&mut table)
             .map_err(|e| fail(&format!("cannot read the checksum table: {e}")))?;
-        let checksums = table
-            .chunks_exact(4)
-            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect();
+        let checksums = words(&table);
+        let (photos, photo_checksums) = if version == 1 {
+            (Photos::default(), Vec::new())
+        } else {
+            read_photos(&mut file, header.file_bytes(), length).map_err(|e| fail(&e))?
+        };
         Ok(Self {
             path: path.to_path_buf(),
             file,
             header,
             checksums,
             record: vec![0; RECORD_BYTES],
+            photos,
+            photo_checksums,
         })
     }
 
@@ -216,6 +312,68 @@ impl TilesFile {
     pub fn path(&self) -> &Path {
         &self.path
     }
+}
+
+/// Little-endian words.
+fn words(bytes: &[u8]) -> Vec<u32> {
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
+/// Reads the photo section starting at `start` of a file `length` bytes
+/// long; why not, in words, when it is damaged or cut short.
+fn read_photos(
+    file: &mut File,
+    start: u64,
+    length: u64,
+) -> std::result::Result<(Photos, Vec<u32>), String> {
+    let cut = |what: &str| format!("truncated: the photo section's {what} is missing");
+    if length < start + 4 {
+        return Err(cut("count"));
+    }
+    let mut count = [0u8; 4];
+    file.seek(SeekFrom::Start(start))
+        .and_then(|_| file.read_exact(&mut count))
+        .map_err(|e| format!("cannot read the photo count: {e}"))?;
+    let count = u64::from(u32::from_le_bytes(count));
+    if count > MAX_PHOTOS {
+        return Err(format!(
+            "the photo table lists {count} photos, a file holds at most {MAX_PHOTOS}: the file is damaged"
+        ));
+    }
+    let table_bytes = 4 + PHOTO_ENTRY_BYTES as u64 * count + 4;
+    if length < start + table_bytes {
+        return Err(cut("table"));
+    }
+    let mut table = vec![0u8; table_bytes as usize];
+    file.seek(SeekFrom::Start(start))
+        .and_then(|_| file.read_exact(&mut table))
+        .map_err(|e| format!("cannot read the photo table: {e}"))?;
+    let (entries, crc) = table.split_at(table.len() - 4);
+    if crc32fast::hash(entries) != words(crc)[0] {
+        return Err("photo table checksum mismatch: the file is damaged".into());
+    }
+    let areas = entries[4..]
+        .chunks_exact(PHOTO_ENTRY_BYTES)
+        .map(|entry| {
+            let v = words(entry);
+            DetailArea::new([v[0], v[1]], [v[2], v[3]], v[4], World::MAX_SIDE)
+                .map_err(|e| format!("photo table: {e}"))
+        })
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let photos = Photos::new(areas);
+    if length < start + photos.bytes() {
+        return Err(format!(
+            "truncated: {length} bytes, the photo table promises {}",
+            start + photos.bytes()
+        ));
+    }
+    let mut sums = vec![0u8; 4 * photos.tiles as usize];
+    file.read_exact(&mut sums)
+        .map_err(|e| format!("cannot read the photo checksums: {e}"))?;
+    Ok((photos, words(&sums)))
 }
 
 impl TileSource<TILE> for TilesFile {
@@ -239,6 +397,31 @@ impl TileSource<TILE> for TilesFile {
         }
         decode(&self.record, tile);
         Ok(RECORD_BYTES)
+    }
+
+    fn photos(&self) -> &[DetailArea] {
+        &self.photos.areas
+    }
+
+    fn load_photo(
+        &mut self,
+        key: PhotoKey,
+        tile: &mut PhotoTile<TILE>,
+    ) -> std::result::Result<usize, TileError> {
+        let index = self.photos.index(key).ok_or(TileError::Missing)?;
+        let offset = self.photos.record_offset(self.header.file_bytes(), index);
+        let record = &mut self.record[..PHOTO_RECORD_BYTES];
+        self.file
+            .seek(SeekFrom::Start(offset))
+            .and_then(|_| self.file.read_exact(record))
+            .map_err(|_| TileError::Io)?;
+        if crc32fast::hash(record) != self.photo_checksums[index as usize] {
+            return Err(TileError::Checksum);
+        }
+        for (texel, c) in tile.texels.iter_mut().flatten().zip(record.chunks_exact(3)) {
+            *texel = [c[0], c[1], c[2]];
+        }
+        Ok(PHOTO_RECORD_BYTES)
     }
 }
 
@@ -276,20 +459,58 @@ pub(crate) struct TilesWriter {
     checksums: Vec<u32>,
     record: Vec<u8>,
     position: u64,
+    photos: Photos,
+    photo_checksums: Vec<u32>,
 }
 
 impl TilesWriter {
-    pub fn create(path: &Path, header: Header) -> Result<Self> {
+    /// A file of `header`'s tiles and of the tiles of the photos over
+    /// `photos`.
+    pub fn create(path: &Path, header: Header, photos: Vec<DetailArea>) -> Result<Self> {
         let fail = |e: std::io::Error| Error::new(format!("cannot write {}: {e}", path.display()));
+        let photos = Photos::new(photos);
         let file = File::create(path).map_err(fail)?;
-        file.set_len(header.file_bytes()).map_err(fail)?;
+        file.set_len(header.file_bytes() + photos.bytes())
+            .map_err(fail)?;
         Ok(Self {
             file: BufWriter::with_capacity(1 << 20, file),
             header,
             checksums: vec![0; header.tiles as usize],
             record: Vec::with_capacity(RECORD_BYTES),
             position: u64::MAX,
+            photo_checksums: vec![0; photos.tiles as usize],
+            photos,
         })
+    }
+
+    /// Writes `bytes` at `offset`, seeking only when the last write did
+    /// not end there.
+    fn write_at(&mut self, offset: u64, bytes: &[u8]) -> Result<()> {
+        let io = |e: std::io::Error| Error::new(format!("cannot write tile: {e}"));
+        if offset != self.position {
+            self.file.seek(SeekFrom::Start(offset)).map_err(io)?;
+        }
+        self.file.write_all(bytes).map_err(io)?;
+        self.position = offset + bytes.len() as u64;
+        Ok(())
+    }
+
+    /// Writes photo tile `key`.
+    pub fn write_photo(&mut self, key: PhotoKey, tile: &PhotoTile<TILE>) -> Result<()> {
+        let index = self.photos.index(key).ok_or_else(|| {
+            Error::new(format!("photo tile {key:?} is outside the packed photos"))
+        })?;
+        let mut record = std::mem::take(&mut self.record);
+        record.clear();
+        tile.texels
+            .iter()
+            .flatten()
+            .for_each(|c| record.extend_from_slice(c));
+        self.photo_checksums[index as usize] = crc32fast::hash(&record);
+        let offset = self.photos.record_offset(self.header.file_bytes(), index);
+        let written = self.write_at(offset, &record);
+        self.record = record;
+        written
     }
 
     pub fn write(&mut self, key: TileKey, tile: &Tile<TILE>) -> Result<()> {
@@ -297,16 +518,12 @@ impl TilesWriter {
             .header
             .index(key)
             .ok_or_else(|| Error::new(format!("tile {key:?} is outside the packed map")))?;
-        encode(tile, &mut self.record);
-        self.checksums[index as usize] = crc32fast::hash(&self.record);
-        let offset = self.header.record_offset(index);
-        let io = |e: std::io::Error| Error::new(format!("cannot write tile: {e}"));
-        if offset != self.position {
-            self.file.seek(SeekFrom::Start(offset)).map_err(io)?;
-        }
-        self.file.write_all(&self.record).map_err(io)?;
-        self.position = offset + RECORD_BYTES as u64;
-        Ok(())
+        let mut record = std::mem::take(&mut self.record);
+        encode(tile, &mut record);
+        self.checksums[index as usize] = crc32fast::hash(&record);
+        let written = self.write_at(self.header.record_offset(index), &record);
+        self.record = record;
+        written
     }
 
     /// Writes the header (with the final highest height) and the checksums.
@@ -317,6 +534,13 @@ impl TilesWriter {
         self.file.seek(SeekFrom::Start(0)).map_err(io)?;
         self.file.write_all(&self.header.bytes()).map_err(io)?;
         for c in &self.checksums {
+            self.file.write_all(&c.to_le_bytes()).map_err(io)?;
+        }
+        self.file
+            .seek(SeekFrom::Start(self.header.file_bytes()))
+            .map_err(io)?;
+        self.file.write_all(&self.photos.table()).map_err(io)?;
+        for c in &self.photo_checksums {
             self.file.write_all(&c.to_le_bytes()).map_err(io)?;
         }
         self.file.flush().map_err(io)

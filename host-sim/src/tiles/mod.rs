@@ -3,7 +3,9 @@
 //! the kernel's tile cache.
 //!
 //! The host uses one cache shape: tiles of [`TILE`]² points (28 KiB each)
-//! in [`SLOTS`] slots, 28 MiB of terrain at most.
+//! in [`SLOTS`] slots, 28 MiB of terrain at most; and, for photos finer
+//! than the height grid, photo tiles of [`TILE`]² texels (12 KiB each) in
+//! [`PHOTO_SLOTS`] slots, 24 MiB at most.
 
 mod file;
 mod pack;
@@ -13,14 +15,15 @@ mod procedural;
 pub use file::{TilesFile, FORMAT_VERSION};
 pub use pack::{pack, PackInput, PackSummary};
 pub use paging::{
-    footprint_beyond, page_flight, render_tiled, render_tiled_in, PageOptions, PageReport,
-    PagedFrame, TiledRender, TiledViewer,
+    footprint_beyond, new_photo_slots, page_flight, render_tiled, render_tiled_in, PageOptions,
+    PageReport, PagedFrame, TiledRender, TiledViewer, PHOTO_SLOTS,
 };
 pub use procedural::ProceduralSource;
 
 use crate::error::{Error, Result};
 use std::path::Path;
-use terracast::tiles::{Tile, TileError, TileKey, TileSource, World};
+use terracast::tiles::{PhotoKey, PhotoTile, Tile, TileError, TileKey, TileSource, World};
+use terracast::DetailArea;
 
 /// Points per tile side on the host.
 pub const TILE: usize = 64;
@@ -58,6 +61,22 @@ impl TileSource<TILE> for Terrain {
         match self {
             Self::Procedural(s) => s.world(),
             Self::File(s) => s.world(),
+        }
+    }
+    fn photos(&self) -> &[DetailArea] {
+        match self {
+            Self::Procedural(_) => &[],
+            Self::File(s) => s.photos(),
+        }
+    }
+    fn load_photo(
+        &mut self,
+        key: PhotoKey,
+        tile: &mut PhotoTile<TILE>,
+    ) -> std::result::Result<usize, TileError> {
+        match self {
+            Self::Procedural(_) => Err(TileError::Missing),
+            Self::File(s) => s.load_photo(key, tile),
         }
     }
     fn load(

@@ -14,9 +14,11 @@
 //! ([`load_scene_files`]: voids filled from their neighbours, which takes
 //! the rows around them; photos placed by their georeference), and their
 //! rows are packed from memory: an `.hgt` tile is at most 3601 × 3601
-//! samples.
+//! samples. A photo finer than the height grid is packed at its own
+//! resolution, its fine levels cut into photo tiles
+//! ([`terracast::tiles::cut_photo_tile`]).
 
-use super::file::{Header, TilesWriter};
+use super::file::{Header, TilesWriter, MAX_PHOTOS};
 use super::TILE;
 use crate::error::{Error, Result};
 use crate::outputs::Outputs;
@@ -30,9 +32,9 @@ use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use terracast::roughness::RoughnessSum;
-use terracast::tiles::{Tile, TileKey, World};
+use terracast::tiles::{cut_photo_tile, photo_tiles, PhotoKey, PhotoTile, Tile, TileKey, World};
 use terracast::wavelet_row;
-use terracast::{HeightFilter, Rgb, Terrain};
+use terracast::{Detail, DetailArea, HeightFilter, Rgb, Terrain};
 
 /// What to pack.
 #[derive(Debug, Clone)]
@@ -65,6 +67,9 @@ pub struct PackSummary {
     pub levels: u8,
     /// Tiles written.
     pub tiles: u64,
+    /// Photo tiles written: the texels of photos finer than the height
+    /// grid, at their own resolution.
+    pub photo_tiles: u64,
     /// File size in bytes.
     pub bytes: u64,
     /// Most rows (of points and of bounds, all levels) held at once: the
@@ -168,11 +173,22 @@ pub fn pack(
         },
     };
     let header = Header::new(world, input.filter);
-    let mut builder = Builder::new(
-        world,
-        input.filter,
-        TilesWriter::create(outputs.temporary(out_id), header)?,
-    );
+    // Photos finer than the grid (only a scene loaded whole has them)
+    // keep their texels in photo tiles.
+    let photos = loaded
+        .as_ref()
+        .map_or_else(Vec::new, |scene| kernel_photos(scene));
+    if photos.len() as u64 > MAX_PHOTOS {
+        return Err(Error::new(format!(
+            "{} photos are finer than the height grid: a packed file holds at most {MAX_PHOTOS}",
+            photos.len()
+        )));
+    }
+    let areas = photos.iter().map(|(area, _)| *area).collect();
+    let mut writer = TilesWriter::create(outputs.temporary(out_id), header, areas)?;
+    let photo_tiles = write_photos(&mut writer, &photos)?;
+    drop(photos);
+    let mut builder = Builder::new(world, input.filter, writer);
     let mut max_height = 0u16;
     // Measured on the rows a pyramid of the same map measures.
     let mut roughness = RoughnessSum::default();
@@ -219,10 +235,54 @@ pub fn pack(
         depth,
         levels: header.levels,
         tiles: header.tiles,
+        photo_tiles,
         bytes,
         rows_held_at_most,
         streamed: loaded.is_none(),
     })
+}
+
+/// The photos of `scene` kept finer than its grid, as the kernel holds
+/// them: where each lies, and all its fine levels' texels.
+fn kernel_photos(scene: &Scene) -> Vec<(DetailArea, Vec<Rgb>)> {
+    scene
+        .details
+        .iter()
+        .map(|detail| {
+            let area = DetailArea::new(detail.origin, detail.size, detail.shift, World::MAX_SIDE)
+                .expect("a photo detail's shift and size are within the kernel's limits");
+            (area, detail.kernel_levels())
+        })
+        .collect()
+}
+
+/// Cuts every tile of every fine level of `photos` and writes it; returns
+/// the tiles written.
+fn write_photos(writer: &mut TilesWriter, photos: &[(DetailArea, Vec<Rgb>)]) -> Result<u64> {
+    let mut tile = Box::new(PhotoTile::<TILE>::EMPTY);
+    let mut written = 0;
+    for (photo, (area, levels)) in photos.iter().enumerate() {
+        let detail = Detail::new(area.origin(), area.size(), area.shift(), levels)
+            .map_err(|e| Error::new(format!("photo {photo}: {e}")))?;
+        for level in 0..=area.shift() {
+            let (columns, rows) = photo_tiles(area, level, TILE as u32);
+            for y in 0..rows {
+                for x in 0..columns {
+                    let key = PhotoKey {
+                        photo: photo as u8,
+                        level: level as u8,
+                        x,
+                        y,
+                    };
+                    if cut_photo_tile(&detail, key, &mut tile) {
+                        writer.write_photo(key, &tile)?;
+                        written += 1;
+                    }
+                }
+            }
+        }
+    }
+    Ok(written)
 }
 
 /// Whether the images at `a` and `b` have the same size (`false` when
