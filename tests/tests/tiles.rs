@@ -230,6 +230,33 @@ fn an_hgt_with_voids_packs_as_render_loads_it() {
     // The void is filled as `render` fills it: no pit down to height 0.
     let hgt = hgt_with_a_void();
     packed_equals_maps(&hgt, &[], 1.0 / 16.0, HeightFilter::default(), "void.tiles");
+    // Streamed, the fill holding the void's rows and one each side.
+    let summary = pack(
+        &pack_input(&hgt, &[], 1.0 / 16.0, HeightFilter::default()),
+        &temp("void-again.tiles"),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(summary.streamed);
+    assert_eq!((summary.voids, summary.void_rows_held_at_most), (63, 9));
+    // A tile more void than not is refused in one line, and nothing is
+    // written.
+    let mostly = temp("mostly-void.hgt");
+    let side = 50usize;
+    let samples: Vec<u8> = (0..side * side)
+        .flat_map(|i| if i % 3 == 0 { 100i16 } else { i16::MIN }.to_be_bytes())
+        .collect();
+    std::fs::write(&mostly, samples).unwrap();
+    let out = temp("mostly-void.tiles");
+    let e = pack(
+        &pack_input(&mostly, &[], 1.0, HeightFilter::default()),
+        &out,
+        &mut |_, _| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("mostly void") && !e.contains('\n'), "{e}");
+    assert!(!out.exists());
     let scene = load_scene_files(&hgt, &[], 1.0 / 16.0, 1).unwrap();
     let lowest = |points: &mut dyn Iterator<Item = (usize, usize)>| {
         points
@@ -425,8 +452,8 @@ fn geotiff_heights_stream_into_a_pack_and_a_void_is_filled_as_render_fills_it() 
         HeightFilter::default(),
         "geotiff-streamed.tiles",
     );
-    // A block of no data: filled from its neighbours, which takes the
-    // whole map, as `render` loads it.
+    // A block of no data: filled from its neighbours as the rows pass, to
+    // the bit as `render` fills it loading the map whole.
     for y in 40..50 {
         for x in 60..75 {
             heights[(y * w + x) as usize] = f32::NAN;
@@ -457,14 +484,48 @@ fn geotiff_heights_stream_into_a_pack_and_a_void_is_filled_as_render_fills_it() 
     assert!(summary.streamed);
     let held = summary.rows_held_at_most;
     assert!(held < 3000 / 3, "{held} rows held of 3000");
-    // The map with voids was loaded whole.
+    // The map with voids streamed, the fill holding the block's rows and
+    // the row each side of it.
     let summary = pack(
         &pack_input(&voids, &[], 1.0, HeightFilter::default()),
         &temp("void-again.tiles"),
         &mut |_, _| {},
     )
     .unwrap();
-    assert!(!summary.streamed);
+    assert!(summary.streamed);
+    assert_eq!(summary.voids, 150);
+    assert!(
+        summary.void_rows_held_at_most <= 12,
+        "{}",
+        summary.void_rows_held_at_most
+    );
+    // Tall, with a void every 40 rows (a few points each, and one as wide
+    // as the map): the fill holds a few rows, not the map.
+    let mut holed = tall.clone();
+    for y in (20..td).step_by(40) {
+        let wide = y % 400 == 20;
+        for x in 0..tw {
+            if wide || (x + y) % 37 < 3 {
+                holed[(y * tw + x) as usize] = f32::NAN;
+            }
+        }
+    }
+    let path =
+        geotiff::<colortype::Gray32Float>("holed-tall.tif", (tw, td), &holed, [20.0, -34.0], 0.001);
+    packed_equals_maps(&path, &[], 1.0, HeightFilter::default(), "holed-tall.tiles");
+    let summary = pack(
+        &pack_input(&path, &[], 1.0, HeightFilter::default()),
+        &temp("holed-tall-again.tiles"),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(summary.streamed && summary.voids > 0);
+    assert!(
+        summary.void_rows_held_at_most <= 3,
+        "{}",
+        summary.void_rows_held_at_most
+    );
+    assert!(summary.rows_held_at_most < 3000 / 3);
 }
 
 #[test]

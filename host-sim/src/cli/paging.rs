@@ -59,6 +59,14 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
         bar.set_position(u64::from(done));
     })?;
     bar.finish_and_clear();
+    let voids = if summary.voids > 0 {
+        format!(
+            ", {} voids filled holding at most {} rows",
+            summary.voids, summary.void_rows_held_at_most
+        )
+    } else {
+        String::new()
+    };
     let photos = if summary.photo_tiles > 0 {
         format!(
             " and {} photo tiles (photos finer than the height grid, at their own resolution)",
@@ -68,7 +76,7 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
         String::new()
     };
     println!(
-        "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}{photos}, {} bytes, at most {} rows held, {} -> {}",
+        "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}{photos}, {} bytes, at most {} rows held{voids}, {} -> {}",
         summary.width,
         summary.depth,
         summary.levels,

@@ -60,24 +60,36 @@ pub fn not_a_height_map(path: &Path, kind: &str) -> Error {
     ))
 }
 
+/// The side of an SRTM `.hgt` tile of `bytes` bytes (a square grid of
+/// big-endian 16-bit samples), or why it is not one.
+pub fn hgt_side(path: &Path, bytes: u64) -> Result<u32> {
+    let samples = bytes / 2;
+    let side = (samples as f64).sqrt() as u64;
+    if bytes % 2 != 0 || side * side != samples || side < 2 || side > u64::from(u32::MAX) {
+        return Err(Error::new(format!(
+            "{} is not an SRTM .hgt tile: {bytes} bytes is not a square grid of 16-bit samples",
+            path.display(),
+        )));
+    }
+    Ok(side as u32)
+}
+
+/// An `.hgt` sample's height: its big-endian value, NaN for a void
+/// (−32768).
+pub fn hgt_height(sample: [u8; 2]) -> f32 {
+    match i16::from_be_bytes(sample) {
+        i16::MIN => f32::NAN,
+        v => f32::from(v),
+    }
+}
+
 fn load_hgt(path: &Path, scale: f32) -> Result<(u32, u32, Vec<f32>)> {
     let bytes = std::fs::read(path)
         .map_err(|e| Error::new(format!("cannot read height map {}: {e}", path.display())))?;
-    let samples = bytes.len() / 2;
-    let side = (samples as f64).sqrt() as usize;
-    if bytes.len() % 2 != 0 || side * side != samples || side < 2 {
-        return Err(Error::new(format!(
-            "{} is not an SRTM .hgt tile: {} bytes is not a square grid of 16-bit samples",
-            path.display(),
-            bytes.len()
-        )));
-    }
+    let side = hgt_side(path, bytes.len() as u64)? as usize;
     let mut heights: Vec<f32> = bytes
         .chunks_exact(2)
-        .map(|b| match i16::from_be_bytes([b[0], b[1]]) {
-            i16::MIN => f32::NAN,
-            v => f32::from(v),
-        })
+        .map(|b| hgt_height([b[0], b[1]]))
         .collect();
     fill_voids(path, side as u32, side as u32, &mut heights)?;
     Ok((
@@ -88,62 +100,43 @@ fn load_hgt(path: &Path, scale: f32) -> Result<(u32, u32, Vec<f32>)> {
 }
 
 /// Fills the voids (NaN) of a `width` × `depth` height grid from their
-/// valid neighbours, ring by ring from the edges of each void inward: a
-/// void point with a known one among its eight neighbours takes their mean,
-/// and the next ring sees it as known. Every filled height is a mean of
-/// known heights, so none lies below the lowest valid height around its
-/// void (no pits) or above the highest. Says on one line how many were
-/// filled; refuses a grid that is mostly void. Returns the count.
+/// valid neighbours ([`super::voids`]: ring by ring from the edges of each
+/// void inward, each point the mean of its known neighbours, so no filled
+/// height lies below the lowest valid height around its void). Says on
+/// one line how many were filled; refuses a grid that is mostly void.
+/// Returns the count.
 pub fn fill_voids(path: &Path, width: u32, depth: u32, heights: &mut [f32]) -> Result<usize> {
     let voids = heights.iter().filter(|h| h.is_nan()).count();
     if voids == 0 {
         return Ok(0);
     }
-    let total = heights.len();
+    refuse_mostly_void(path, voids as u64, heights.len() as u64)?;
+    let cells = width as usize * depth as usize;
+    let grid = heights.get_mut(..cells).unwrap_or_default();
+    let (filled, _) = super::voids::VoidFill::fill_grid(width as usize, grid);
+    grid.copy_from_slice(&filled);
+    report_filled(path, voids as u64, heights.len() as u64);
+    Ok(voids)
+}
+
+/// Refuses a height map with more void samples than valid ones.
+pub fn refuse_mostly_void(path: &Path, voids: u64, total: u64) -> Result<()> {
     if voids * 2 > total {
         return Err(Error::new(format!(
             "height map {} is mostly void: {voids} of its {total} samples have no data",
             path.display()
         )));
     }
-    let (w, d) = (width as usize, depth as usize);
-    // Only the voids left are visited each ring.
-    let mut pending: Vec<usize> = (0..total).filter(|&i| heights[i].is_nan()).collect();
-    let mut ring: Vec<(usize, f32)> = Vec::new();
-    while !pending.is_empty() {
-        ring.clear();
-        for &i in &pending {
-            let (x, y) = (i % w, i / w);
-            let (mut sum, mut n) = (0.0f64, 0u32);
-            for ny in y.saturating_sub(1)..=(y + 1).min(d - 1) {
-                for nx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
-                    let h = heights[ny * w + nx];
-                    if !h.is_nan() {
-                        sum += f64::from(h);
-                        n += 1;
-                    }
-                }
-            }
-            if n > 0 {
-                ring.push((i, (sum / f64::from(n)) as f32));
-            }
-        }
-        if ring.is_empty() {
-            // Unreachable with fewer voids than points (some known point
-            // borders every void region); kept so the loop cannot spin.
-            break;
-        }
-        for &(i, h) in &ring {
-            heights[i] = h;
-        }
-        pending.retain(|&i| heights[i].is_nan());
-    }
+    Ok(())
+}
+
+/// Says on one line how many void samples were filled.
+pub fn report_filled(path: &Path, voids: u64, total: u64) {
     eprintln!(
         "{}: filled {voids} void samples ({:.1} %) from their neighbours",
         path.display(),
         100.0 * voids as f64 / total as f64
     );
-    Ok(voids)
 }
 
 /// Loads a color map and fits it to a `width` × `depth` height grid.

@@ -8,13 +8,13 @@
 //! as soon as its rows and bounds are complete. Memory is a few strips of
 //! [`TILE`] rows a level, whatever the map's size.
 //!
-//! PNG maps stream row by row, and GeoTIFF heights a strip (or a row of
-//! tiles) at a time ([`TiffHeightRows`]). A GeoTIFF with voids, an SRTM
-//! `.hgt` or GeoTIFF photos are loaded whole, as `render` loads them
-//! ([`load_scene_files`]: voids filled from their neighbours, which takes
-//! the rows around them; photos placed by their georeference), and their
-//! rows are packed from memory: an `.hgt` tile is at most 3601 × 3601
-//! samples. A photo finer than the height grid is packed at its own
+//! PNG maps stream row by row, GeoTIFF heights a strip (or a row of
+//! tiles) at a time ([`TiffHeightRows`]) and SRTM `.hgt` tiles row by
+//! row; voids are filled as the rows pass ([`VoidFill`]: each void as soon
+//! as the row after it arrives), to the bit as `render` fills them.
+//! GeoTIFF photos and a color map of another size than the heights are
+//! loaded whole, as `render` loads them ([`load_scene_files`]: photos
+//! placed by their georeference), and the rows packed from memory. A photo finer than the height grid is packed at its own
 //! resolution, its fine levels cut into photo tiles
 //! ([`terracast::tiles::cut_photo_tile`]).
 
@@ -23,8 +23,10 @@ use super::TILE;
 use crate::error::{Error, Result};
 use crate::outputs::Outputs;
 use crate::scene::geotiff::{is_tiff, TiffHeightRows};
+use crate::scene::voids::VoidFill;
 use crate::scene::{
-    load_scene_files, not_a_height_map, terrain_color, value_noise, HeightBands, Scene,
+    hgt_height, hgt_side, load_scene_files, not_a_height_map, refuse_mostly_void, report_filled,
+    terrain_color, value_noise, HeightBands, Scene,
 };
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -75,8 +77,14 @@ pub struct PackSummary {
     /// Most rows (of points and of bounds, all levels) held at once: the
     /// streaming's memory, whatever the input's height.
     pub rows_held_at_most: usize,
+    /// Void samples filled (streamed; a map loaded whole says so as it
+    /// loads).
+    pub voids: u64,
+    /// Most rows the void fill held at once: those from the top of the
+    /// tallest void not yet filled (streamed).
+    pub void_rows_held_at_most: usize,
     /// Whether the input's rows were read as they were packed (else it
-    /// was loaded whole first: an `.hgt`, voids, TIFF photos).
+    /// was loaded whole first: TIFF photos, a color map of another size).
     pub streamed: bool,
 }
 
@@ -105,19 +113,14 @@ pub fn pack(
         outputs.input("--color", color);
     }
     let out_id = outputs.output("--out", out)?;
-    let is_hgt = |path: &Path| {
-        path.extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("hgt"))
-    };
     // A PNG height map with at most one PNG color map of its size streams,
-    // and so do GeoTIFF heights without a color map; anything
-    // else (an `.hgt`, a TIFF photo, a color map of another size) is
+    // and so do GeoTIFF and `.hgt` heights without a color map, voids and
+    // all; anything else (a TIFF photo, a color map of another size) is
     // stretched or draped as `render` does it, whole.
-    let streams = if is_tiff(&input.height) {
+    let streams = if is_tiff(&input.height) || is_hgt(&input.height) {
         input.colors.is_empty()
     } else {
-        !is_hgt(&input.height)
-            && input.colors.len() <= 1
+        input.colors.len() <= 1
             && !input.colors.iter().any(|c| is_tiff(c) || is_hgt(c))
             && input.colors.iter().all(|c| same_size(&input.height, c))
     };
@@ -125,7 +128,7 @@ pub fn pack(
         let scene = load_scene_files(&input.height, &input.colors, input.height_scale, input.seed)?;
         Ok(Arc::new(scene))
     };
-    let mut loaded = if streams { None } else { Some(load_whole()?) };
+    let loaded = if streams { None } else { Some(load_whole()?) };
     let mut heights = match &loaded {
         Some(scene) => HeightRows::loaded(scene),
         None => HeightRows::open(&input.height, input.height_scale)?,
@@ -133,18 +136,11 @@ pub fn pack(
     let (width, depth) = heights.size();
     // The whole range first: a height the kernel cannot hold is reported
     // before any tile is written, and colors by height need the range too.
-    let bands = match height_range(&input.height, &mut heights, depth)? {
-        Some(bands) => bands,
-        None => {
-            // A GeoTIFF with voids: they are filled from the rows around
-            // them, so it is loaded whole after all.
-            let scene = load_whole()?;
-            heights = HeightRows::loaded(&scene);
-            loaded = Some(scene);
-            height_range(&input.height, &mut heights, depth)?
-                .ok_or_else(|| Error::new("voids left after filling them"))?
-        }
-    };
+    let bands = height_range(&input.height, &mut heights, depth)?;
+    let (voids, void_rows_held_at_most) = heights.voids();
+    if voids > 0 {
+        report_filled(&input.height, voids, u64::from(width) * u64::from(depth));
+    }
     heights.rewind()?;
     let world = World::new(width, depth, 0).ok_or_else(|| {
         Error::new(format!(
@@ -238,6 +234,8 @@ pub fn pack(
         photo_tiles,
         bytes,
         rows_held_at_most,
+        voids,
+        void_rows_held_at_most,
         streamed: loaded.is_none(),
     })
 }
@@ -294,16 +292,12 @@ fn same_size(a: &Path, b: &Path) -> bool {
     )
 }
 
-/// The lowest and highest height of the map, refusing the first one outside
-/// the kernel's range (with its grid point); `None` at the first void (no
-/// data: only a GeoTIFF streamed has them, which must then be filled).
-fn height_range(path: &Path, rows: &mut HeightRows, depth: u32) -> Result<Option<HeightBands>> {
+/// The lowest and highest height of the map (voids filled), refusing the
+/// first one outside the kernel's range (with its grid point).
+fn height_range(path: &Path, rows: &mut HeightRows, depth: u32) -> Result<HeightBands> {
     let mut bands = HeightBands::default();
     for y in 0..depth {
         for (x, &h) in rows.next()?.iter().enumerate() {
-            if h.is_nan() {
-                return Ok(None);
-            }
             if Terrain::quantize_height(h).is_none() {
                 return Err(Error::new(format!(
                     "height map {}: height {h} at grid point ({x}, {y}) is outside the kernel's range 0..={} voxels (adjust --height-scale)",
@@ -314,24 +308,19 @@ fn height_range(path: &Path, rows: &mut HeightRows, depth: u32) -> Result<Option
             bands.add(h);
         }
     }
-    Ok(Some(bands))
+    Ok(bands)
 }
 
-/// Height rows, scaled, top row first: streamed from a PNG or a GeoTIFF,
-/// or from a scene loaded whole.
+/// Height rows, scaled, top row first: streamed from a PNG, a GeoTIFF or
+/// an `.hgt` through the void fill, or from a scene loaded whole.
 enum HeightRows {
-    Tiff {
-        rows: Box<TiffHeightRows>,
+    Streamed {
+        raw: Box<RawRows>,
         path: PathBuf,
-        row: Vec<f32>,
-        scale: f32,
-    },
-    Png {
-        reader: Box<png::Reader<BufReader<File>>>,
-        path: PathBuf,
+        fill: Box<VoidFill>,
+        /// Rows given to the fill, of `size`.
+        pushed: u32,
         size: (u32, u32),
-        wide: bool,
-        channels: usize,
         row: Vec<f32>,
         scale: f32,
     },
@@ -342,27 +331,43 @@ enum HeightRows {
     },
 }
 
-impl HeightRows {
-    fn loaded(scene: &Arc<Scene>) -> Self {
-        Self::Loaded {
-            scene: scene.clone(),
-            y: 0,
-        }
-    }
+/// A height map's rows as the file holds them (NaN for no data).
+enum RawRows {
+    Tiff(Box<TiffHeightRows>),
+    Png {
+        reader: Box<png::Reader<BufReader<File>>>,
+        wide: bool,
+        channels: usize,
+        row: Vec<f32>,
+    },
+    Hgt {
+        file: BufReader<File>,
+        bytes: Vec<u8>,
+        row: Vec<f32>,
+    },
+}
 
-    fn open(path: &Path, scale: f32) -> Result<Self> {
-        if is_tiff(path) {
-            let rows = TiffHeightRows::open(path)?;
-            return Ok(Self::Tiff {
-                row: vec![0.0; rows.size().0 as usize],
-                rows: Box::new(rows),
-                path: path.to_owned(),
-                scale,
-            });
-        }
+impl RawRows {
+    fn open(path: &Path) -> Result<(Self, (u32, u32))> {
         let fail = |e: &dyn std::fmt::Display| {
             Error::new(format!("cannot read height map {}: {e}", path.display()))
         };
+        if is_tiff(path) {
+            let rows = TiffHeightRows::open(path)?;
+            let size = rows.size();
+            return Ok((Self::Tiff(Box::new(rows)), size));
+        }
+        if is_hgt(path) {
+            let file = File::open(path).map_err(|e| fail(&e))?;
+            let length = file.metadata().map_err(|e| fail(&e))?.len();
+            let side = hgt_side(path, length)?;
+            let raw = Self::Hgt {
+                file: BufReader::new(file),
+                bytes: vec![0; 2 * side as usize],
+                row: vec![0.0; side as usize],
+            };
+            return Ok((raw, (side, side)));
+        }
         let file = File::open(path).map_err(|e| fail(&e))?;
         let file = require_png(file, path, "height map")?;
         let mut decoder = png::Decoder::new(BufReader::new(file));
@@ -380,12 +385,66 @@ impl HeightRows {
             other => return Err(not_a_height_map(path, &format!("{other:?}-bit"))),
         };
         let size = (info.width, info.height);
-        Ok(Self::Png {
+        let raw = Self::Png {
             reader: Box::new(reader),
-            path: path.to_owned(),
-            size,
             wide,
             channels,
+            row: vec![0.0; size.0 as usize],
+        };
+        Ok((raw, size))
+    }
+
+    fn next(&mut self, path: &Path) -> Result<&[f32]> {
+        let early = || Error::new(format!("height map {} ends early", path.display()));
+        match self {
+            Self::Tiff(rows) => rows.next_row(),
+            Self::Png {
+                reader,
+                wide,
+                channels,
+                row,
+            } => {
+                let data = reader
+                    .next_row()
+                    .map_err(|e| Error::new(format!("height map {}: {e}", path.display())))?
+                    .ok_or_else(early)?;
+                let step = *channels * if *wide { 2 } else { 1 };
+                for (v, px) in row.iter_mut().zip(data.data().chunks_exact(step)) {
+                    *v = if *wide {
+                        f32::from(u16::from_be_bytes([px[0], px[1]]))
+                    } else {
+                        f32::from(px[0])
+                    };
+                }
+                Ok(row)
+            }
+            Self::Hgt { file, bytes, row } => {
+                file.read_exact(bytes).map_err(|_| early())?;
+                for (v, b) in row.iter_mut().zip(bytes.chunks_exact(2)) {
+                    *v = hgt_height([b[0], b[1]]);
+                }
+                Ok(row)
+            }
+        }
+    }
+}
+
+impl HeightRows {
+    fn loaded(scene: &Arc<Scene>) -> Self {
+        Self::Loaded {
+            scene: scene.clone(),
+            y: 0,
+        }
+    }
+
+    fn open(path: &Path, scale: f32) -> Result<Self> {
+        let (raw, size) = RawRows::open(path)?;
+        Ok(Self::Streamed {
+            raw: Box::new(raw),
+            path: path.to_owned(),
+            fill: Box::new(VoidFill::new(size.0 as usize)),
+            pushed: 0,
+            size,
             row: vec![0.0; size.0 as usize],
             scale,
         })
@@ -393,18 +452,24 @@ impl HeightRows {
 
     fn size(&self) -> (u32, u32) {
         match self {
-            Self::Png { size, .. } => *size,
-            Self::Tiff { rows, .. } => rows.size(),
+            Self::Streamed { size, .. } => *size,
             Self::Loaded { scene, .. } => (scene.width, scene.depth),
+        }
+    }
+
+    /// Void samples filled so far (those of the rows given out, and of
+    /// the ones the fill holds), and the most rows the fill held at once.
+    fn voids(&self) -> (u64, usize) {
+        match self {
+            Self::Streamed { fill, .. } => (fill.voids(), fill.rows_held_at_most()),
+            Self::Loaded { .. } => (0, 0),
         }
     }
 
     /// Back to the first row.
     fn rewind(&mut self) -> Result<()> {
         match self {
-            Self::Png { path, scale, .. } | Self::Tiff { path, scale, .. } => {
-                *self = Self::open(&path.clone(), *scale)?
-            }
+            Self::Streamed { path, scale, .. } => *self = Self::open(&path.clone(), *scale)?,
             Self::Loaded { y, .. } => *y = 0,
         }
         Ok(())
@@ -412,37 +477,34 @@ impl HeightRows {
 
     fn next(&mut self) -> Result<&[f32]> {
         match self {
-            Self::Png {
-                reader,
+            Self::Streamed {
+                raw,
                 path,
-                wide,
-                channels,
+                fill,
+                pushed,
+                size,
                 row,
                 scale,
-                ..
             } => {
-                let data = reader
-                    .next_row()
-                    .map_err(|e| Error::new(format!("height map {}: {e}", path.display())))?
-                    .ok_or_else(|| {
-                        Error::new(format!("height map {} ends early", path.display()))
-                    })?;
-                let data = data.data();
-                let step = *channels * if *wide { 2 } else { 1 };
-                for (v, px) in row.iter_mut().zip(data.chunks_exact(step)) {
-                    let raw = if *wide {
-                        f32::from(u16::from_be_bytes([px[0], px[1]]))
-                    } else {
-                        f32::from(px[0])
-                    };
-                    *v = raw * *scale;
-                }
-                Ok(row)
-            }
-            Self::Tiff {
-                rows, row, scale, ..
-            } => {
-                for (v, &h) in row.iter_mut().zip(rows.next_row()?) {
+                // Voids are filled before the scale, as a map loaded whole.
+                let filled = loop {
+                    if let Some(filled) = fill.pop() {
+                        break filled;
+                    }
+                    if *pushed == size.1 {
+                        fill.finish();
+                        break fill.pop().ok_or_else(|| {
+                            Error::new(format!(
+                                "height map {}: a void with no valid height around it",
+                                path.display()
+                            ))
+                        })?;
+                    }
+                    fill.push(raw.next(path)?);
+                    *pushed += 1;
+                    refuse_mostly_void(path, fill.voids(), u64::from(size.0) * u64::from(size.1))?;
+                };
+                for (v, h) in row.iter_mut().zip(filled) {
                     *v = h * *scale;
                 }
                 Ok(row)
@@ -458,6 +520,12 @@ impl HeightRows {
             }
         }
     }
+}
+
+/// Whether `path` names an SRTM `.hgt` tile.
+fn is_hgt(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("hgt"))
 }
 
 /// `file`, rewound, when it starts with PNG's signature; otherwise an
