@@ -9,7 +9,7 @@ mod load;
 mod procedural;
 pub mod voids;
 
-pub use detail::PhotoDetail;
+pub use detail::{block_means, PhotoDetail, PlacedPhoto};
 pub use load::{
     derived_height_scale, fill_voids, hgt_height, hgt_side, hgt_spacing, load_colors, load_heights,
     not_a_height_map, read_color_map, refuse_mostly_void, report_filled, stretch_colors,
@@ -133,20 +133,7 @@ pub fn load_scene_files(
     scale: f32,
     seed: u64,
 ) -> Result<Scene> {
-    let georeferenced = |path: &std::path::Path| -> Result<Option<geotiff::GeoRef>> {
-        if !geotiff::is_tiff(path) {
-            return Ok(None);
-        }
-        Ok(geotiff::read_georef(path)?.ok())
-    };
-    let grid_at = georeferenced(height)?;
-    let photos_at = colors
-        .iter()
-        .map(|p| georeferenced(p))
-        .collect::<Result<Vec<_>>>()?;
-    let placed =
-        grid_at.is_some() && !photos_at.is_empty() && photos_at.iter().all(Option::is_some);
-    if !placed {
+    let Some((grid_at, photos_at)) = placements(height, colors)? else {
         return match colors {
             [] => load_pair(height, None, scale, seed),
             [one] => load_pair(height, Some(one), scale, seed),
@@ -154,20 +141,11 @@ pub fn load_scene_files(
                 "several --color photos are placed by their georeference: give GeoTIFF photos over a GeoTIFF height map, or one photo to stretch over the map",
             )),
         };
-    }
+    };
     let (w, d, heights) = load_heights(height, scale)?;
     let mut scene_colors = color_by_height_and_slope(w, d, &heights, seed);
-    let grid_at = grid_at.unwrap_or_else(|| unreachable!("placed photos need a grid"));
     let mut details = Vec::new();
     for (path, at) in colors.iter().zip(photos_at) {
-        let at = at.unwrap_or_else(|| unreachable!("placed photos are georeferenced"));
-        if at.geographic != grid_at.geographic {
-            return Err(Error::new(format!(
-                "photo {} and height map {} are in different coordinate systems (one geographic, one projected)",
-                path.display(),
-                height.display()
-            )));
-        }
         let photo = geotiff::read_photo(path)?;
         let covered = geotiff::drape(&mut scene_colors, (w, d), &grid_at, &photo, &at);
         if covered == 0 {
@@ -193,6 +171,50 @@ pub fn load_scene_files(
     let mut scene = Scene::new(w, d, heights, scene_colors)?;
     scene.details = details;
     Ok(scene)
+}
+
+/// Where the photos `colors` lie over the grid of `height` when they are
+/// placed by their georeference (a georeferenced GeoTIFF height map and
+/// every photo a georeferenced GeoTIFF): the grid's georeference and each
+/// photo's; `None` when they are not placed (a photo is then stretched
+/// over the map). Refuses a photo in another coordinate system than the
+/// grid's, in one line.
+pub fn placements(
+    height: &std::path::Path,
+    colors: &[std::path::PathBuf],
+) -> Result<Option<(geotiff::GeoRef, Vec<geotiff::GeoRef>)>> {
+    let georeferenced = |path: &std::path::Path| -> Result<Option<geotiff::GeoRef>> {
+        if !geotiff::is_tiff(path) {
+            return Ok(None);
+        }
+        Ok(geotiff::read_georef(path)?.ok())
+    };
+    if colors.is_empty() {
+        return Ok(None);
+    }
+    let Some(grid_at) = georeferenced(height)? else {
+        return Ok(None);
+    };
+    let mut photos_at = Vec::new();
+    for path in colors {
+        let Some(at) = georeferenced(path)? else {
+            return Ok(None);
+        };
+        photos_at.push((path, at));
+    }
+    for (path, at) in &photos_at {
+        if at.geographic != grid_at.geographic {
+            return Err(Error::new(format!(
+                "photo {} and height map {} are in different coordinate systems (one geographic, one projected)",
+                path.display(),
+                height.display()
+            )));
+        }
+    }
+    Ok(Some((
+        grid_at,
+        photos_at.into_iter().map(|(_, at)| at).collect(),
+    )))
 }
 
 impl Scene {

@@ -67,6 +67,47 @@ fn views(w: f32, d: f32, top: f32) -> Vec<Camera> {
     .collect()
 }
 
+/// Checks that `file` holds the photos of `kernel` kept finer than its
+/// grid, every photo tile as the photo in memory cuts it; returns the
+/// photo tiles.
+fn photo_tiles_as_in_memory(
+    file: &mut TilesFile,
+    kernel: &terracast_sim::scene::KernelScene,
+    name: &str,
+) -> u64 {
+    let details = kernel.details().unwrap();
+    assert_eq!(
+        file.photos(),
+        details.iter().map(|d| d.area()).collect::<Vec<_>>(),
+        "{name}"
+    );
+    let (mut from_file, mut cut) = (
+        Box::new(PhotoTile::<TILE>::EMPTY),
+        Box::new(PhotoTile::EMPTY),
+    );
+    let mut photo_tiles = 0;
+    for (photo, detail) in details.iter().enumerate() {
+        for level in 0..=detail.shift() {
+            let (tx, ty) = photo_tiles_of(&detail.area(), level, TILE as u32);
+            for y in 0..ty {
+                for x in 0..tx {
+                    let key = PhotoKey {
+                        photo: photo as u8,
+                        level: level as u8,
+                        x,
+                        y,
+                    };
+                    file.load_photo(key, &mut from_file).unwrap();
+                    assert!(cut_photo_tile(detail, key, &mut cut));
+                    assert!(from_file == cut, "{name}: photo tile {key:?} differs");
+                    photo_tiles += 1;
+                }
+            }
+        }
+    }
+    photo_tiles
+}
+
 /// Packs the maps with `filter`, then checks every tile against the pyramid
 /// in memory and every view against the render from the maps.
 fn packed_equals_maps(
@@ -107,36 +148,7 @@ fn packed_equals_maps(
     assert_eq!(tiles, summary.tiles);
     // A photo finer than the grid is packed at its own resolution: every
     // photo tile as the kernel's detail in memory cuts it.
-    let details = kernel.details().unwrap();
-    assert_eq!(
-        file.photos(),
-        details.iter().map(|d| d.area()).collect::<Vec<_>>(),
-        "{name}"
-    );
-    let (mut from_file, mut cut) = (
-        Box::new(PhotoTile::<TILE>::EMPTY),
-        Box::new(PhotoTile::EMPTY),
-    );
-    let mut photo_tiles = 0;
-    for (photo, detail) in details.iter().enumerate() {
-        for level in 0..=detail.shift() {
-            let (tx, ty) = photo_tiles_of(&detail.area(), level, TILE as u32);
-            for y in 0..ty {
-                for x in 0..tx {
-                    let key = PhotoKey {
-                        photo: photo as u8,
-                        level: level as u8,
-                        x,
-                        y,
-                    };
-                    file.load_photo(key, &mut from_file).unwrap();
-                    assert!(cut_photo_tile(detail, key, &mut cut));
-                    assert!(from_file == cut, "{name}: photo tile {key:?} differs");
-                    photo_tiles += 1;
-                }
-            }
-        }
-    }
+    let photo_tiles = photo_tiles_as_in_memory(&mut file, &kernel, name);
     assert_eq!(photo_tiles, summary.photo_tiles);
     let top = scene.max_height();
     for camera in views(scene.width as f32, scene.depth as f32, top) {
@@ -363,6 +375,19 @@ fn several_photos_pack_as_render_drapes_them() {
         HeightFilter::default(),
         "two-photos.tiles",
     );
+    // Streamed: a few rows of each photo at a time.
+    let summary = pack(
+        &pack_input(&grid, &[&west, &band], 1.0, HeightFilter::default()),
+        &temp("two-photos-again.tiles"),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert!(summary.streamed);
+    assert!(
+        summary.photo_rows_held_at_most < 20,
+        "{}",
+        summary.photo_rows_held_at_most
+    );
     // Both photos are on the packed terrain, the band over the west one
     // where they overlap, and the terrain neither covers is colored by
     // height.
@@ -400,11 +425,19 @@ fn swellendams_photos_pack_at_their_own_resolution_and_page_as_a_near_view_needs
     let in_memory: usize = kernel.details().unwrap().iter().map(|d| d.bytes()).sum();
     let mut file = TilesFile::open(&out).unwrap();
     assert_eq!(file.photos().len(), 2);
+    // Streamed, a band of each photo's rows at a time, into the tiles the
+    // photos loaded whole cut.
+    assert!(summary.streamed);
+    assert_eq!(
+        photo_tiles_as_in_memory(&mut file, &kernel, "swellendam"),
+        summary.photo_tiles
+    );
     println!(
-        "Swellendam packed: {} tiles and {} photo tiles, {:.1} MiB; the photos' fine levels {:.1} MiB in memory",
+        "Swellendam packed, streamed: {} tiles and {} photo tiles, {:.1} MiB, holding at most {} rows of a photo; the photos' fine levels {:.1} MiB in memory",
         summary.tiles,
         summary.photo_tiles,
         summary.bytes as f64 / 1048576.0,
+        summary.photo_rows_held_at_most,
         in_memory as f64 / 1048576.0
     );
     // Near views over each photo (as the photo-detail accuracy test's):

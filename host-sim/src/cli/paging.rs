@@ -67,13 +67,14 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
     } else {
         String::new()
     };
-    let photos = if summary.photo_tiles > 0 {
-        format!(
-            " and {} photo tiles (photos finer than the height grid, at their own resolution)",
-            summary.photo_tiles
-        )
-    } else {
-        String::new()
+    let photos = match (summary.photo_tiles, summary.photo_rows_held_at_most) {
+        (0, _) => String::new(),
+        (tiles, 0) => format!(
+            " and {tiles} photo tiles (photos finer than the height grid, at their own resolution)"
+        ),
+        (tiles, rows) => format!(
+            " and {tiles} photo tiles (photos finer than the height grid, at their own resolution; at most {rows} rows of a photo held)"
+        ),
     };
     println!(
         "packed {}x{}: {} levels, {} tiles of {TILE}x{TILE}{photos}, {} bytes, at most {} rows held{voids}, {} -> {}",

@@ -17,7 +17,7 @@
 //! on, so that the fine levels and level 0 agree where the caster passes
 //! from one to the other.
 
-use super::geotiff::GeoRef;
+use super::geotiff::{GeoRef, PhotoPixels};
 use image::RgbImage;
 use terracast::config::MAX_DETAIL_SHIFT;
 use terracast::{detail_points, Detail, Rgb};
@@ -51,12 +51,12 @@ fn shift_for(ratio: f64) -> u32 {
 /// edge pixels repeated past it) for a texel `pixels` wide: bilinear
 /// where a texel is at most a pixel, else the mean of the pixels within
 /// it.
-fn sample(photo: &RgbImage, [u, v]: [f64; 2], pixels: [f64; 2]) -> Rgb {
-    let (w, h) = (i64::from(photo.width()), i64::from(photo.height()));
+fn sample(photo: &impl PhotoPixels, [u, v]: [f64; 2], pixels: [f64; 2]) -> Rgb {
+    let (w, h) = photo.dimensions();
+    let (w, h) = (i64::from(w), i64::from(h));
     let pixel = |x: i64, y: i64| -> [f64; 3] {
         photo
-            .get_pixel(x.clamp(0, w - 1) as u32, y.clamp(0, h - 1) as u32)
-            .0
+            .pixel(x.clamp(0, w - 1) as u32, y.clamp(0, h - 1) as u32)
             .map(f64::from)
     };
     let color = if pixels[0] > 1.0 || pixels[1] > 1.0 {
@@ -127,13 +127,8 @@ impl PhotoDetail {
     }
 
     /// `photo`, lying at `photo_at`, over the grid of `width` × `depth`
-    /// points lying at `grid_at` (both pixel-is-area, as
-    /// [`super::geotiff::drape`] places them), kept finer where it has
-    /// more than 1.5 pixels a grid spacing: over the grid points whose
-    /// centers it covers, at the power of two at or above its pixels a
-    /// spacing (at most 32), each texel the photo at its center (bilinear,
-    /// or past 32 the mean of the pixels it covers). A texel past the
-    /// photo's edge takes its grid point's color in `colors`. `None` when
+    /// points lying at `grid_at`, kept finer where it has more than 1.5
+    /// pixels a grid spacing ([`PlacedPhoto`], row by row). `None` when
     /// the photo is not finer or covers no point's center.
     pub fn placed(
         photo: &RgbImage,
@@ -142,50 +137,18 @@ impl PhotoDetail {
         (width, depth): (u32, u32),
         colors: &[Rgb],
     ) -> Option<Self> {
-        let ratio =
-            (grid_at.pixel[0] / photo_at.pixel[0]).min(grid_at.pixel[1] / photo_at.pixel[1]);
-        if ratio.is_nan() || ratio <= LEAST_RATIO {
-            return None;
-        }
-        let shift = shift_for(ratio);
-        let (pw, ph) = (f64::from(photo.width()), f64::from(photo.height()));
-        // A grid coordinate (points, fractional) in photo pixels (their
-        // centers at whole numbers), and back.
-        let u_of = |x: f64| grid_at.pixel_in(photo_at, [x, 0.0])[0];
-        let v_of = |y: f64| grid_at.pixel_in(photo_at, [0.0, y])[1];
-        let x_of = |u: f64| photo_at.pixel_in(grid_at, [u, 0.0])[0];
-        let y_of = |v: f64| photo_at.pixel_in(grid_at, [0.0, v])[1];
-        let span = |low: f64, high: f64, n: u32| -> Option<(u32, u32)> {
-            let first = low.ceil().max(0.0);
-            let last = high.floor().min(f64::from(n) - 1.0);
-            (first <= last).then_some((first as u32, last as u32))
-        };
-        let (x0, x1) = span(x_of(-0.5), x_of(pw - 0.5), width)?;
-        let (y0, y1) = span(y_of(-0.5), y_of(ph - 0.5), depth)?;
-        let size = [x1 - x0 + 1, y1 - y0 + 1];
-        let scale = f64::from(1u32 << shift);
-        let (tw, td) = (size[0] << shift, size[1] << shift);
-        // Photo pixels a texel on each axis.
-        let pixels_a_texel = [0, 1].map(|i| grid_at.pixel[i] / scale / photo_at.pixel[i]);
-        let mut texels = Vec::with_capacity(tw as usize * td as usize);
-        for ty in 0..td {
-            let y = f64::from(y0) + (f64::from(ty) + 0.5) / scale - 0.5;
-            let v = v_of(y);
-            for tx in 0..tw {
-                let x = f64::from(x0) + (f64::from(tx) + 0.5) / scale - 0.5;
-                let u = u_of(x);
-                if u < -0.5 || u > pw - 0.5 || v < -0.5 || v > ph - 0.5 {
-                    let (gx, gy) = (x.round() as usize, y.round() as usize);
-                    texels.push(colors[gy * width as usize + gx]);
-                } else {
-                    texels.push(sample(photo, [u, v], pixels_a_texel));
-                }
-            }
-        }
+        let placed = PlacedPhoto::new(photo.dimensions(), photo_at, grid_at, (width, depth))?;
+        let rows = placed.origin[1]..placed.origin[1] + placed.size[1];
+        let texels = rows
+            .flat_map(|gy| {
+                let row = &colors[(gy * width) as usize..][..width as usize];
+                placed.texel_rows(gy, row, photo)
+            })
+            .collect();
         Some(Self {
-            shift,
-            origin: [x0, y0],
-            size,
+            shift: placed.shift,
+            origin: placed.origin,
+            size: placed.size,
             texels,
         })
     }
@@ -211,23 +174,10 @@ impl PhotoDetail {
     /// The height grid's colors: each point the rounded mean of its
     /// `2^shift × 2^shift` texels (as the kernel's coarsest fine level).
     pub fn grid_colors(&self) -> Vec<Rgb> {
-        let side = 1usize << self.shift;
-        let (w, d, row) = (self.size[0] as usize, self.size[1] as usize, self.row());
-        let n = (side * side) as u32;
-        (0..w * d)
-            .map(|i| {
-                let (x, y) = (i % w, i / w);
-                core::array::from_fn(|c| {
-                    let sum: u32 = (0..side * side)
-                        .map(|k| {
-                            u32::from(
-                                self.texels[(y * side + k / side) * row + x * side + k % side][c],
-                            )
-                        })
-                        .sum();
-                    ((sum + n / 2) / n) as u8
-                })
-            })
+        let band = self.row() << self.shift;
+        self.texels
+            .chunks_exact(band)
+            .flat_map(|texels| block_means(texels, self.shift, self.size[0]))
             .collect()
     }
 
@@ -270,6 +220,131 @@ impl PhotoDetail {
     /// Bytes of its texels.
     pub fn bytes(&self) -> usize {
         std::mem::size_of_val(self.texels.as_slice())
+    }
+}
+
+/// The rounded mean of each of `points` blocks of `2^shift × 2^shift`
+/// texels side by side in `texels` (`2^shift` rows of `points << shift`):
+/// a row of grid points' colors from their texels.
+pub fn block_means(texels: &[Rgb], shift: u32, points: u32) -> Vec<Rgb> {
+    let side = 1usize << shift;
+    let row = (points as usize) << shift;
+    let n = (side * side) as u32;
+    (0..points as usize)
+        .map(|x| {
+            core::array::from_fn(|c| {
+                let sum: u32 = (0..side * side)
+                    .map(|k| u32::from(texels[(k / side) * row + x * side + k % side][c]))
+                    .sum();
+                ((sum + n / 2) / n) as u8
+            })
+        })
+        .collect()
+}
+
+/// Where a photo placed by its georeference is kept finer than the grid
+/// (see [`PhotoDetail::placed`]), and how its texels are made, a grid
+/// row at a time: over the grid points whose centers it covers, at the
+/// power of two at or above its pixels a spacing (at most 32), each texel
+/// the photo at its center (bilinear, or past 32 the mean of the pixels it
+/// covers), a texel past the photo's edge its grid point's color.
+#[derive(Debug, Clone, Copy)]
+pub struct PlacedPhoto {
+    /// Texels a grid spacing on each side: `2^shift`.
+    pub shift: u32,
+    /// The first grid point the texels cover.
+    pub origin: [u32; 2],
+    /// Grid points along x and y the texels cover.
+    pub size: [u32; 2],
+    photo_at: GeoRef,
+    grid_at: GeoRef,
+    /// The photo's pixels a row, and rows.
+    photo_size: (u32, u32),
+    /// Photo pixels a texel on each axis.
+    pixels_a_texel: [f64; 2],
+}
+
+impl PlacedPhoto {
+    /// A photo of `photo_size` pixels lying at `photo_at` over the grid of
+    /// `width` × `depth` points lying at `grid_at` (both pixel-is-area, as
+    /// [`super::geotiff::drape`] places them); `None` when the photo is
+    /// not finer than the grid or covers no point's center.
+    pub fn new(
+        photo_size: (u32, u32),
+        photo_at: &GeoRef,
+        grid_at: &GeoRef,
+        (width, depth): (u32, u32),
+    ) -> Option<Self> {
+        let ratio =
+            (grid_at.pixel[0] / photo_at.pixel[0]).min(grid_at.pixel[1] / photo_at.pixel[1]);
+        if ratio.is_nan() || ratio <= LEAST_RATIO {
+            return None;
+        }
+        let shift = shift_for(ratio);
+        let (pw, ph) = (f64::from(photo_size.0), f64::from(photo_size.1));
+        let x_of = |u: f64| photo_at.pixel_in(grid_at, [u, 0.0])[0];
+        let y_of = |v: f64| photo_at.pixel_in(grid_at, [0.0, v])[1];
+        let span = |low: f64, high: f64, n: u32| -> Option<(u32, u32)> {
+            let first = low.ceil().max(0.0);
+            let last = high.floor().min(f64::from(n) - 1.0);
+            (first <= last).then_some((first as u32, last as u32))
+        };
+        let (x0, x1) = span(x_of(-0.5), x_of(pw - 0.5), width)?;
+        let (y0, y1) = span(y_of(-0.5), y_of(ph - 0.5), depth)?;
+        let scale = f64::from(1u32 << shift);
+        Some(Self {
+            shift,
+            origin: [x0, y0],
+            size: [x1 - x0 + 1, y1 - y0 + 1],
+            photo_at: *photo_at,
+            grid_at: *grid_at,
+            photo_size,
+            pixels_a_texel: [0, 1].map(|i| grid_at.pixel[i] / scale / photo_at.pixel[i]),
+        })
+    }
+
+    /// Whether grid row `gy` has texels.
+    pub fn covers_row(&self, gy: u32) -> bool {
+        (self.origin[1]..self.origin[1] + self.size[1]).contains(&gy)
+    }
+
+    /// The photo rows [`PlacedPhoto::texel_rows`] reads for grid row `gy`.
+    pub fn photo_rows(&self, gy: u32) -> (i64, i64) {
+        let v_of = |y: f64| self.grid_at.pixel_in(&self.photo_at, [0.0, y])[1];
+        let (a, b) = (v_of(f64::from(gy) - 0.5), v_of(f64::from(gy) + 0.5));
+        let margin = self.pixels_a_texel[1] / 2.0 + 2.0;
+        (
+            (a.min(b) - margin).floor() as i64,
+            (a.max(b) + margin).ceil() as i64,
+        )
+    }
+
+    /// The `2^shift` texel rows of grid row `gy` (one of those it
+    /// covers), `size[0] << shift` texels each, one after the other;
+    /// `colors` is the grid row's colors (a texel past the photo's edge
+    /// takes its point's).
+    pub fn texel_rows(&self, gy: u32, colors: &[Rgb], photo: &impl PhotoPixels) -> Vec<Rgb> {
+        let scale = f64::from(1u32 << self.shift);
+        let (pw, ph) = (f64::from(self.photo_size.0), f64::from(self.photo_size.1));
+        let u_of = |x: f64| self.grid_at.pixel_in(&self.photo_at, [x, 0.0])[0];
+        let v_of = |y: f64| self.grid_at.pixel_in(&self.photo_at, [0.0, y])[1];
+        let [x0, y0] = self.origin;
+        let (side, tw) = (1u32 << self.shift, self.size[0] << self.shift);
+        let mut texels = Vec::with_capacity((side * tw) as usize);
+        for ty in (gy - y0) * side..(gy - y0 + 1) * side {
+            let y = f64::from(y0) + (f64::from(ty) + 0.5) / scale - 0.5;
+            let v = v_of(y);
+            for tx in 0..tw {
+                let x = f64::from(x0) + (f64::from(tx) + 0.5) / scale - 0.5;
+                let u = u_of(x);
+                if u < -0.5 || u > pw - 0.5 || v < -0.5 || v > ph - 0.5 {
+                    texels.push(colors[x.round() as usize]);
+                } else {
+                    texels.push(sample(photo, [u, v], self.pixels_a_texel));
+                }
+            }
+        }
+        texels
     }
 }
 

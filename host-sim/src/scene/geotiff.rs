@@ -10,6 +10,7 @@ use image::RgbImage;
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
+use terracast::Rgb;
 use tiff::decoder::{Decoder, DecodingResult};
 use tiff::tags::Tag;
 use tiff::ColorType;
@@ -264,41 +265,157 @@ pub fn height_scale(path: &Path) -> Result<std::result::Result<(f32, String), &'
     Ok(georef(&mut decoder).map(|georef| georef.height_scale(rows)))
 }
 
-/// Drapes `photo`, which lies at `photo_at`, over the grid of `width` ×
-/// `depth` points lying at `grid_at` (pixel-is-area: a sample stands for
-/// its pixel's center): each grid point the photo covers takes the mean
-/// of the photo's pixels over the point's own footprint (a box as wide as
-/// the grid's spacing, at most 64 photo pixels a side), and the others
-/// keep their colors. Returns the points covered.
-pub fn drape(
-    colors: &mut [terracast::Rgb],
-    (width, depth): (u32, u32),
-    grid_at: &GeoRef,
-    photo: &RgbImage,
-    photo_at: &GeoRef,
-) -> usize {
-    let (pw, ph) = (i64::from(photo.width()), i64::from(photo.height()));
-    // Photo pixels across a grid point's footprint.
-    let reach = [0, 1].map(|i| (grid_at.pixel[i] / photo_at.pixel[i] / 2.0).clamp(0.5, 32.0));
-    let mut covered = 0;
-    for gy in 0..depth {
-        let my = grid_at.origin[1] - (f64::from(gy) + 0.5) * grid_at.pixel[1];
-        let v = (photo_at.origin[1] - my) / photo_at.pixel[1] - 0.5;
-        if v < -0.5 || v > ph as f64 - 0.5 {
-            continue;
+/// A photo's pixels as draping reads them: a photo in memory, or a
+/// window of its rows streamed from its file ([`PhotoWindow`]).
+pub trait PhotoPixels {
+    /// Pixels a row, and rows.
+    fn dimensions(&self) -> (u32, u32);
+    /// Pixel `(x, y)`, inside the photo.
+    fn pixel(&self, x: u32, y: u32) -> Rgb;
+}
+
+impl PhotoPixels for RgbImage {
+    fn dimensions(&self) -> (u32, u32) {
+        RgbImage::dimensions(self)
+    }
+    fn pixel(&self, x: u32, y: u32) -> Rgb {
+        self.get_pixel(x, y).0
+    }
+}
+
+/// The rows of a photo streamed from its file that draping the grid's
+/// current row reads ([`PhotoWindow::hold`]): the grid's rows come in
+/// order, and the photo rows they need move down with them.
+pub struct PhotoWindow {
+    rows: TiffPhotoRows,
+    /// The rows held, from `first`.
+    lines: std::collections::VecDeque<Vec<Rgb>>,
+    first: u32,
+}
+
+impl PhotoWindow {
+    /// The photo at `path`, no row read yet.
+    pub fn open(path: &Path) -> Result<Self> {
+        Ok(Self {
+            rows: TiffPhotoRows::open_photo(path)?,
+            lines: std::collections::VecDeque::new(),
+            first: 0,
+        })
+    }
+
+    /// Holds photo rows `low..=high` (clamped into the photo), dropping
+    /// those above: rows are read in order, once each.
+    pub fn hold(&mut self, low: i64, high: i64) -> Result<()> {
+        let last = i64::from(self.rows.size().1) - 1;
+        let (low, high) = (low.clamp(0, last) as u32, high.clamp(0, last) as u32);
+        while self.first < low && !self.lines.is_empty() {
+            self.lines.pop_front();
+            self.first += 1;
         }
-        for gx in 0..width {
-            let mx = grid_at.origin[0] + (f64::from(gx) + 0.5) * grid_at.pixel[0];
-            let u = (mx - photo_at.origin[0]) / photo_at.pixel[0] - 0.5;
+        if self.lines.is_empty() {
+            // Rows above `low` that were never held are skipped.
+            while self.rows.next < low {
+                self.rows.next_row()?;
+            }
+            self.first = self.rows.next;
+        }
+        while self.first + (self.lines.len() as u32) <= high {
+            let row = self.rows.next_row()?.to_vec();
+            self.lines.push_back(row);
+        }
+        Ok(())
+    }
+
+    /// Rows held now.
+    pub fn rows_held(&self) -> usize {
+        self.lines.len()
+    }
+
+    /// The photo's pixels a row, and rows.
+    pub fn dimensions(&self) -> (u32, u32) {
+        self.rows.size()
+    }
+}
+
+impl PhotoPixels for PhotoWindow {
+    fn dimensions(&self) -> (u32, u32) {
+        self.rows.size()
+    }
+    fn pixel(&self, x: u32, y: u32) -> Rgb {
+        // (Draping holds every row it reads first: `hold`.)
+        let at = (y.saturating_sub(self.first) as usize).min(self.lines.len().saturating_sub(1));
+        self.lines
+            .get(at)
+            .and_then(|line| line.get(x as usize))
+            .copied()
+            .unwrap_or([0; 3])
+    }
+}
+
+/// How a photo lying at `photo_at` drapes over a grid lying at `grid_at`
+/// (pixel-is-area: a sample stands for its pixel's center): a grid
+/// point's footprint is a box as wide as the grid's spacing, at most 64
+/// photo pixels a side.
+#[derive(Debug, Clone, Copy)]
+pub struct Drape {
+    grid_at: GeoRef,
+    photo_at: GeoRef,
+    /// Photo pixels each side of a point's center its footprint reaches.
+    reach: [f64; 2],
+}
+
+impl Drape {
+    /// `photo_at`'s photo over `grid_at`'s grid.
+    pub fn new(grid_at: &GeoRef, photo_at: &GeoRef) -> Self {
+        Self {
+            grid_at: *grid_at,
+            photo_at: *photo_at,
+            reach: [0, 1].map(|i| (grid_at.pixel[i] / photo_at.pixel[i] / 2.0).clamp(0.5, 32.0)),
+        }
+    }
+
+    /// Grid row `gy`'s center in photo rows.
+    fn v(&self, gy: u32) -> f64 {
+        let my = self.grid_at.origin[1] - (f64::from(gy) + 0.5) * self.grid_at.pixel[1];
+        (self.photo_at.origin[1] - my) / self.photo_at.pixel[1] - 0.5
+    }
+
+    /// The photo rows draping grid row `gy` reads.
+    pub fn rows(&self, gy: u32) -> (i64, i64) {
+        let v = self.v(gy);
+        (
+            (v - self.reach[1]).ceil() as i64,
+            (v + self.reach[1]).floor() as i64,
+        )
+    }
+
+    /// Drapes `photo` over grid row `gy` (`colors`, its points' colors):
+    /// each point the photo covers takes the mean of the photo's pixels
+    /// over the point's footprint, and the others keep their colors.
+    /// Returns the points covered.
+    pub fn row(&self, colors: &mut [Rgb], gy: u32, photo: &impl PhotoPixels) -> usize {
+        let (pw, ph) = photo.dimensions();
+        let (pw, ph) = (i64::from(pw), i64::from(ph));
+        let v = self.v(gy);
+        if v < -0.5 || v > ph as f64 - 0.5 {
+            return 0;
+        }
+        let (y0, y1) = self.rows(gy);
+        let mut covered = 0;
+        for (gx, color) in colors.iter_mut().enumerate() {
+            let mx = self.grid_at.origin[0] + (gx as f64 + 0.5) * self.grid_at.pixel[0];
+            let u = (mx - self.photo_at.origin[0]) / self.photo_at.pixel[0] - 0.5;
             if u < -0.5 || u > pw as f64 - 0.5 {
                 continue;
             }
-            let (x0, x1) = ((u - reach[0]).ceil() as i64, (u + reach[0]).floor() as i64);
-            let (y0, y1) = ((v - reach[1]).ceil() as i64, (v + reach[1]).floor() as i64);
+            let (x0, x1) = (
+                (u - self.reach[0]).ceil() as i64,
+                (u + self.reach[0]).floor() as i64,
+            );
             let (mut sum, mut n) = ([0u64; 3], 0u64);
             for y in y0.max(0)..=y1.min(ph - 1) {
                 for x in x0.max(0)..=x1.min(pw - 1) {
-                    let p = photo.get_pixel(x as u32, y as u32).0;
+                    let p = photo.pixel(x as u32, y as u32);
                     (0..3).for_each(|i| sum[i] += u64::from(p[i]));
                     n += 1;
                 }
@@ -306,11 +423,30 @@ pub fn drape(
             if n == 0 {
                 continue;
             }
-            colors[(gy * width + gx) as usize] = sum.map(|c| ((c + n / 2) / n) as u8);
+            *color = sum.map(|c| ((c + n / 2) / n) as u8);
             covered += 1;
         }
+        covered
     }
-    covered
+}
+
+/// Drapes `photo`, which lies at `photo_at`, over the grid of `width` ×
+/// `depth` points lying at `grid_at`, row by row ([`Drape::row`]).
+/// Returns the points covered.
+pub fn drape(
+    colors: &mut [Rgb],
+    (width, depth): (u32, u32),
+    grid_at: &GeoRef,
+    photo: &RgbImage,
+    photo_at: &GeoRef,
+) -> usize {
+    let drape = Drape::new(grid_at, photo_at);
+    colors
+        .chunks_exact_mut(width as usize)
+        .take(depth as usize)
+        .enumerate()
+        .map(|(gy, row)| drape.row(row, gy as u32, photo))
+        .sum()
 }
 
 /// A height raster: row-major values, NaN where it has no data.
@@ -407,29 +543,45 @@ fn heights_of(samples: DecodingResult, no_data: Option<f64>, path: &Path) -> Res
     Ok(values)
 }
 
-/// A single-band GeoTIFF's heights row by row, top row first, decoded a
-/// strip at a time, or for a file stored in tiles a row of tiles at a
-/// time: what `pack` streams, in memory a strip's (or a tile's) rows,
-/// whatever the file's size.
-pub struct TiffHeightRows {
+/// A TIFF's rows, top row first, decoded a strip at a time, or for a file
+/// stored in tiles a row of tiles at a time: what `pack` streams, in
+/// memory a strip's (or a tile's) rows, whatever the file's size. Each
+/// pixel is a `T`: a height ([`TiffHeightRows`]) or a photo's color
+/// ([`TiffPhotoRows`]).
+pub struct TiffRows<T> {
     decoder: FileDecoder,
     path: std::path::PathBuf,
+    what: &'static str,
     size: (u32, u32),
-    no_data: Option<f64>,
+    /// A chunk's samples as pixels.
+    pixels: ChunkPixels<T>,
+    /// What a pixel a tile does not cover holds until one does.
+    blank: T,
     /// Tiles across and each tile's width, for a file stored in tiles.
     tiles: Option<(u32, u32)>,
-    /// The current strip's (or row of tiles') rows, `size.0` samples
+    /// The current strip's (or row of tiles') rows, `size.0` pixels
     /// each, and its first row.
-    strip: Vec<f32>,
+    strip: Vec<T>,
     strip_first: u32,
     /// The next row, and the next strip (or row of tiles) to decode.
     next: u32,
     next_strip: u32,
 }
 
-impl std::fmt::Debug for TiffHeightRows {
+/// A decoded chunk's samples as a [`TiffRows`]'s pixels (the file's path
+/// for errors).
+type ChunkPixels<T> = Box<dyn Fn(DecodingResult, &Path) -> Result<Vec<T>>>;
+
+/// A single-band GeoTIFF's heights row by row ([`TiffRows`]), in the
+/// file's units, NaN for no data.
+pub type TiffHeightRows = TiffRows<f32>;
+
+/// A photo's rows ([`TiffRows`]), its pixels as RGB.
+pub type TiffPhotoRows = TiffRows<Rgb>;
+
+impl<T> std::fmt::Debug for TiffRows<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("TiffHeightRows")
+        f.debug_struct("TiffRows")
             .field("path", &self.path)
             .field("size", &self.size)
             .field("next", &self.next)
@@ -437,10 +589,47 @@ impl std::fmt::Debug for TiffHeightRows {
     }
 }
 
-impl TiffHeightRows {
+impl TiffRows<f32> {
     /// Opens the heights at `path`, stored in strips or in tiles.
     pub fn open(path: &Path) -> Result<Self> {
         let (decoder, size, no_data) = open_heights(path)?;
+        let pixels = Box::new(move |samples, path: &Path| heights_of(samples, no_data, path));
+        Ok(TiffRows::over(
+            decoder,
+            path,
+            "height map",
+            size,
+            pixels,
+            f32::NAN,
+        ))
+    }
+}
+
+impl TiffRows<Rgb> {
+    /// Opens the photo at `path` (8-bit gray, RGB or RGBA, alpha dropped),
+    /// stored in strips or in tiles.
+    pub fn open_photo(path: &Path) -> Result<Self> {
+        let what = "color map";
+        let (decoder, size, channels) = open_photo(path)?;
+        let pixels = Box::new(move |samples, path: &Path| {
+            let DecodingResult::U8(bytes) = samples else {
+                return Err(failed(path, what, "its samples are not bytes"));
+            };
+            Ok(rgb_of(&bytes, channels).collect())
+        });
+        Ok(TiffRows::over(decoder, path, what, size, pixels, [0; 3]))
+    }
+}
+
+impl<T: Copy> TiffRows<T> {
+    fn over(
+        decoder: FileDecoder,
+        path: &Path,
+        what: &'static str,
+        size: (u32, u32),
+        pixels: ChunkPixels<T>,
+        blank: T,
+    ) -> Self {
         let tiles = match decoder.get_chunk_type() {
             tiff::decoder::ChunkType::Strip => None,
             // (`open` refused tiles with a side of 0.)
@@ -449,27 +638,29 @@ impl TiffHeightRows {
                 Some((size.0.div_ceil(width.max(1)), width))
             }
         };
-        Ok(Self {
+        Self {
             decoder,
             path: path.to_owned(),
+            what,
             size,
-            no_data,
+            pixels,
+            blank,
             tiles,
             strip: Vec::new(),
             strip_first: 0,
             next: 0,
             next_strip: 0,
-        })
+        }
     }
 
-    /// Samples a row and rows.
+    /// Pixels a row and rows.
     pub fn size(&self) -> (u32, u32) {
         self.size
     }
 
-    /// The next row's heights in the file's units, NaN for no data.
-    pub fn next_row(&mut self) -> Result<&[f32]> {
-        let what = "height map";
+    /// The next row.
+    pub fn next_row(&mut self) -> Result<&[T]> {
+        let what = self.what;
         let width = self.size.0 as usize;
         if self.next >= self.size.1 {
             return Err(failed(&self.path, what, "read past its last row"));
@@ -481,7 +672,7 @@ impl TiffHeightRows {
                         .decoder
                         .read_chunk(self.next_strip)
                         .map_err(|e| failed(&self.path, what, e))?;
-                    heights_of(samples, self.no_data, &self.path)?
+                    (self.pixels)(samples, &self.path)?
                 }
                 Some((across, tile_width)) => self.tile_row(self.next_strip, across, tile_width)?,
             };
@@ -497,9 +688,9 @@ impl TiffHeightRows {
     }
 
     /// Row `row` of the file's tiles (`across` of them, `tile_width`
-    /// samples wide, the last cut at the image's edge) as whole image rows.
-    fn tile_row(&mut self, row: u32, across: u32, tile_width: u32) -> Result<Vec<f32>> {
-        let what = "height map";
+    /// pixels wide, the last cut at the image's edge) as whole image rows.
+    fn tile_row(&mut self, row: u32, across: u32, tile_width: u32) -> Result<Vec<T>> {
+        let what = self.what;
         let width = self.size.0 as usize;
         let count = self
             .decoder
@@ -521,11 +712,11 @@ impl TiffHeightRows {
                 .decoder
                 .read_chunk(index)
                 .map_err(|e| failed(&self.path, what, e))?;
-            let tile = heights_of(samples, self.no_data, &self.path)?;
+            let tile = (self.pixels)(samples, &self.path)?;
             let (data_width, data_height) = (data_width as usize, data_height as usize);
             let x = (column * tile_width) as usize;
             if rows.is_empty() {
-                rows = vec![f32::NAN; data_height * width];
+                rows = vec![self.blank; data_height * width];
             }
             if tile.len() < data_width * data_height
                 || x + data_width > width
@@ -537,11 +728,11 @@ impl TiffHeightRows {
                     "a tile of another size than its row's",
                 ));
             }
-            for (line, samples) in rows
+            for (line, pixels) in rows
                 .chunks_exact_mut(width)
                 .zip(tile.chunks_exact(data_width))
             {
-                line[x..x + data_width].copy_from_slice(samples);
+                line[x..x + data_width].copy_from_slice(pixels);
             }
         }
         Ok(rows)
@@ -561,8 +752,24 @@ fn sample_kind(result: &DecodingResult) -> &'static str {
 /// dropped).
 pub fn read_photo(path: &Path) -> Result<RgbImage> {
     let what = "color map";
+    let (mut decoder, (width, height), channels) = open_photo(path)?;
+    let DecodingResult::U8(bytes) = decoder.read_image().map_err(|e| failed(path, what, e))? else {
+        return Err(failed(path, what, "its samples are not bytes"));
+    };
+    let pixels = width as usize * height as usize;
+    if bytes.len() < pixels * channels {
+        return Err(failed(path, what, "fewer samples than its size"));
+    }
+    let rgb: Vec<u8> = rgb_of(&bytes, channels).take(pixels).flatten().collect();
+    RgbImage::from_raw(width, height, rgb).ok_or_else(|| failed(path, what, "bad size"))
+}
+
+/// A photo's decoder, its size and its samples a pixel (1 to 4), refused
+/// in one line unless 8-bit gray, RGB or RGBA.
+fn open_photo(path: &Path) -> Result<(FileDecoder, (u32, u32), usize)> {
+    let what = "color map";
     let mut decoder = open(path, what)?;
-    let (width, height) = decoder.dimensions().map_err(|e| failed(path, what, e))?;
+    let size = decoder.dimensions().map_err(|e| failed(path, what, e))?;
     let color = decoder.colortype().map_err(|e| failed(path, what, e))?;
     let channels = match color {
         ColorType::Gray(8) => 1,
@@ -576,22 +783,16 @@ pub fn read_photo(path: &Path) -> Result<RgbImage> {
             )))
         }
     };
-    let DecodingResult::U8(bytes) = decoder.read_image().map_err(|e| failed(path, what, e))? else {
-        return Err(failed(path, what, "its samples are not bytes"));
-    };
-    let pixels = width as usize * height as usize;
-    if bytes.len() < pixels * channels {
-        return Err(failed(path, what, "fewer samples than its size"));
-    }
-    let rgb: Vec<u8> = bytes
-        .chunks_exact(channels)
-        .take(pixels)
-        .flat_map(|p| match channels {
-            1 | 2 => [p[0]; 3],
-            _ => [p[0], p[1], p[2]],
-        })
-        .collect();
-    RgbImage::from_raw(width, height, rgb).ok_or_else(|| failed(path, what, "bad size"))
+    Ok((decoder, size, channels))
+}
+
+/// 8-bit samples, `channels` a pixel, as RGB (gray repeated, alpha
+/// dropped).
+fn rgb_of(bytes: &[u8], channels: usize) -> impl Iterator<Item = Rgb> + '_ {
+    bytes.chunks_exact(channels).map(move |p| match channels {
+        1 | 2 => [p[0]; 3],
+        _ => [p[0], p[1], p[2]],
+    })
 }
 
 /// Whether `path` names a TIFF by its extension.

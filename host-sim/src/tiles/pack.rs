@@ -12,9 +12,12 @@
 //! tiles) at a time ([`TiffHeightRows`]) and SRTM `.hgt` tiles row by
 //! row; voids are filled as the rows pass ([`VoidFill`]: each void as soon
 //! as the row after it arrives), to the bit as `render` fills them.
-//! GeoTIFF photos and a color map of another size than the heights are
-//! loaded whole, as `render` loads them ([`load_scene_files`]: photos
-//! placed by their georeference), and the rows packed from memory. A photo finer than the height grid is packed at its own
+//! GeoTIFF photos placed by their georeference stream with the rows they
+//! color ([`StreamedPhoto`]: a window of each photo's rows, draped row by
+//! row, its texels kept and cut into photo tiles as they come). A photo
+//! stretched over the map and a color map of another size than the
+//! heights are loaded whole, as `render` loads them
+//! ([`load_scene_files`]), and the rows packed from memory. A photo finer than the height grid is packed at its own
 //! resolution, its fine levels cut into photo tiles
 //! ([`terracast::tiles::cut_photo_tile`]).
 
@@ -23,10 +26,11 @@ use super::TILE;
 use crate::error::{Error, Result};
 use crate::outputs::Outputs;
 use crate::scene::geotiff::{is_tiff, TiffHeightRows};
+use crate::scene::geotiff::{Drape, PhotoWindow};
 use crate::scene::voids::VoidFill;
 use crate::scene::{
-    hgt_height, hgt_side, load_scene_files, not_a_height_map, refuse_mostly_void, report_filled,
-    terrain_color, value_noise, HeightBands, Scene,
+    block_means, hgt_height, hgt_side, load_scene_files, not_a_height_map, placements,
+    refuse_mostly_void, report_filled, terrain_color, value_noise, HeightBands, PlacedPhoto, Scene,
 };
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -83,6 +87,8 @@ pub struct PackSummary {
     /// Most rows the void fill held at once: those from the top of the
     /// tallest void not yet filled (streamed).
     pub void_rows_held_at_most: usize,
+    /// Most rows of a photo held at once (photos streamed).
+    pub photo_rows_held_at_most: usize,
     /// Whether the input's rows were read as they were packed (else it
     /// was loaded whole first: TIFF photos, a color map of another size).
     pub streamed: bool,
@@ -115,10 +121,12 @@ pub fn pack(
     let out_id = outputs.output("--out", out)?;
     // A PNG height map with at most one PNG color map of its size streams,
     // and so do GeoTIFF and `.hgt` heights without a color map, voids and
-    // all; anything else (a TIFF photo, a color map of another size) is
-    // stretched or draped as `render` does it, whole.
+    // all, and GeoTIFF heights with GeoTIFF photos placed by their
+    // georeference; anything else (a photo stretched over the map, a color
+    // map of another size) is stretched as `render` does it, whole.
+    let placed = placements(&input.height, &input.colors)?;
     let streams = if is_tiff(&input.height) || is_hgt(&input.height) {
-        input.colors.is_empty()
+        input.colors.is_empty() || placed.is_some()
     } else {
         input.colors.len() <= 1
             && !input.colors.iter().any(|c| is_tiff(c) || is_hgt(c))
@@ -148,9 +156,35 @@ pub fn pack(
         ))
     })?;
     // (Streamed, there is at most one color map.)
-    let mut colors = match (&loaded, input.colors.first()) {
-        (Some(scene), _) => Colors::Loaded(scene.clone()),
-        (None, Some(path)) => {
+    let mut colors = match (&loaded, &placed, input.colors.first()) {
+        (Some(scene), _, _) => Colors::Loaded(scene.clone()),
+        (None, Some((grid_at, photos_at)), _) => {
+            let mut photos = Vec::new();
+            for (path, at) in input.colors.iter().zip(photos_at) {
+                let window = PhotoWindow::open(path)?;
+                let placed = PlacedPhoto::new(window.dimensions(), at, grid_at, (width, depth));
+                let next = photos
+                    .iter()
+                    .filter(|p: &&StreamedPhoto| p.levels.is_some());
+                let index = next.count() as u8;
+                let levels = placed.map(|placed| FineLevels::new(index, &area_of(&placed)));
+                photos.push(StreamedPhoto {
+                    path: path.clone(),
+                    window,
+                    drape: Drape::new(grid_at, at),
+                    placed,
+                    levels,
+                    covered: 0,
+                    pixels_a_spacing: grid_at.pixel[0] / at.pixel[0],
+                    rows_held_at_most: 0,
+                });
+            }
+            Colors::Placed {
+                by_height: ByHeight::new(bands, input.seed),
+                photos,
+            }
+        }
+        (None, None, Some(path)) => {
             let rows = ColorRows::open(path)?;
             if rows.size() != (width, depth) {
                 return Err(Error::new(format!(
@@ -162,27 +196,31 @@ pub fn pack(
             }
             Colors::Map(Box::new(rows))
         }
-        (None, None) => Colors::ByHeight {
-            range: bands,
-            window: Vec::new(),
-            seed: input.seed,
-        },
+        (None, None, None) => Colors::ByHeight(ByHeight::new(bands, input.seed)),
     };
     let header = Header::new(world, input.filter);
-    // Photos finer than the grid (only a scene loaded whole has them)
-    // keep their texels in photo tiles.
+    // Photos finer than the grid keep their texels in photo tiles: a
+    // scene loaded whole has them in memory, photos streamed cut them as
+    // their rows pass.
     let photos = loaded
         .as_ref()
         .map_or_else(Vec::new, |scene| kernel_photos(scene));
-    if photos.len() as u64 > MAX_PHOTOS {
+    let areas: Vec<DetailArea> = match &colors {
+        Colors::Placed { photos, .. } => photos
+            .iter()
+            .filter(|photo| photo.levels.is_some())
+            .filter_map(|photo| photo.placed.as_ref().map(area_of))
+            .collect(),
+        _ => photos.iter().map(|(area, _)| *area).collect(),
+    };
+    if areas.len() as u64 > MAX_PHOTOS {
         return Err(Error::new(format!(
             "{} photos are finer than the height grid: a packed file holds at most {MAX_PHOTOS}",
-            photos.len()
+            areas.len()
         )));
     }
-    let areas = photos.iter().map(|(area, _)| *area).collect();
     let mut writer = TilesWriter::create(outputs.temporary(out_id), header, areas)?;
-    let photo_tiles = write_photos(&mut writer, &photos)?;
+    let mut photo_tiles = write_photos(&mut writer, &photos)?;
     drop(photos);
     let mut builder = Builder::new(world, input.filter, writer);
     let mut max_height = 0u16;
@@ -207,7 +245,12 @@ pub fn pack(
         roughness.add_row_at(y, &quantized);
         // Colors by height lag a row (they need the row after): the row
         // they color now is the one held back.
-        match (colors.row(y, row)?, held.take()) {
+        let row_colors = colors.row(y, row)?;
+        for (key, tile) in colors.photo_tiles() {
+            builder.writer.write_photo(key, &tile)?;
+            photo_tiles += 1;
+        }
+        match (row_colors, held.take()) {
             (Some(row_colors), Some(previous)) => {
                 builder.push(0, y - 1, previous, row_colors)?;
                 held = Some(quantized);
@@ -219,9 +262,14 @@ pub fn pack(
             progress(y + 1, depth);
         }
     }
-    if let (Some(last), Some(row_colors)) = (held.take(), colors.finish(depth)) {
+    if let (Some(last), Some(row_colors)) = (held.take(), colors.finish(depth)?) {
         builder.push(0, depth - 1, last, row_colors)?;
     }
+    for (key, tile) in colors.photo_tiles() {
+        builder.writer.write_photo(key, &tile)?;
+        photo_tiles += 1;
+    }
+    let photo_rows_held_at_most = colors.photos_placed(&input.height, (width, depth))?;
     let rows_held_at_most = builder.rows_held_at_most;
     builder.finish(max_height, roughness.roughness())?;
     let bytes = std::fs::metadata(outputs.temporary(out_id)).map_or(0, |m| m.len());
@@ -236,6 +284,7 @@ pub fn pack(
         rows_held_at_most,
         voids,
         void_rows_held_at_most,
+        photo_rows_held_at_most,
         streamed: loaded.is_none(),
     })
 }
@@ -615,14 +664,68 @@ enum Colors {
     Map(Box<ColorRows>),
     /// The colors of a scene loaded whole.
     Loaded(Arc<Scene>),
-    /// Colored by height and slope, as `render` colors a height map alone:
-    /// a row is colored when the row after it has arrived.
-    ByHeight {
-        range: HeightBands,
-        /// The last two height rows (row y − 1 and row y).
-        window: Vec<Vec<f32>>,
-        seed: u64,
+    /// Colored by height and slope, as `render` colors a height map alone.
+    ByHeight(ByHeight),
+    /// Colored by height and slope, and the photos draped over that as
+    /// `render` places them, a row at a time.
+    Placed {
+        by_height: ByHeight,
+        photos: Vec<StreamedPhoto>,
     },
+}
+
+/// Colored by height and slope, as `render` colors a height map alone:
+/// a row is colored when the row after it has arrived.
+struct ByHeight {
+    range: HeightBands,
+    /// The last three height rows (rows y − 2 to y).
+    window: Vec<Vec<f32>>,
+    seed: u64,
+}
+
+impl ByHeight {
+    fn new(range: HeightBands, seed: u64) -> Self {
+        Self {
+            range,
+            window: Vec::new(),
+            seed,
+        }
+    }
+
+    /// Row `y − 1`'s colors, now that row `y` has arrived (`None` for the
+    /// first row).
+    fn row(&mut self, y: u32, heights: &[f32]) -> Option<Vec<Rgb>> {
+        self.window.push(heights.to_vec());
+        if self.window.len() > 3 {
+            self.window.remove(0);
+        }
+        if y == 0 {
+            return None;
+        }
+        // Rows y − 2 (if any), y − 1 and y: color row y − 1.
+        let n = self.window.len();
+        let (here, below) = (&self.window[n - 2], &self.window[n - 1]);
+        let above = if n >= 3 { &self.window[n - 3] } else { here };
+        Some(color_row(
+            y - 1,
+            [above, here, below],
+            self.range,
+            self.seed,
+        ))
+    }
+
+    /// The last row's colors, once every row has arrived.
+    fn finish(&mut self, depth: u32) -> Option<Vec<Rgb>> {
+        let n = self.window.len();
+        let here = self.window.last()?;
+        let above = if n >= 2 { &self.window[n - 2] } else { here };
+        Some(color_row(
+            depth - 1,
+            [above, here, here],
+            self.range,
+            self.seed,
+        ))
+    }
 }
 
 impl Colors {
@@ -640,40 +743,236 @@ impl Colors {
                     .ok_or_else(|| Error::new("color rows read past the map's last"))?;
                 Ok(Some(row.to_vec()))
             }
-            Self::ByHeight {
-                window,
-                range,
-                seed,
-            } => {
-                window.push(heights.to_vec());
-                if window.len() > 3 {
-                    window.remove(0);
+            Self::ByHeight(by_height) => Ok(by_height.row(y, heights)),
+            Self::Placed { by_height, photos } => match by_height.row(y, heights) {
+                Some(mut colors) => {
+                    for photo in photos.iter_mut() {
+                        photo.drape(y - 1, &mut colors)?;
+                    }
+                    Ok(Some(colors))
                 }
-                if y == 0 {
+                None => Ok(None),
+            },
+        }
+    }
+
+    /// The last row's colors (by height, and the photos over them), once
+    /// every row has arrived.
+    fn finish(&mut self, depth: u32) -> Result<Option<Vec<Rgb>>> {
+        match self {
+            Self::Map(_) | Self::Loaded(_) => Ok(None),
+            Self::ByHeight(by_height) => Ok(by_height.finish(depth)),
+            Self::Placed { by_height, photos } => {
+                let Some(mut colors) = by_height.finish(depth) else {
                     return Ok(None);
+                };
+                for photo in photos.iter_mut() {
+                    photo.drape(depth - 1, &mut colors)?;
+                    photo.finish();
                 }
-                // Rows y − 2 (if any), y − 1 and y: color row y − 1.
-                let n = window.len();
-                let (here, below) = (&window[n - 2], &window[n - 1]);
-                let above = if n >= 3 { &window[n - 3] } else { here };
-                Ok(Some(color_row(y - 1, [above, here, below], *range, *seed)))
+                Ok(Some(colors))
             }
         }
     }
 
-    /// The last row's colors (by height), once every row has arrived.
-    fn finish(&mut self, depth: u32) -> Option<Vec<Rgb>> {
+    /// After the last row: refuses a photo streamed over none of the
+    /// terrain, says on one line how much each covers (as `render` does),
+    /// and returns the most photo rows held at once.
+    fn photos_placed(&self, height: &Path, (width, depth): (u32, u32)) -> Result<usize> {
+        let Self::Placed { photos, .. } = self else {
+            return Ok(0);
+        };
+        for photo in photos {
+            if photo.covered == 0 {
+                return Err(Error::new(format!(
+                    "photo {} does not overlap height map {}",
+                    photo.path.display(),
+                    height.display()
+                )));
+            }
+            eprintln!(
+                "{}: covers {:.1} % of the terrain, {:.1} photo pixels a grid spacing",
+                photo.path.display(),
+                100.0 * photo.covered as f64 / (f64::from(width) * f64::from(depth)),
+                photo.pixels_a_spacing
+            );
+        }
+        Ok(photos
+            .iter()
+            .map(|p| p.rows_held_at_most)
+            .max()
+            .unwrap_or(0))
+    }
+
+    /// Photo tiles complete so far, to be written.
+    fn photo_tiles(&mut self) -> Vec<(PhotoKey, Box<PhotoTile<TILE>>)> {
         match self {
-            Self::Map(_) | Self::Loaded(_) => None,
-            Self::ByHeight {
-                window,
-                range,
-                seed,
-            } => {
-                let n = window.len();
-                let here = window.last()?;
-                let above = if n >= 2 { &window[n - 2] } else { here };
-                Some(color_row(depth - 1, [above, here, here], *range, *seed))
+            Self::Placed { photos, .. } => photos
+                .iter_mut()
+                .filter_map(|photo| photo.levels.as_mut())
+                .flat_map(|levels| std::mem::take(&mut levels.done))
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// A GeoTIFF photo streamed over the grid's rows as they are colored:
+/// draped as `render` drapes it, and where it is finer than the grid kept
+/// at its own resolution, its fine levels cut into photo tiles as their
+/// rows complete.
+struct StreamedPhoto {
+    path: PathBuf,
+    window: PhotoWindow,
+    drape: Drape,
+    placed: Option<PlacedPhoto>,
+    levels: Option<FineLevels>,
+    /// Grid points it covers.
+    covered: u64,
+    /// Its pixels a grid spacing (east-west).
+    pixels_a_spacing: f64,
+    /// Most photo rows held at once.
+    rows_held_at_most: usize,
+}
+
+/// The kernel's place of a photo kept finer than the grid.
+fn area_of(placed: &PlacedPhoto) -> DetailArea {
+    DetailArea::new(placed.origin, placed.size, placed.shift, World::MAX_SIDE)
+        .expect("a photo detail's shift and size are within the kernel's limits")
+}
+
+impl StreamedPhoto {
+    /// Drapes the photo over grid row `gy` (`colors`), and keeps its
+    /// texels there.
+    fn drape(&mut self, gy: u32, colors: &mut [Rgb]) -> Result<()> {
+        let (mut low, mut high) = self.drape.rows(gy);
+        let placed = self.placed.filter(|placed| placed.covers_row(gy));
+        if let Some(placed) = &placed {
+            let (a, b) = placed.photo_rows(gy);
+            (low, high) = (low.min(a), high.max(b));
+        }
+        self.window.hold(low, high)?;
+        self.rows_held_at_most = self.rows_held_at_most.max(self.window.rows_held());
+        self.covered += self.drape.row(colors, gy, &self.window) as u64;
+        if let (Some(placed), Some(levels)) = (placed, self.levels.as_mut()) {
+            // The grid's colors there are the mean of each point's texels.
+            let texels = placed.texel_rows(gy, colors, &self.window);
+            let means = block_means(&texels, placed.shift, placed.size[0]);
+            colors[placed.origin[0] as usize..][..means.len()].copy_from_slice(&means);
+            for row in texels.chunks_exact((placed.size[0] << placed.shift) as usize) {
+                levels.push(0, row.to_vec());
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self) {
+        if let Some(levels) = &mut self.levels {
+            levels.finish();
+        }
+    }
+}
+
+/// A photo's fine levels built as fine level 0's rows arrive (each row of
+/// a level the rounded mean of two of the one below, as
+/// [`terracast::Detail::build_levels`]), and cut into photo tiles a strip
+/// of `TILE` rows at a time (as [`terracast::tiles::cut_photo_tile`]).
+struct FineLevels {
+    photo: u8,
+    /// Each level's texels a row and rows, its strip's rows so far, its
+    /// next strip, and a row waiting for the next to make a coarser one.
+    levels: Vec<FineLevel>,
+    /// Tiles cut, not written yet.
+    done: Vec<(PhotoKey, Box<PhotoTile<TILE>>)>,
+}
+
+struct FineLevel {
+    size: (usize, usize),
+    rows: Vec<Vec<Rgb>>,
+    received: usize,
+    strip: u32,
+    waiting: Option<Vec<Rgb>>,
+}
+
+impl FineLevels {
+    fn new(photo: u8, area: &DetailArea) -> Self {
+        Self {
+            photo,
+            levels: (0..=area.shift())
+                .map(|level| FineLevel {
+                    size: area.level_size(level),
+                    rows: Vec::new(),
+                    received: 0,
+                    strip: 0,
+                    waiting: None,
+                })
+                .collect(),
+            done: Vec::new(),
+        }
+    }
+
+    fn push(&mut self, level: usize, row: Vec<Rgb>) {
+        let coarser = level + 1 < self.levels.len();
+        let l = &mut self.levels[level];
+        l.received += 1;
+        let pair = if coarser {
+            match l.waiting.take() {
+                Some(first) => Some(
+                    (0..row.len() / 2)
+                        .map(|x| {
+                            let quad = [first[2 * x], first[2 * x + 1], row[2 * x], row[2 * x + 1]];
+                            core::array::from_fn(|c| {
+                                let sum: u32 = quad.iter().map(|t| u32::from(t[c])).sum();
+                                ((sum + 2) / 4) as u8
+                            })
+                        })
+                        .collect::<Vec<Rgb>>(),
+                ),
+                None => {
+                    l.waiting = Some(row.clone());
+                    None
+                }
+            }
+        } else {
+            None
+        };
+        l.rows.push(row);
+        if l.rows.len() == TILE || l.received == l.size.1 {
+            self.cut_strip(level);
+        }
+        if let Some(pair) = pair {
+            self.push(level + 1, pair);
+        }
+    }
+
+    /// Cuts level `level`'s strip into tiles.
+    fn cut_strip(&mut self, level: usize) {
+        let l = &mut self.levels[level];
+        let (width, rows) = (l.size.0, std::mem::take(&mut l.rows));
+        for x in 0..width.div_ceil(TILE) {
+            let mut tile = Box::new(PhotoTile::<TILE>::EMPTY);
+            for (j, line) in tile.texels.iter_mut().enumerate() {
+                let row = &rows[j.min(rows.len() - 1)];
+                for (i, texel) in line.iter_mut().enumerate() {
+                    *texel = row[(x * TILE + i).min(width - 1)];
+                }
+            }
+            let key = PhotoKey {
+                photo: self.photo,
+                level: level as u8,
+                x: x as u32,
+                y: l.strip,
+            };
+            self.done.push((key, tile));
+        }
+        l.strip += 1;
+    }
+
+    /// Cuts what is left (every level's strips end with its last row).
+    fn finish(&mut self) {
+        for level in 0..self.levels.len() {
+            if !self.levels[level].rows.is_empty() {
+                self.cut_strip(level);
             }
         }
     }
