@@ -9,11 +9,11 @@ mod load;
 mod procedural;
 pub mod voids;
 
-pub use detail::{block_means, PhotoDetail, PlacedPhoto};
+pub use detail::{block_means, PhotoDetail, PlacedPhoto, StretchedPhoto};
 pub use load::{
     derived_height_scale, fill_voids, hgt_height, hgt_side, hgt_spacing, load_colors, load_heights,
     not_a_height_map, read_color_map, refuse_mostly_void, report_filled, stretch_colors,
-    HgtSpacing,
+    HgtSpacing, Stretch,
 };
 pub use procedural::HeightBands;
 pub use procedural::{color_by_height_and_slope, procedural};

@@ -195,7 +195,13 @@ fn packed_files_render_as_their_maps_bit_for_bit() {
         &mut |_, _| {},
     )
     .unwrap();
-    assert!(!summary.streamed);
+    assert!(summary.streamed);
+    // A color map coarser than the grid: stretched bilinear, streamed.
+    let coarse = temp("odd-c-half.png");
+    image::imageops::resize(&odd, 101, 75, image::imageops::FilterType::Triangle)
+        .save(&coarse)
+        .unwrap();
+    packed_equals_maps(&height, &[&coarse], 1.0 / 16.0, default, "odd-coarse.tiles");
     if let Some(data) = terracast_tests::data_dir("the Comanche and SRTM packs") {
         let comanche = data.join("comanche");
         packed_equals_maps(

@@ -98,28 +98,12 @@ impl PhotoDetail {
     /// has more than 1.5 pixels a grid spacing on both axes; `None` when
     /// it has fewer.
     pub fn from_photo(photo: &RgbImage, width: u32, depth: u32) -> Option<Self> {
-        let (cw, cd) = photo.dimensions();
-        let ratio = (f64::from(cw) / f64::from(width)).min(f64::from(cd) / f64::from(depth));
-        if ratio <= LEAST_RATIO {
-            return None;
-        }
-        let shift = shift_for(ratio);
-        let (tw, td) = (width << shift, depth << shift);
-        // Photo pixels a texel on each axis.
-        let (sx, sy) = (f64::from(cw) / f64::from(tw), f64::from(cd) / f64::from(td));
-        let mut texels = Vec::with_capacity(tw as usize * td as usize);
-        for ty in 0..td {
-            for tx in 0..tw {
-                // The texel's center in photo pixels.
-                let (u, v) = (
-                    (f64::from(tx) + 0.5) * sx - 0.5,
-                    (f64::from(ty) + 0.5) * sy - 0.5,
-                );
-                texels.push(sample(photo, [u, v], [sx, sy]));
-            }
-        }
+        let stretched = StretchedPhoto::new(photo.dimensions(), (width, depth))?;
+        let texels = (0..depth)
+            .flat_map(|gy| stretched.texel_rows(gy, photo))
+            .collect();
         Some(Self {
-            shift,
+            shift: stretched.shift,
             origin: [0, 0],
             size: [width, depth],
             texels,
@@ -240,6 +224,68 @@ pub fn block_means(texels: &[Rgb], shift: u32, points: u32) -> Vec<Rgb> {
             })
         })
         .collect()
+}
+
+/// A photo stretched over the whole map and kept finer than the grid
+/// (see [`PhotoDetail::from_photo`]), its texels made a grid row at a
+/// time: the photo's pixels cover the map's voxels by area, `2^shift`
+/// texels a grid spacing, each texel the photo at its center.
+#[derive(Debug, Clone, Copy)]
+pub struct StretchedPhoto {
+    /// Texels a grid spacing on each side: `2^shift`.
+    pub shift: u32,
+    /// The grid's points along x.
+    width: u32,
+    /// Photo pixels a texel on each axis.
+    pixels_a_texel: [f64; 2],
+}
+
+impl StretchedPhoto {
+    /// A photo of `photo_size` pixels over a `width` × `depth` grid, kept
+    /// finer when it has more than 1.5 pixels a grid spacing on both
+    /// axes; `None` when it has fewer.
+    pub fn new(photo_size: (u32, u32), (width, depth): (u32, u32)) -> Option<Self> {
+        let (cw, cd) = photo_size;
+        let ratio = (f64::from(cw) / f64::from(width)).min(f64::from(cd) / f64::from(depth));
+        if ratio <= LEAST_RATIO {
+            return None;
+        }
+        let shift = shift_for(ratio);
+        let (tw, td) = (width << shift, depth << shift);
+        Some(Self {
+            shift,
+            width,
+            pixels_a_texel: [f64::from(cw) / f64::from(tw), f64::from(cd) / f64::from(td)],
+        })
+    }
+
+    /// The photo rows [`StretchedPhoto::texel_rows`] reads for grid row
+    /// `gy`.
+    pub fn photo_rows(&self, gy: u32) -> (i64, i64) {
+        let sy = self.pixels_a_texel[1];
+        let side = f64::from(1u32 << self.shift);
+        let first = f64::from(gy) * side;
+        let (a, b) = ((first + 0.5) * sy - 0.5, (first + side - 0.5) * sy - 0.5);
+        let margin = sy / 2.0 + 2.0;
+        ((a - margin).floor() as i64, (b + margin).ceil() as i64)
+    }
+
+    /// The `2^shift` texel rows of grid row `gy`, `width << shift`
+    /// texels each, one after the other.
+    pub fn texel_rows(&self, gy: u32, photo: &impl PhotoPixels) -> Vec<Rgb> {
+        let [sx, sy] = self.pixels_a_texel;
+        let (side, tw) = (1u32 << self.shift, self.width << self.shift);
+        let mut texels = Vec::with_capacity((side * tw) as usize);
+        for ty in gy * side..(gy + 1) * side {
+            // The texel's center in photo pixels.
+            let v = (f64::from(ty) + 0.5) * sy - 0.5;
+            for tx in 0..tw {
+                let u = (f64::from(tx) + 0.5) * sx - 0.5;
+                texels.push(sample(photo, [u, v], [sx, sy]));
+            }
+        }
+        texels
+    }
 }
 
 /// Where a photo placed by its georeference is kept finer than the grid

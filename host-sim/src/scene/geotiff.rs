@@ -283,30 +283,57 @@ impl PhotoPixels for RgbImage {
     }
 }
 
+/// A photo's rows read from its file in order, top row first: a TIFF
+/// ([`TiffPhotoRows`]) or a PNG.
+pub trait PhotoRowSource {
+    /// Pixels a row, and rows.
+    fn size(&self) -> (u32, u32);
+    /// The next row.
+    fn read_row(&mut self) -> Result<Vec<Rgb>>;
+}
+
+impl PhotoRowSource for TiffPhotoRows {
+    fn size(&self) -> (u32, u32) {
+        TiffRows::size(self)
+    }
+    fn read_row(&mut self) -> Result<Vec<Rgb>> {
+        self.next_row().map(<[Rgb]>::to_vec)
+    }
+}
+
 /// The rows of a photo streamed from its file that draping the grid's
 /// current row reads ([`PhotoWindow::hold`]): the grid's rows come in
 /// order, and the photo rows they need move down with them.
 pub struct PhotoWindow {
-    rows: TiffPhotoRows,
-    /// The rows held, from `first`.
+    rows: Box<dyn PhotoRowSource>,
+    size: (u32, u32),
+    /// The rows held, from `first`, and the next row to read.
     lines: std::collections::VecDeque<Vec<Rgb>>,
     first: u32,
+    next: u32,
 }
 
 impl PhotoWindow {
-    /// The photo at `path`, no row read yet.
+    /// The TIFF photo at `path`, no row read yet.
     pub fn open(path: &Path) -> Result<Self> {
-        Ok(Self {
-            rows: TiffPhotoRows::open_photo(path)?,
+        Ok(Self::over(Box::new(TiffPhotoRows::open_photo(path)?)))
+    }
+
+    /// The photo `rows` reads, no row read yet.
+    pub fn over(rows: Box<dyn PhotoRowSource>) -> Self {
+        Self {
+            size: rows.size(),
+            rows,
             lines: std::collections::VecDeque::new(),
             first: 0,
-        })
+            next: 0,
+        }
     }
 
     /// Holds photo rows `low..=high` (clamped into the photo), dropping
     /// those above: rows are read in order, once each.
     pub fn hold(&mut self, low: i64, high: i64) -> Result<()> {
-        let last = i64::from(self.rows.size().1) - 1;
+        let last = i64::from(self.size.1) - 1;
         let (low, high) = (low.clamp(0, last) as u32, high.clamp(0, last) as u32);
         while self.first < low && !self.lines.is_empty() {
             self.lines.pop_front();
@@ -314,14 +341,15 @@ impl PhotoWindow {
         }
         if self.lines.is_empty() {
             // Rows above `low` that were never held are skipped.
-            while self.rows.next < low {
-                self.rows.next_row()?;
+            while self.next < low {
+                self.rows.read_row()?;
+                self.next += 1;
             }
-            self.first = self.rows.next;
+            self.first = self.next;
         }
-        while self.first + (self.lines.len() as u32) <= high {
-            let row = self.rows.next_row()?.to_vec();
-            self.lines.push_back(row);
+        while self.next <= high {
+            self.lines.push_back(self.rows.read_row()?);
+            self.next += 1;
         }
         Ok(())
     }
@@ -333,13 +361,13 @@ impl PhotoWindow {
 
     /// The photo's pixels a row, and rows.
     pub fn dimensions(&self) -> (u32, u32) {
-        self.rows.size()
+        self.size
     }
 }
 
 impl PhotoPixels for PhotoWindow {
     fn dimensions(&self) -> (u32, u32) {
-        self.rows.size()
+        self.size
     }
     fn pixel(&self, x: u32, y: u32) -> Rgb {
         // (Draping holds every row it reads first: `hold`.)

@@ -169,28 +169,65 @@ pub fn stretch_colors(
     width: u32,
     depth: u32,
 ) -> Result<Vec<Rgb>> {
-    let (cw, cd) = image.dimensions();
-    if (cw, cd) == (width, depth) {
-        return Ok(image.pixels().map(|p| p.0).collect());
+    let stretch = Stretch::new(image.dimensions(), path, (width, depth))?;
+    Ok((0..depth).flat_map(|gy| stretch.row(gy, image)).collect())
+}
+
+/// A color map stretched over a height grid, a grid row at a time (see
+/// [`load_colors`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Stretch {
+    image: (u32, u32),
+    width: u32,
+    /// Color pixels a grid spacing, corner to corner.
+    scale: [f64; 2],
+}
+
+impl Stretch {
+    /// A `image`-sized color map (read from `path`) over a `width` ×
+    /// `depth` grid; refused when it is too small to stretch.
+    pub fn new(image: (u32, u32), path: &Path, (width, depth): (u32, u32)) -> Result<Self> {
+        let (cw, cd) = image;
+        if (cw, cd) != (width, depth) && (cw < 2 || cd < 2) {
+            return Err(Error::new(format!(
+                "color map {} is {cw}x{cd}: too small to stretch over a {width}x{depth} height map",
+                path.display()
+            )));
+        }
+        Ok(Self {
+            image,
+            width,
+            scale: [
+                f64::from(cw.saturating_sub(1)) / f64::from(width - 1),
+                f64::from(cd.saturating_sub(1)) / f64::from(depth - 1),
+            ],
+        })
     }
-    if cw < 2 || cd < 2 {
-        return Err(Error::new(format!(
-            "color map {} is {cw}x{cd}: too small to stretch over a {width}x{depth} height map",
-            path.display()
-        )));
+
+    /// The color rows [`Stretch::row`] reads for grid row `gy`.
+    pub fn image_rows(&self, gy: u32) -> (i64, i64) {
+        let cy = f64::from(gy) * self.scale[1];
+        let reach = (self.scale[1] / 2.0).max(0.5) + 1.0;
+        ((cy - reach).floor() as i64, (cy + reach).ceil() as i64)
     }
-    let sx = f64::from(cw - 1) / f64::from(width - 1);
-    let sy = f64::from(cd - 1) / f64::from(depth - 1);
-    let pixel = |x: i64, y: i64| {
-        let p = image.get_pixel(
-            x.clamp(0, i64::from(cw) - 1) as u32,
-            y.clamp(0, i64::from(cd) - 1) as u32,
-        );
-        [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]
-    };
-    let mut out = Vec::with_capacity(width as usize * depth as usize);
-    for gy in 0..depth {
-        for gx in 0..width {
+
+    /// Grid row `gy`'s colors.
+    pub fn row(&self, gy: u32, image: &impl super::geotiff::PhotoPixels) -> Vec<Rgb> {
+        let (cw, cd) = self.image;
+        if self.scale == [1.0, 1.0] {
+            // The same size: a pixel a point.
+            return (0..cw).map(|x| image.pixel(x, gy)).collect();
+        }
+        let [sx, sy] = self.scale;
+        let pixel = |x: i64, y: i64| {
+            let p = image.pixel(
+                x.clamp(0, i64::from(cw) - 1) as u32,
+                y.clamp(0, i64::from(cd) - 1) as u32,
+            );
+            [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]
+        };
+        let mut out = Vec::with_capacity(self.width as usize);
+        for gx in 0..self.width {
             let (cx, cy) = (f64::from(gx) * sx, f64::from(gy) * sy);
             let color = if sx > 1.0 || sy > 1.0 {
                 // Box filter: every color pixel within half a grid spacing.
@@ -224,8 +261,8 @@ pub fn stretch_colors(
             };
             out.push(color.map(|v| v.round().clamp(0.0, 255.0) as u8));
         }
+        out
     }
-    Ok(out)
 }
 
 fn open_image(path: &Path, what: &str) -> Result<DynamicImage> {

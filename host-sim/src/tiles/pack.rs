@@ -14,10 +14,11 @@
 //! as the row after it arrives), to the bit as `render` fills them.
 //! GeoTIFF photos placed by their georeference stream with the rows they
 //! color ([`StreamedPhoto`]: a window of each photo's rows, draped row by
-//! row, its texels kept and cut into photo tiles as they come). A photo
-//! stretched over the map and a color map of another size than the
-//! heights are loaded whole, as `render` loads them
-//! ([`load_scene_files`]), and the rows packed from memory. A photo finer than the height grid is packed at its own
+//! row, its texels kept and cut into photo tiles as they come), and so
+//! does one PNG or TIFF color map stretched over the map, whatever its
+//! size ([`Stretching`]). A color map in another image format is loaded
+//! whole, as `render` loads it ([`load_scene_files`]), and the rows
+//! packed from memory. A photo finer than the height grid is packed at its own
 //! resolution, its fine levels cut into photo tiles
 //! ([`terracast::tiles::cut_photo_tile`]).
 
@@ -25,12 +26,14 @@ use super::file::{Header, TilesWriter, MAX_PHOTOS};
 use super::TILE;
 use crate::error::{Error, Result};
 use crate::outputs::Outputs;
+use crate::scene::geotiff::PhotoRowSource;
 use crate::scene::geotiff::{is_tiff, TiffHeightRows};
 use crate::scene::geotiff::{Drape, PhotoWindow};
 use crate::scene::voids::VoidFill;
 use crate::scene::{
     block_means, hgt_height, hgt_side, load_scene_files, not_a_height_map, placements,
     refuse_mostly_void, report_filled, terrain_color, value_noise, HeightBands, PlacedPhoto, Scene,
+    Stretch, StretchedPhoto,
 };
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -90,7 +93,7 @@ pub struct PackSummary {
     /// Most rows of a photo held at once (photos streamed).
     pub photo_rows_held_at_most: usize,
     /// Whether the input's rows were read as they were packed (else it
-    /// was loaded whole first: TIFF photos, a color map of another size).
+    /// was loaded whole first: a color map in another image format).
     pub streamed: bool,
 }
 
@@ -119,19 +122,17 @@ pub fn pack(
         outputs.input("--color", color);
     }
     let out_id = outputs.output("--out", out)?;
-    // A PNG height map with at most one PNG color map of its size streams,
-    // and so do GeoTIFF and `.hgt` heights without a color map, voids and
-    // all, and GeoTIFF heights with GeoTIFF photos placed by their
-    // georeference; anything else (a photo stretched over the map, a color
-    // map of another size) is stretched as `render` does it, whole.
+    // Heights stream (PNG, GeoTIFF, `.hgt`, voids and all) alone, with
+    // GeoTIFF photos placed by their georeference, or with one PNG or TIFF
+    // color map stretched over the map as `render` stretches it; anything
+    // else (several photos not placed, another image format) is loaded
+    // whole, as `render` loads it.
     let placed = placements(&input.height, &input.colors)?;
-    let streams = if is_tiff(&input.height) || is_hgt(&input.height) {
-        input.colors.is_empty() || placed.is_some()
-    } else {
-        input.colors.len() <= 1
-            && !input.colors.iter().any(|c| is_tiff(c) || is_hgt(c))
-            && input.colors.iter().all(|c| same_size(&input.height, c))
+    let stretched = match (&placed, input.colors.as_slice()) {
+        (None, [one]) => is_tiff(one) || is_png(one),
+        _ => false,
     };
+    let streams = input.colors.is_empty() || placed.is_some() || stretched;
     let load_whole = || -> Result<Arc<Scene>> {
         let scene = load_scene_files(&input.height, &input.colors, input.height_scale, input.seed)?;
         Ok(Arc::new(scene))
@@ -185,16 +186,28 @@ pub fn pack(
             }
         }
         (None, None, Some(path)) => {
-            let rows = ColorRows::open(path)?;
-            if rows.size() != (width, depth) {
-                return Err(Error::new(format!(
-                    "color map {} is {}x{}, the height map {width}x{depth}: pack needs them the same size",
-                    path.display(),
-                    rows.size().0,
-                    rows.size().1
-                )));
+            let window = if is_tiff(path) {
+                PhotoWindow::open(path)?
+            } else {
+                PhotoWindow::over(Box::new(ColorRows::open(path)?))
+            };
+            let size = window.dimensions();
+            let photo = StretchedPhoto::new(size, (width, depth));
+            let how = match photo {
+                Some(photo) => {
+                    let area =
+                        DetailArea::new([0, 0], [width, depth], photo.shift, World::MAX_SIDE)
+                            .expect(
+                                "a photo detail's shift and size are within the kernel's limits",
+                            );
+                    Stretching::Detail(photo, FineLevels::new(0, &area))
+                }
+                None => Stretching::Colors(Stretch::new(size, path, (width, depth))?),
+            };
+            Colors::Stretched {
+                window,
+                how: Box::new(how),
             }
-            Colors::Map(Box::new(rows))
         }
         (None, None, None) => Colors::ByHeight(ByHeight::new(bands, input.seed)),
     };
@@ -211,6 +224,10 @@ pub fn pack(
             .filter(|photo| photo.levels.is_some())
             .filter_map(|photo| photo.placed.as_ref().map(area_of))
             .collect(),
+        Colors::Stretched { how, .. } => match how.as_ref() {
+            Stretching::Detail(_, levels) => vec![levels.area],
+            Stretching::Colors(_) => Vec::new(),
+        },
         _ => photos.iter().map(|(area, _)| *area).collect(),
     };
     if areas.len() as u64 > MAX_PHOTOS {
@@ -332,13 +349,11 @@ fn write_photos(writer: &mut TilesWriter, photos: &[(DetailArea, Vec<Rgb>)]) -> 
     Ok(written)
 }
 
-/// Whether the images at `a` and `b` have the same size (`false` when
-/// either cannot be read: the whole load then says why).
-fn same_size(a: &Path, b: &Path) -> bool {
-    matches!(
-        (image::image_dimensions(a), image::image_dimensions(b)),
-        (Ok(a), Ok(b)) if a == b
-    )
+/// Whether `path` is a PNG (by its first bytes).
+fn is_png(path: &Path) -> bool {
+    let mut magic = [0u8; 8];
+    File::open(path).is_ok_and(|mut f| f.read_exact(&mut magic).is_ok())
+        && magic == *b"\x89PNG\r\n\x1a\n"
 }
 
 /// The lowest and highest height of the map (voids filled), refusing the
@@ -634,10 +649,6 @@ impl ColorRows {
         })
     }
 
-    fn size(&self) -> (u32, u32) {
-        self.size
-    }
-
     fn next(&mut self) -> Result<Vec<Rgb>> {
         let channels = self.channels;
         let row = self
@@ -659,9 +670,23 @@ impl ColorRows {
     }
 }
 
+impl PhotoRowSource for ColorRows {
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+    fn read_row(&mut self) -> Result<Vec<Rgb>> {
+        self.next()
+    }
+}
+
 /// Where each row's colors come from.
 enum Colors {
-    Map(Box<ColorRows>),
+    /// One color map stretched over the map as `render` stretches it, a
+    /// window of its rows at a time.
+    Stretched {
+        window: PhotoWindow,
+        how: Box<Stretching>,
+    },
     /// The colors of a scene loaded whole.
     Loaded(Arc<Scene>),
     /// Colored by height and slope, as `render` colors a height map alone.
@@ -672,6 +697,14 @@ enum Colors {
         by_height: ByHeight,
         photos: Vec<StreamedPhoto>,
     },
+}
+
+/// How a color map is stretched over the map: kept finer than the grid
+/// (its texels into photo tiles, the grid's colors their means), or
+/// filtered to the grid.
+enum Stretching {
+    Detail(StretchedPhoto, FineLevels),
+    Colors(Stretch),
 }
 
 /// Colored by height and slope, as `render` colors a height map alone:
@@ -733,7 +766,25 @@ impl Colors {
     /// `y − 1`'s by height (`None` for the first row).
     fn row(&mut self, y: u32, heights: &[f32]) -> Result<Option<Vec<Rgb>>> {
         match self {
-            Self::Map(rows) => rows.next().map(Some),
+            Self::Stretched { window, how } => match how.as_mut() {
+                Stretching::Detail(photo, levels) => {
+                    let (low, high) = photo.photo_rows(y);
+                    window.hold(low, high)?;
+                    let texels = photo.texel_rows(y, window);
+                    // `2^shift` rows of texels, `2^shift` a grid point.
+                    let row = texels.len() >> photo.shift;
+                    for texel_row in texels.chunks_exact(row) {
+                        levels.push(0, texel_row.to_vec());
+                    }
+                    let points = (row >> photo.shift) as u32;
+                    Ok(Some(block_means(&texels, photo.shift, points)))
+                }
+                Stretching::Colors(stretch) => {
+                    let (low, high) = stretch.image_rows(y);
+                    window.hold(low, high)?;
+                    Ok(Some(stretch.row(y, window)))
+                }
+            },
             Self::Loaded(scene) => {
                 let width = scene.width as usize;
                 let at = y as usize * width;
@@ -760,7 +811,13 @@ impl Colors {
     /// every row has arrived.
     fn finish(&mut self, depth: u32) -> Result<Option<Vec<Rgb>>> {
         match self {
-            Self::Map(_) | Self::Loaded(_) => Ok(None),
+            Self::Stretched { how, .. } => {
+                if let Stretching::Detail(_, levels) = how.as_mut() {
+                    levels.finish();
+                }
+                Ok(None)
+            }
+            Self::Loaded(_) => Ok(None),
             Self::ByHeight(by_height) => Ok(by_height.finish(depth)),
             Self::Placed { by_height, photos } => {
                 let Some(mut colors) = by_height.finish(depth) else {
@@ -807,6 +864,10 @@ impl Colors {
     /// Photo tiles complete so far, to be written.
     fn photo_tiles(&mut self) -> Vec<(PhotoKey, Box<PhotoTile<TILE>>)> {
         match self {
+            Self::Stretched { how, .. } => match how.as_mut() {
+                Stretching::Detail(_, levels) => std::mem::take(&mut levels.done),
+                Stretching::Colors(_) => Vec::new(),
+            },
             Self::Placed { photos, .. } => photos
                 .iter_mut()
                 .filter_map(|photo| photo.levels.as_mut())
@@ -879,6 +940,8 @@ impl StreamedPhoto {
 /// of `TILE` rows at a time (as [`terracast::tiles::cut_photo_tile`]).
 struct FineLevels {
     photo: u8,
+    /// Where the photo lies.
+    area: DetailArea,
     /// Each level's texels a row and rows, its strip's rows so far, its
     /// next strip, and a row waiting for the next to make a coarser one.
     levels: Vec<FineLevel>,
@@ -898,6 +961,7 @@ impl FineLevels {
     fn new(photo: u8, area: &DetailArea) -> Self {
         Self {
             photo,
+            area: *area,
             levels: (0..=area.shift())
                 .map(|level| FineLevel {
                     size: area.level_size(level),
