@@ -2,7 +2,7 @@
 //! read through the cache, with coarser tiles standing in for missing ones.
 
 use super::footprint::{window_origin, WINDOW_SIDE};
-use super::{PhotoCache, PhotoKey, Tile, TileCache, TileKey, World};
+use super::{PhotoCache, PhotoKey, PhotoTile, Tile, TileCache, TileKey, World};
 use crate::color::Rgb;
 use crate::config::COORD_FRAC_BITS;
 use crate::detail::DetailArea;
@@ -181,14 +181,26 @@ impl<'c, 'a, const T: usize, const N: usize, const M: usize> TiledSurface<'c, 'a
         let shift = T.trailing_zeros();
         let mask = T - 1;
         (level..=area.shift()).find_map(|at| {
+            // The four texels of a color nearly always share a tile: one
+            // directory lookup for them.
+            let last = core::cell::Cell::new(None);
             let color = area.color_with(at, point, |x, y| {
-                let key = PhotoKey {
-                    photo,
-                    level: at as u8,
-                    x: (x >> shift) as u32,
-                    y: (y >> shift) as u32,
+                let (tx, ty) = ((x >> shift) as u32, (y >> shift) as u32);
+                let tile = match last.get() {
+                    Some((at_x, at_y, tile)) if (at_x, at_y) == (tx, ty) => tile,
+                    _ => {
+                        let key = PhotoKey {
+                            photo,
+                            level: at as u8,
+                            x: tx,
+                            y: ty,
+                        };
+                        let tile: &PhotoTile<T> = cache.get(&key)?;
+                        last.set(Some((tx, ty, tile)));
+                        tile
+                    }
                 };
-                cache.get(&key).map(|tile| tile.texels[y & mask][x & mask])
+                Some(tile.texels[y & mask][x & mask])
             });
             if color.is_some() && at != level {
                 self.degraded.fetch_add(1, Ordering::Relaxed);

@@ -156,7 +156,8 @@ pub fn pack(
             "height map is {width}x{depth}: it needs at least 2x2 points"
         ))
     })?;
-    // (Streamed, there is at most one color map.)
+    // (Streamed, the color maps are photos placed by their georeference,
+    // or one map stretched over the whole.)
     let mut colors = match (&loaded, &placed, input.colors.first()) {
         (Some(scene), _, _) => Colors::Loaded(scene.clone()),
         (None, Some((grid_at, photos_at)), _) => {
