@@ -165,17 +165,18 @@ pub fn pack(
             for (path, at) in input.colors.iter().zip(photos_at) {
                 let window = PhotoWindow::open(path)?;
                 let placed = PlacedPhoto::new(window.dimensions(), at, grid_at, (width, depth));
-                let next = photos
+                // Photo tiles number the photos kept finer, in order.
+                let kept = photos
                     .iter()
-                    .filter(|p: &&StreamedPhoto| p.levels.is_some());
-                let index = next.count() as u8;
-                let levels = placed.map(|placed| FineLevels::new(index, &area_of(&placed)));
+                    .filter(|p: &&StreamedPhoto| p.detail.is_some());
+                let index = kept.count() as u8;
+                let detail =
+                    placed.map(|placed| (placed, FineLevels::new(index, &area_of(&placed))));
                 photos.push(StreamedPhoto {
                     path: path.clone(),
                     window,
                     drape: Drape::new(grid_at, at),
-                    placed,
-                    levels,
+                    detail,
                     covered: 0,
                     pixels_a_spacing: grid_at.pixel[0] / at.pixel[0],
                     rows_held_at_most: 0,
@@ -222,8 +223,7 @@ pub fn pack(
     let areas: Vec<DetailArea> = match &colors {
         Colors::Placed { photos, .. } => photos
             .iter()
-            .filter(|photo| photo.levels.is_some())
-            .filter_map(|photo| photo.placed.as_ref().map(area_of))
+            .filter_map(|photo| photo.detail.as_ref().map(|(_, levels)| levels.area))
             .collect(),
         Colors::Stretched { how, .. } => match how.as_ref() {
             Stretching::Detail(_, levels) => vec![levels.area],
@@ -871,8 +871,8 @@ impl Colors {
             },
             Self::Placed { photos, .. } => photos
                 .iter_mut()
-                .filter_map(|photo| photo.levels.as_mut())
-                .flat_map(|levels| std::mem::take(&mut levels.done))
+                .filter_map(|photo| photo.detail.as_mut())
+                .flat_map(|(_, levels)| std::mem::take(&mut levels.done))
                 .collect(),
             _ => Vec::new(),
         }
@@ -887,8 +887,8 @@ struct StreamedPhoto {
     path: PathBuf,
     window: PhotoWindow,
     drape: Drape,
-    placed: Option<PlacedPhoto>,
-    levels: Option<FineLevels>,
+    /// Where it is kept finer than the grid, and its fine levels.
+    detail: Option<(PlacedPhoto, FineLevels)>,
     /// Grid points it covers.
     covered: u64,
     /// Its pixels a grid spacing (east-west).
@@ -908,15 +908,18 @@ impl StreamedPhoto {
     /// texels there.
     fn drape(&mut self, gy: u32, colors: &mut [Rgb]) -> Result<()> {
         let (mut low, mut high) = self.drape.rows(gy);
-        let placed = self.placed.filter(|placed| placed.covers_row(gy));
-        if let Some(placed) = &placed {
+        let detail = self
+            .detail
+            .as_mut()
+            .filter(|(placed, _)| placed.covers_row(gy));
+        if let Some((placed, _)) = &detail {
             let (a, b) = placed.photo_rows(gy);
             (low, high) = (low.min(a), high.max(b));
         }
         self.window.hold(low, high)?;
         self.rows_held_at_most = self.rows_held_at_most.max(self.window.rows_held());
         self.covered += self.drape.row(colors, gy, &self.window) as u64;
-        if let (Some(placed), Some(levels)) = (placed, self.levels.as_mut()) {
+        if let Some((placed, levels)) = detail {
             // The grid's colors there are the mean of each point's texels.
             let texels = placed.texel_rows(gy, colors, &self.window);
             let means = block_means(&texels, placed.shift, placed.size[0]);
@@ -929,7 +932,7 @@ impl StreamedPhoto {
     }
 
     fn finish(&mut self) {
-        if let Some(levels) = &mut self.levels {
+        if let Some((_, levels)) = &mut self.detail {
             levels.finish();
         }
     }
