@@ -165,9 +165,11 @@ impl<'a> StickLayer<'a> {
         let point = *self.points.get(index as usize)?;
         let stick = self.sticks.get(usize::from(point.checked_sub(1)?))?;
         let base = i32::from(top - stick.height.min(top)) << HEIGHT_TO_Q16;
-        // Voxels above the base, within the stick's texels.
-        let texel =
-            (z.saturating_sub(base) >> COORD_FRAC_BITS).clamp(0, i32::from(stick.texels) - 1);
+        // Voxels above the base, within the stick's texels (as compares:
+        // `i32::clamp` is a call on the board).
+        let texel = (z.saturating_sub(base) >> COORD_FRAC_BITS)
+            .min(i32::from(stick.texels) - 1)
+            .max(0);
         self.texels
             .get(stick.first as usize + texel as usize)
             .copied()
