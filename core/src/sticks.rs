@@ -16,7 +16,9 @@
 //! their texels: replicated objects (the trees of a wood) share sticks. A
 //! stick's base is its point's height less its own: it stands on the
 //! terrain wherever it is placed. [`WithSticks`] lends a surface with the
-//! layer on its level 0 to the caster.
+//! layer on its level 0 to the caster. A tiled terrain keeps its points'
+//! values in its level-0 tiles and lends the [`StickTable`] alone
+//! ([`crate::tiles::TiledSurface::with_sticks`]).
 //!
 //! A **uniform** stick is one texel (one color at every height, as a
 //! terrain voxel); a **textured** stick has a texel a voxel of its height,
@@ -69,6 +71,21 @@ pub struct Stick {
     pub height: u16,
 }
 
+impl Stick {
+    /// Where in the texel table its texel at height `z` (Q16) lies, on a
+    /// point whose height is `top` (U12.4): the voxels above its base,
+    /// within its texels.
+    #[inline(always)]
+    fn texel_at(&self, top: u16, z: i32) -> usize {
+        let base = i32::from(top - self.height.min(top)) << HEIGHT_TO_Q16;
+        // As compares: `i32::clamp` is a call on the board.
+        let texel = (z.saturating_sub(base) >> COORD_FRAC_BITS)
+            .min(i32::from(self.texels) - 1)
+            .max(0);
+        self.first as usize + texel as usize
+    }
+}
+
 /// Why a [`StickLayer`] cannot be made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StickError {
@@ -111,6 +128,114 @@ impl fmt::Display for StickError {
 
 impl core::error::Error for StickError {}
 
+/// The sticks of a [`StickLayer`] (or of a tiled terrain's level-0 tiles,
+/// [`crate::tiles::TiledSurface::with_sticks`]) and their texels, shared
+/// by every grid point that holds one: point value `i` names
+/// `sticks[i − 1]`, 0 plain terrain. Checked when it is made: every
+/// stick's texels lie inside the texel table.
+#[derive(Debug, Clone, Copy)]
+pub struct StickTable<'a> {
+    sticks: &'a [Stick],
+    texels: &'a [Rgb],
+}
+
+impl<'a> StickTable<'a> {
+    /// No sticks.
+    pub const EMPTY: StickTable<'static> = StickTable {
+        sticks: &[],
+        texels: &[],
+    };
+
+    /// The table of `sticks` and their `texels`.
+    pub fn new(sticks: &'a [Stick], texels: &'a [Rgb]) -> Result<Self, StickError> {
+        for (stick, s) in sticks.iter().enumerate() {
+            let end = s.first as usize + usize::from(s.texels);
+            if s.texels == 0 || end > texels.len() {
+                return Err(StickError::Texels { stick });
+            }
+        }
+        Ok(Self { sticks, texels })
+    }
+
+    /// The sticks.
+    pub fn sticks(&self) -> &'a [Stick] {
+        self.sticks
+    }
+
+    /// Their texels.
+    pub fn texels(&self) -> &'a [Rgb] {
+        self.texels
+    }
+
+    /// Whether the table holds no stick.
+    pub fn is_empty(&self) -> bool {
+        self.sticks.is_empty()
+    }
+
+    /// Bytes of the table: its sticks and texels.
+    pub fn bytes(&self) -> usize {
+        core::mem::size_of_val(self.sticks) + core::mem::size_of_val(self.texels)
+    }
+
+    /// The texel at height `z` (Q16) of the stick a grid point whose value
+    /// is `point` and whose height is `top` (U12.4) holds; `None` for
+    /// plain terrain (0) or a value past the table.
+    #[inline]
+    pub(crate) fn texel(&self, point: u16, top: u16, z: i32) -> Option<Rgb> {
+        let stick = self.sticks.get(usize::from(point.checked_sub(1)?))?;
+        self.texels.get(stick.texel_at(top, z)).copied()
+    }
+
+    /// The colors at two neighbouring grid points (heights `tops`, U12.4,
+    /// colors `terrain`) where a ray crosses the surface between them at
+    /// height `z` (Q16), given each point's stick texel there (`None`
+    /// where no stick stands; see [`StickLayer::pair`]).
+    #[inline(always)]
+    fn pair_of(
+        texels: (Option<Rgb>, Option<Rgb>),
+        tops: (u16, u16),
+        z: i32,
+        terrain: (Rgb, Rgb),
+    ) -> (Rgb, Rgb) {
+        let (first, second) = texels;
+        let above = |top: u16| z > i32::from(top) << HEIGHT_TO_Q16;
+        let c0 = match (first, second) {
+            (Some(c), _) => c,
+            (None, Some(c)) if above(tops.0) => c,
+            _ => terrain.0,
+        };
+        let c1 = match (second, first) {
+            (Some(c), _) => c,
+            (None, Some(c)) if above(tops.1) => c,
+            _ => terrain.1,
+        };
+        (c0, c1)
+    }
+
+    /// [`StickLayer::pair`] of two points whose values are `points`.
+    #[inline]
+    pub(crate) fn pair(
+        &self,
+        points: (u16, u16),
+        tops: (u16, u16),
+        z: i32,
+        terrain: (Rgb, Rgb),
+    ) -> (Rgb, Rgb) {
+        let texels = (
+            self.texel(points.0, tops.0, z),
+            self.texel(points.1, tops.1, z),
+        );
+        Self::pair_of(texels, tops, z, terrain)
+    }
+
+    /// Whether a stick stands at a point whose value is `point` and whose
+    /// height is `top` (U12.4) as high as `z` (Q16) or higher.
+    #[inline(always)]
+    pub(crate) fn stands(point: u16, top: u16, z: i32) -> bool {
+        point != 0 && i32::from(top) << HEIGHT_TO_Q16 >= z
+    }
+}
+
 /// Sticks on level 0 of a terrain: an index a grid point into the stick
 /// table (0 for plain terrain, `i` for `sticks[i − 1]`), in caller storage.
 #[derive(Debug, Clone, Copy)]
@@ -133,12 +258,7 @@ impl<'a> StickLayer<'a> {
         if points.len() != terrain.heights().len() {
             return Err(StickError::PointsLength);
         }
-        for (stick, s) in sticks.iter().enumerate() {
-            let end = s.first as usize + usize::from(s.texels);
-            if s.texels == 0 || end > texels.len() {
-                return Err(StickError::Texels { stick });
-            }
-        }
+        StickTable::new(sticks, texels)?;
         for (point, (&index, &height)) in points.iter().zip(terrain.heights()).enumerate() {
             if index == 0 {
                 continue;
@@ -157,22 +277,31 @@ impl<'a> StickLayer<'a> {
         })
     }
 
+    /// The stick table.
+    pub fn table(&self) -> StickTable<'a> {
+        StickTable {
+            sticks: self.sticks,
+            texels: self.texels,
+        }
+    }
+
+    /// The value of grid point `index` of level 0 (row by row): 0 for
+    /// plain terrain, `i` for the table's stick `i − 1`.
+    #[inline(always)]
+    pub fn point(&self, index: usize) -> u16 {
+        self.points.get(index).copied().unwrap_or(0)
+    }
+
     /// The color at grid point `index` of level 0, whose height is
     /// `top` (U12.4), at height `z` (Q16): its stick's texel there, or
     /// `None` where no stick stands.
     #[inline]
     pub fn texel(&self, index: isize, top: u16, z: i32) -> Option<Rgb> {
+        // Its own lookup rather than `StickTable::texel`'s: the board's
+        // render compiles a few instructions a pixel shorter so.
         let point = *self.points.get(index as usize)?;
         let stick = self.sticks.get(usize::from(point.checked_sub(1)?))?;
-        let base = i32::from(top - stick.height.min(top)) << HEIGHT_TO_Q16;
-        // Voxels above the base, within the stick's texels (as compares:
-        // `i32::clamp` is a call on the board).
-        let texel = (z.saturating_sub(base) >> COORD_FRAC_BITS)
-            .min(i32::from(stick.texels) - 1)
-            .max(0);
-        self.texels
-            .get(stick.first as usize + texel as usize)
-            .copied()
+        self.texels.get(stick.texel_at(top, z)).copied()
     }
 
     /// The colors at two neighbouring grid points (`index` and `index +
@@ -192,20 +321,11 @@ impl<'a> StickLayer<'a> {
         z: i32,
         terrain: (Rgb, Rgb),
     ) -> (Rgb, Rgb) {
-        let first = self.texel(index, tops.0, z);
-        let second = self.texel(index + across, tops.1, z);
-        let above = |top: u16| z > i32::from(top) << HEIGHT_TO_Q16;
-        let c0 = match (first, second) {
-            (Some(c), _) => c,
-            (None, Some(c)) if above(tops.0) => c,
-            _ => terrain.0,
-        };
-        let c1 = match (second, first) {
-            (Some(c), _) => c,
-            (None, Some(c)) if above(tops.1) => c,
-            _ => terrain.1,
-        };
-        (c0, c1)
+        let texels = (
+            self.texel(index, tops.0, z),
+            self.texel(index + across, tops.1, z),
+        );
+        StickTable::pair_of(texels, tops, z, terrain)
     }
 
     /// Whether grid point `index` holds a stick.
@@ -216,9 +336,7 @@ impl<'a> StickLayer<'a> {
 
     /// Bytes of the layer: its points, sticks and texels.
     pub fn bytes(&self) -> usize {
-        core::mem::size_of_val(self.points)
-            + core::mem::size_of_val(self.sticks)
-            + core::mem::size_of_val(self.texels)
+        core::mem::size_of_val(self.points) + self.table().bytes()
     }
 
     /// Raises the coarser levels' heights (`coarse`: levels 1 and up of

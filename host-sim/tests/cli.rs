@@ -4,7 +4,7 @@
 mod common;
 
 use common::{s, sim};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("terracast-cli-{}", std::process::id()));
@@ -580,4 +580,65 @@ fn a_photo_finer_than_the_height_grid_is_kept_unless_asked_not_to() {
         spread(&kept),
         spread(&reduced)
     );
+}
+
+/// `pack --place` carries a scene file's objects into the tiled file:
+/// `render --terrain` draws the PNG `render --place` draws from the maps;
+/// `--objects` beside `--terrain` is refused in one line that names
+/// `pack`.
+#[test]
+fn objects_packed_into_a_tiles_file_render_as_from_the_maps() {
+    let (h, c) = maps_named("objects-h.png", "objects-c.png");
+    let plan = temp("objects.toml");
+    std::fs::write(
+        &plan,
+        "[[place]]\nobject = \"house\"\nat = [8, 8]\nheading = 0\nscale = 1\n",
+    )
+    .unwrap();
+    let tiles = temp("objects.tiles");
+    let (code, out, err) = sim(&[
+        "pack",
+        "--height",
+        s(&h),
+        "--color",
+        s(&c),
+        "--place",
+        s(&plan),
+        "--out",
+        s(&tiles),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("placed 1 objects"), "{out}");
+    let camera = [
+        "--eye", "-6,8,45", "--yaw", "0", "--pitch", "35", "--size", "64x48",
+    ];
+    let render = |scene: &[&str], png: &Path| {
+        let mut args = vec!["render"];
+        args.extend_from_slice(scene);
+        args.extend_from_slice(&camera);
+        args.extend_from_slice(&["--out", s(png)]);
+        let (code, _, err) = sim(&args);
+        assert_eq!(code, 0, "{err}");
+        std::fs::read(png).unwrap()
+    };
+    let from_tiles = render(&["--terrain", s(&tiles)], &temp("objects-t.png"));
+    let maps = ["--height", s(&h), "--color", s(&c)];
+    let from_maps = render(
+        &[&maps[..], &["--place", s(&plan)]].concat(),
+        &temp("objects-m.png"),
+    );
+    let bare = render(&maps, &temp("objects-b.png"));
+    assert!(from_tiles == from_maps);
+    assert!(from_tiles != bare, "the house shows");
+    let (code, _, err) = sim(&[
+        "render",
+        "--terrain",
+        s(&tiles),
+        "--objects",
+        "--out",
+        s(&temp("refused.png")),
+    ]);
+    assert_ne!(code, 0);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("pack --objects"), "{err}");
 }

@@ -257,6 +257,8 @@ fn tiled_terrain_files() {
         height_scale: 1.0 / 16.0,
         filter: Default::default(),
         seed: 1,
+        objects: false,
+        place: None,
     };
     pack(&input, &tiles, &mut |_, _| {}).unwrap();
     let valid = std::fs::read(&tiles).unwrap();

@@ -8,8 +8,8 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use terracast::tiles::{
-    cut_photo_tile, cut_tile, photo_tiles as photo_tiles_of, PhotoKey, PhotoTile, Tile, TileError,
-    TileKey, TileSource, World,
+    cut_photo_tile, cut_stick_points, cut_tile, photo_tiles as photo_tiles_of, PhotoKey, PhotoTile,
+    Tile, TileError, TileKey, TileSource, World,
 };
 use terracast::{Camera, HeightFilter, RenderOptions};
 use terracast_sim::kernel::{render_kernel, PixelRays};
@@ -32,6 +32,8 @@ fn pack_input(height: &Path, colors: &[&Path], scale: f32, filter: HeightFilter)
         height_scale: scale,
         filter,
         seed: 1,
+        objects: false,
+        place: None,
     }
 }
 
@@ -108,6 +110,39 @@ fn photo_tiles_as_in_memory(
     photo_tiles
 }
 
+/// Checks that every tile of `file` is as `pyramid` cuts it (with
+/// `layer`'s points in level 0's tiles, when the map has objects); returns
+/// the tiles.
+fn tiles_as_cut(
+    file: &mut TilesFile,
+    pyramid: &terracast::Pyramid<'_>,
+    layer: Option<&terracast::StickLayer<'_>>,
+    name: &str,
+) -> u64 {
+    let world = file.world();
+    let (mut from_file, mut cut) = (Box::new(Tile::<TILE>::EMPTY), Box::new(Tile::EMPTY));
+    let mut tiles = 0;
+    for level in 0..world.levels() {
+        let (tx, ty) = world.tiles(level, TILE as u32);
+        for y in 0..ty {
+            for x in 0..tx {
+                let key = TileKey { level, x, y };
+                file.load(key, &mut from_file).unwrap();
+                assert!(cut_tile(pyramid, key, &mut cut));
+                if let Some(layer) = layer {
+                    cut_stick_points(layer, (world.width, world.depth), key, &mut cut);
+                }
+                assert!(
+                    from_file == cut,
+                    "{name}: tile {key:?} differs from the pyramid's"
+                );
+                tiles += 1;
+            }
+        }
+    }
+    tiles
+}
+
 /// Packs the maps with `filter`, then checks every tile against the pyramid
 /// in memory and every view against the render from the maps.
 fn packed_equals_maps(
@@ -128,23 +163,7 @@ fn packed_equals_maps(
     assert_eq!((world.width, world.depth), (scene.width, scene.depth));
     // The packer measured the roughness on the rows the pyramid does.
     assert_eq!(world.roughness, pyramid.roughness(), "{name}");
-    let (mut from_file, mut cut) = (Box::new(Tile::<TILE>::EMPTY), Box::new(Tile::EMPTY));
-    let mut tiles = 0;
-    for level in 0..world.levels() {
-        let (tx, ty) = world.tiles(level, TILE as u32);
-        for y in 0..ty {
-            for x in 0..tx {
-                let key = TileKey { level, x, y };
-                file.load(key, &mut from_file).unwrap();
-                assert!(cut_tile(&pyramid, key, &mut cut));
-                assert!(
-                    from_file == cut,
-                    "{name}: tile {key:?} differs from the pyramid's"
-                );
-                tiles += 1;
-            }
-        }
-    }
+    let tiles = tiles_as_cut(&mut file, &pyramid, None, name);
     assert_eq!(tiles, summary.tiles);
     // A photo finer than the grid is packed at its own resolution: every
     // photo tile as the kernel's detail in memory cuts it.
@@ -424,6 +443,8 @@ fn swellendams_photos_pack_at_their_own_resolution_and_page_as_a_near_view_needs
         height_scale: scale,
         filter: HeightFilter::default(),
         seed: 1,
+        objects: false,
+        place: None,
     };
     let summary = pack(&input, &out, &mut |_, _| {}).unwrap();
     let scene = load_scene_files(&height, &photos, scale, 1).unwrap();
@@ -649,6 +670,73 @@ fn pack_holds_a_few_strips_of_rows_however_tall_the_map() {
     assert!(tall < 3000 / 3, "{tall} rows held of 3000");
 }
 
+/// A map packed with objects (`pack --objects`) renders from its tiles as
+/// `render --objects` draws it from the maps, bit for bit: every tile as
+/// the pyramid with the objects' heights cuts it, level 0's tiles naming
+/// the points' sticks, the file carrying the stick table; views from afar
+/// and among the objects.
+#[test]
+fn objects_pack_into_tiles_and_render_as_from_the_maps() {
+    let (height, color) = odd_sized_maps();
+    let out = temp("objects.tiles");
+    let input = PackInput {
+        objects: true,
+        ..pack_input(&height, &[&color], 1.0 / 16.0, HeightFilter::default())
+    };
+    let summary = pack(&input, &out, &mut |_, _| {}).unwrap();
+    let mut scene = load_scene_files(&height, &input.colors, 1.0 / 16.0, 1).unwrap();
+    let planted = scene.plant_objects(1);
+    assert_eq!(summary.objects.as_deref(), Some(planted.as_str()));
+    let kernel = scene.to_kernel().unwrap();
+    let pyramid = kernel.pyramid().unwrap();
+    let layer = kernel.sticks().unwrap().unwrap();
+    let mut file = TilesFile::open(&out).unwrap();
+    let table = file.sticks();
+    assert!(!table.is_empty(), "{planted}");
+    assert_eq!(table.sticks(), layer.table().sticks());
+    assert_eq!(table.texels(), layer.table().texels());
+    let world = file.world();
+    assert_eq!(world.roughness, pyramid.roughness());
+    assert_eq!(
+        tiles_as_cut(&mut file, &pyramid, Some(&layer), "objects"),
+        summary.tiles
+    );
+    // Among the objects: low over the first stick, looking along +x.
+    let objects = scene.objects.as_ref().unwrap();
+    let first = objects.points.iter().position(|&p| p != 0).unwrap();
+    let (x, y) = (first % scene.width as usize, first / scene.width as usize);
+    let ground = scene.height(x, y);
+    let mut cameras = views(scene.width as f32, scene.depth as f32, scene.max_height());
+    cameras.push(Camera::looking(
+        [x as f32 - 12.0, y as f32 + 0.5, ground + 2.0],
+        0.0,
+        5.0,
+    ));
+    let options = RenderOptions::default();
+    for camera in cameras {
+        let (from_maps, _) = render_kernel(&kernel, &camera, 96, 72, &options).unwrap();
+        let (from_tiles, _, tiled) =
+            render_tiled(&mut file, &camera, 96, 72, &options, PixelRays::Fixed).unwrap();
+        assert!(from_maps.colors == from_tiles.colors, "{camera:?}");
+        assert_eq!((tiled.misses, tiled.degraded_samples), (0, 0), "{camera:?}");
+    }
+    println!(
+        "{planted}: {} tiles, {} bytes, every tile and view identical",
+        summary.tiles, summary.bytes
+    );
+}
+
+/// The bytes of a `.tiles` file with the header's version set to
+/// `version` and its checksum made again (the file's sections of later
+/// versions cut off by the caller).
+fn as_version(bytes: &[u8], version: u8) -> Vec<u8> {
+    let mut older = bytes.to_vec();
+    older[8] = version;
+    let header_crc = crc32fast::hash(&older[..40]);
+    older[40..44].copy_from_slice(&header_crc.to_le_bytes());
+    older
+}
+
 #[test]
 fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
     let (height, color) = odd_sized_maps();
@@ -676,14 +764,26 @@ fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
     std::fs::write(&versioned, &newer).unwrap();
     let e = TilesFile::open(&versioned).unwrap_err().to_string();
     assert!(e.contains("format version 9"), "{e}");
+    // A version-2 file (no stick section) reads as one without objects.
+    let stick_section = 12;
+    let old = temp("version-2.tiles");
+    std::fs::write(&old, as_version(&bytes[..bytes.len() - stick_section], 2)).unwrap();
+    assert!(TilesFile::open(&old).unwrap().sticks().is_empty());
+    // A damaged stick table, and one cut short: refused in one line.
+    let mut table = bytes.clone();
+    let at = bytes.len() - 3;
+    table[at] ^= 0x01;
+    let damaged_sticks = temp("stick-table.tiles");
+    std::fs::write(&damaged_sticks, &table).unwrap();
+    let e = TilesFile::open(&damaged_sticks).unwrap_err().to_string();
+    assert!(e.contains("stick table") && !e.contains('\n'), "{e}");
+    std::fs::write(&damaged_sticks, &bytes[..bytes.len() - 2]).unwrap();
+    let e = TilesFile::open(&damaged_sticks).unwrap_err().to_string();
+    assert!(e.contains("truncated") && !e.contains('\n'), "{e}");
     // A version-1 file (no photo section) reads as one without photos.
-    let tiles_end = bytes.len() - 8;
-    let mut older = bytes[..tiles_end].to_vec();
-    older[8] = 1;
-    let header_crc = crc32fast::hash(&older[..40]);
-    older[40..44].copy_from_slice(&header_crc.to_le_bytes());
+    let tiles_end = bytes.len() - stick_section - 8;
     let old = temp("older.tiles");
-    std::fs::write(&old, &older).unwrap();
+    std::fs::write(&old, as_version(&bytes[..tiles_end], 1)).unwrap();
     assert!(TilesFile::open(&old).unwrap().photos().is_empty());
     // A damaged photo table, and one cut short: refused in one line.
     let mut table = bytes.clone();

@@ -55,6 +55,7 @@ pub use surface::{TiledGrid, TiledSurface};
 use crate::color::Rgb;
 use crate::detail::{Detail, DetailArea};
 use crate::pyramid::level_side;
+use crate::sticks::{StickLayer, StickTable};
 use core::fmt;
 
 /// The size of a whole tiled terrain, which may be far larger than any map
@@ -138,7 +139,9 @@ pub struct TileKey {
 
 /// One tile of `T × T` grid points of a level: heights, colors and, on
 /// levels 1 and up, the height bound of the cell to the +x, +y of each point
-/// (see [`crate::Pyramid`]'s notes). Points past the level's far edge hold
+/// (see [`crate::Pyramid`]'s notes); on level 0, each point's stick in the
+/// source's stick table ([`TileSource::sticks`], 0 for plain terrain, as a
+/// [`crate::StickLayer`]'s points). Points past the level's far edge hold
 /// the edge's values.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Tile<const T: usize> {
@@ -146,7 +149,8 @@ pub struct Tile<const T: usize> {
     pub heights: [[u16; T]; T],
     /// Colors, `[row][column]`.
     pub colors: [[Rgb; T]; T],
-    /// Cell bounds, U12.4, `[row][column]` (zero on level 0).
+    /// Cell bounds, U12.4, `[row][column]`; on level 0, the points'
+    /// sticks (zero where none stand).
     pub bounds: [[u16; T]; T],
 }
 
@@ -280,6 +284,11 @@ pub trait TileSource<const T: usize> {
         let _ = (key, tile);
         Err(TileError::Missing)
     }
+    /// The stick table level 0's tiles name their points' sticks in
+    /// ([`Tile::bounds`], [`TiledSurface::with_sticks`]); none by default.
+    fn sticks(&self) -> StickTable<'_> {
+        StickTable::EMPTY
+    }
 }
 
 /// Fills `tile` with tile `key` of `pyramid`: a source for a map already in
@@ -319,6 +328,29 @@ pub fn cut_tile<const T: usize>(
         }
     }
     true
+}
+
+/// Writes `layer`'s points into level-0 tile `key` (cut by [`cut_tile`]
+/// from the pyramid whose level 0 the layer stands on, `width` × `depth`
+/// points): a tile's points name their sticks where coarser levels hold
+/// bounds. Nothing for a tile of another level.
+pub fn cut_stick_points<const T: usize>(
+    layer: &StickLayer<'_>,
+    (width, depth): (u32, u32),
+    key: TileKey,
+    tile: &mut Tile<T>,
+) {
+    if key.level != 0 || width == 0 || depth == 0 {
+        return;
+    }
+    let (x0, y0) = (key.x as usize * T, key.y as usize * T);
+    for (j, row) in tile.bounds.iter_mut().enumerate() {
+        let y = (y0 + j).min(depth as usize - 1);
+        for (i, point) in row.iter_mut().enumerate() {
+            let x = (x0 + i).min(width as usize - 1);
+            *point = layer.point(y * width as usize + x);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -407,6 +439,23 @@ mod tests {
         }
     }
 
+    /// Loads the footprint of a 64 × 48 frame from `camera` with
+    /// `options` into `cache`, as the frame's.
+    fn load_frame<S: TileSource<16>>(
+        cache: &mut TileCache<'_, 16, 256>,
+        source: &mut S,
+        camera: Camera,
+        options: &RenderOptions,
+    ) {
+        let mut needed = heapless::Vec::<TileKey, 512>::new();
+        let frame = frame_64x48(camera, &source.world(), options);
+        footprint::<16, 512>(&source.world(), &frame, &mut needed).unwrap();
+        cache.begin_frame();
+        for key in &needed {
+            cache.require(*key, source).unwrap();
+        }
+    }
+
     #[test]
     fn rendering_from_tiles_equals_rendering_from_the_pyramid() {
         let built = Built::hills(203, 150);
@@ -422,14 +471,8 @@ mod tests {
             ([100.0, 70.0, 300.0], 10.0, 90.0),
         ] {
             let camera = Camera::looking(eye, yaw, pitch);
-            let mut needed = heapless::Vec::<TileKey, 512>::new();
             let options = RenderOptions::default();
-            let frame = frame_64x48(camera, &source.world(), &options);
-            footprint::<16, 512>(&source.world(), &frame, &mut needed).unwrap();
-            cache.begin_frame();
-            for key in &needed {
-                cache.require(*key, &mut source).unwrap();
-            }
+            load_frame(&mut cache, &mut source, camera, &options);
             let surface = TiledSurface::around(&cache, camera.eye);
             assert_eq!(surface.origin(), [0, 0]);
             let view = View::new(&surface.local(&camera), 64, 48).unwrap();
@@ -459,6 +502,111 @@ mod tests {
             );
             // The footprint held every tile the frame read.
             assert_eq!(surface.degraded_samples(), 0, "{camera:?}");
+        }
+    }
+
+    /// Tiles cut from a pyramid with objects, their level-0 tiles naming
+    /// the layer's sticks.
+    struct CutWithSticks<'p> {
+        pyramid: &'p Pyramid<'p>,
+        layer: StickLayer<'p>,
+    }
+
+    impl TileSource<16> for CutWithSticks<'_> {
+        fn world(&self) -> World {
+            Cut(self.pyramid).world()
+        }
+        fn load(&mut self, key: TileKey, tile: &mut Tile<16>) -> Result<usize, TileError> {
+            if !cut_tile(self.pyramid, key, tile) {
+                return Err(TileError::Missing);
+            }
+            let base = self.pyramid.base();
+            cut_stick_points(&self.layer, (base.width(), base.depth()), key, tile);
+            Ok(Tile::<16>::BYTES)
+        }
+        fn sticks(&self) -> StickTable<'_> {
+            self.layer.table()
+        }
+    }
+
+    #[test]
+    fn rendering_objects_from_tiles_equals_rendering_them_from_memory() {
+        use crate::{Stick, WithSticks};
+        let (w, d) = (203, 150);
+        let (mut heights, mut colors) = hills(w, d);
+        // Posts every 9 points and a wall two points thick: sticks five
+        // voxels tall, a texel a voxel, bottom up.
+        let bands: vec::Vec<Rgb> = (0..5).map(|i| [250, 50 * i as u8, 0]).collect();
+        let sticks = [Stick {
+            first: 0,
+            texels: 5,
+            height: 5 * 16,
+        }];
+        let mut points = vec![0u16; (w * d) as usize];
+        for y in 0..d {
+            for x in 0..w {
+                if (x % 9 == 4 && y % 9 == 4) || ((60..62).contains(&x) && (20..120).contains(&y)) {
+                    let i = (y * w + x) as usize;
+                    heights[i] += 5 * 16;
+                    colors[i] = bands[4];
+                    points[i] = 1;
+                }
+            }
+        }
+        let terrain = Terrain::new(w, d, &heights, &colors).unwrap();
+        let layer = StickLayer::new(&terrain, &points, &sticks, &bands).unwrap();
+        let n = pyramid_points(w, d);
+        let (mut ph, mut pc) = (vec![0u16; n], vec![[0u8; 3]; n]);
+        let mut pb = vec![0u16; pyramid_cells(w, d)];
+        Pyramid::build_with_sticks(
+            &terrain,
+            HeightFilter::default(),
+            Some(&layer),
+            &mut ph,
+            &mut pc,
+            &mut pb,
+        )
+        .unwrap();
+        let pyramid = Pyramid::new(terrain, &ph, &pc, &pb).unwrap();
+        let in_memory = WithSticks::new(&pyramid, layer);
+        let mut source = CutWithSticks {
+            pyramid: &pyramid,
+            layer,
+        };
+        let mut slots = vec![Tile::<16>::EMPTY; 256].into_boxed_slice();
+        let slots: &mut [Tile<16>; 256] = (&mut slots[..]).try_into().unwrap();
+        let mut cache = TileCache::<16, 256>::new(source.world(), slots);
+        for (eye, yaw, pitch) in [
+            ([30.0, 70.0, 60.0], 0.0, 10.0),
+            ([100.0, 75.0, 60.0], 200.0, 40.0),
+            ([10.0, 10.0, 70.0], 45.0, 3.0),
+            ([100.0, 70.0, 300.0], 10.0, 90.0),
+        ] {
+            let camera = Camera::looking(eye, yaw, pitch);
+            let options = RenderOptions::default();
+            load_frame(&mut cache, &mut source, camera, &options);
+            let table = source.sticks();
+            let tiled = TiledSurface::around(&cache, camera.eye).with_sticks(table);
+            let bare = TiledSurface::around(&cache, camera.eye);
+            let view = View::new(&tiled.local(&camera), 64, 48).unwrap();
+            let draw = |s: &dyn Fn(&mut Framebuffer<'_>)| {
+                let mut pixels = vec![[0u8; 3]; 64 * 48];
+                s(&mut Framebuffer::new(&mut pixels, 64, 48).unwrap());
+                pixels
+            };
+            let from_tiles = draw(&|f| render(&tiled, &view, &options, f, &mut NoProbe));
+            let from_memory = draw(&|f| render(&in_memory, &view, &options, f, &mut NoProbe));
+            let without_table = draw(&|f| render(&bare, &view, &options, f, &mut NoProbe));
+            let differ = from_tiles
+                .iter()
+                .zip(&from_memory)
+                .filter(|(a, b)| a != b)
+                .count();
+            assert_eq!(differ, 0, "{camera:?}: pixels differ");
+            assert_eq!(tiled.degraded_samples(), 0, "{camera:?}");
+            // The sticks' texels show: without the table the posts and the
+            // wall are their top color all the way down.
+            assert_ne!(from_tiles, without_table, "{camera:?}");
         }
     }
 

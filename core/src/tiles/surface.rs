@@ -6,6 +6,7 @@ use super::{PhotoCache, PhotoKey, PhotoTile, Tile, TileCache, TileKey, World};
 use crate::color::Rgb;
 use crate::config::COORD_FRAC_BITS;
 use crate::detail::DetailArea;
+use crate::sticks::StickTable;
 use crate::surface::{Extent, Grid, Surface};
 use crate::Camera;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -25,12 +26,16 @@ const STRIDE_LOG2: u32 = 15;
 /// Renders from a world that fits the window are the same, bit for bit, as
 /// from a [`crate::Pyramid`] of the same levels; with photos finer than
 /// level 0 paged through a [`PhotoCache`] ([`TiledSurface::with_photos`],
-/// `M` its slots), as from a [`crate::WithDetail`] of the same photos.
+/// `M` its slots), as from a [`crate::WithDetail`] of the same photos;
+/// with objects ([`TiledSurface::with_sticks`]), as from a
+/// [`crate::WithSticks`] of the same sticks.
 #[derive(Debug)]
 pub struct TiledSurface<'c, 'a, const T: usize, const N: usize, const M: usize = 0> {
     cache: &'c TileCache<'a, T, N>,
     /// The photos' tiles and where each photo lies (world coordinates).
     photos: Option<(&'c PhotoCache<'a, T, M>, &'c [DetailArea])>,
+    /// The stick table that level 0's tiles name their points' sticks in.
+    sticks: Option<StickTable<'c>>,
     origin: [u32; 2],
     extent: Extent,
     top: u8,
@@ -59,6 +64,7 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
             degraded: AtomicU32::new(0),
             touched: core::array::from_fn(|_| AtomicBool::new(false)),
             photos: None,
+            sticks: None,
         }
     }
 
@@ -77,6 +83,7 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
         TiledSurface {
             cache: self.cache,
             photos: Some((cache, areas)),
+            sticks: self.sticks,
             origin: self.origin,
             extent: self.extent,
             top: self.top,
@@ -88,6 +95,18 @@ impl<'c, 'a, const T: usize, const N: usize> TiledSurface<'c, 'a, T, N> {
 }
 
 impl<'c, 'a, const T: usize, const N: usize, const M: usize> TiledSurface<'c, 'a, T, N, M> {
+    /// This window with objects standing on level 0: each level-0 tile
+    /// holds its points' values in `table` (a source's
+    /// [`super::TileSource::sticks`]) where other levels hold their cell
+    /// bounds, and a hit on a stick takes its texel at the crossing's
+    /// height, as through a [`crate::WithSticks`]. A point whose level-0
+    /// tile is not resident (its sample read from a coarser tile) is plain
+    /// terrain. An empty table leaves the window as it is.
+    pub fn with_sticks(mut self, table: StickTable<'c>) -> Self {
+        self.sticks = (!table.is_empty()).then_some(table);
+        self
+    }
+
     /// The world point at window point (0, 0).
     pub fn origin(&self) -> [u32; 2] {
         self.origin
@@ -250,6 +269,8 @@ pub struct TiledGrid<'s, 'c, 'a, const T: usize, const N: usize, const M: usize 
     /// A resident tile of this level resolved ahead, and its tile column
     /// and row: reads inside it skip the directory.
     near: Option<(&'s Tile<T>, u32, u32)>,
+    /// On level 0, the stick table its tiles' points name.
+    sticks: Option<StickTable<'s>>,
 }
 
 impl<'s, const T: usize, const N: usize, const M: usize> TiledGrid<'s, '_, '_, T, N, M> {
@@ -272,6 +293,32 @@ impl<'s, const T: usize, const N: usize, const M: usize> TiledGrid<'s, '_, '_, T
         let x = (index & ((1 << self.shift) - 1)) as u32 + self.origin[0];
         let y = (index >> self.shift) as u32 + self.origin[1];
         (x < self.size.0 && y < self.size.1).then_some((x, y))
+    }
+
+    /// The stick value of level-0 point `index` (its tile's bounds slot):
+    /// 0 where the point's own tile is not resident.
+    #[inline(always)]
+    fn stick_point(&self, index: isize) -> u16 {
+        let Some((x, y)) = self.at(index) else {
+            return 0;
+        };
+        let (row, column) = TiledSurface::<T, N, M>::place(x, y);
+        if let Some(tile) = self.near_tile((x, y)) {
+            return tile.bounds[row][column];
+        }
+        let shift = T.trailing_zeros();
+        let key = TileKey {
+            level: 0,
+            x: x >> shift,
+            y: y >> shift,
+        };
+        match self.surface.cache.lookup(&key) {
+            Some((slot, tile)) => {
+                self.surface.touch(slot);
+                tile.bounds[row][column]
+            }
+            None => 0,
+        }
     }
 
     /// `field` (a tile's heights or colors at a row and column) of the
@@ -350,6 +397,45 @@ impl<const T: usize, const N: usize, const M: usize> Grid for TiledGrid<'_, '_, 
     fn color_pair(&self, index: isize, across: isize) -> Option<(Rgb, Rgb)> {
         self.read_pair(index, across, |tile, row, column| tile.colors[row][column])
     }
+    #[inline]
+    fn color_pair_at(&self, index: isize, across: isize, z: i32) -> Option<(Rgb, Rgb)> {
+        let colors = self.color_pair(index, across)?;
+        let Some(table) = &self.sticks else {
+            return Some(colors);
+        };
+        let points = (self.stick_point(index), self.stick_point(index + across));
+        if points == (0, 0) {
+            return Some(colors);
+        }
+        let tops = self.height_pair(index, across)?;
+        Some(table.pair(points, tops, z, colors))
+    }
+    #[inline]
+    fn stands(&self, index: isize, across: isize, z: i32) -> bool {
+        if self.sticks.is_none() {
+            return false;
+        }
+        let stands_at = |i: isize| {
+            let point = self.stick_point(i);
+            point != 0
+                && self
+                    .height(i)
+                    .is_some_and(|top| StickTable::stands(point, top, z))
+        };
+        stands_at(index) || stands_at(index + across)
+    }
+    #[inline]
+    fn color_at(&self, index: isize, z: i32) -> Option<Rgb> {
+        let color = self.color(index)?;
+        let Some(table) = &self.sticks else {
+            return Some(color);
+        };
+        let point = self.stick_point(index);
+        if point == 0 {
+            return Some(color);
+        }
+        Some(table.texel(point, self.height(index)?, z).unwrap_or(color))
+    }
 }
 
 impl<'c, 'a, const T: usize, const N: usize, const M: usize> Surface
@@ -369,6 +455,7 @@ impl<'c, 'a, const T: usize, const N: usize, const M: usize> Surface
             origin: self.origin.map(|o| o >> level),
             size: self.world().level_size(level),
             near: None,
+            sticks: self.sticks.filter(|_| level == 0),
         })
     }
     #[inline]
@@ -380,6 +467,7 @@ impl<'c, 'a, const T: usize, const N: usize, const M: usize> Surface
             origin: self.origin,
             size: (self.world().width, self.world().depth),
             near: None,
+            sticks: self.sticks,
         }
     }
     fn top(&self) -> u8 {

@@ -771,7 +771,8 @@ impl KernelArgs {
 }
 
 impl SceneArgs {
-    /// `--objects` refused where `what` cannot carry them yet.
+    /// `--objects` and `--place` refused for `what`, a tiled terrain,
+    /// which carries the objects it was packed with.
     fn refuse_objects(&self, what: &str) -> Result<()> {
         let flag = if self.objects {
             "--objects"
@@ -781,7 +782,7 @@ impl SceneArgs {
             return Ok(());
         };
         Err(Error::new(format!(
-            "{flag} stands objects on a terrain in memory; {what} does not carry objects yet"
+            "{flag} stands objects on a terrain in memory; {what} carries the objects it was packed with (pack --objects, --place)"
         )))
     }
 

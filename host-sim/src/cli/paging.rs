@@ -33,9 +33,19 @@ pub(super) struct PackArgs {
     /// How the pyramid's coarse heights are made.
     #[arg(long, value_enum, default_value_t = super::HeightFilterArg::Wavelet)]
     height_filter: super::HeightFilterArg,
-    /// Seed of the coloring's texture (without --color).
+    /// Seed of the coloring's texture (without --color) and of the
+    /// objects' planting.
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = seed, allow_hyphen_values = true)]
     seed: u64,
+    /// Plant a wood and a village on the map by a rule seeded with
+    /// --seed, as `render --objects` does: the file carries the objects
+    /// (the map is then loaded whole).
+    #[arg(long)]
+    objects: bool,
+    /// Stand the objects a scene file places on the map, as `render
+    /// --place` does (TOML; see docs/objects.md).
+    #[arg(long, value_name = "FILE.toml")]
+    place: Option<PathBuf>,
     /// The tiled terrain file to write.
     #[arg(long, value_name = "T.tiles")]
     out: PathBuf,
@@ -49,6 +59,8 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
         height_scale,
         filter: args.height_filter.into(),
         seed: args.seed,
+        objects: args.objects,
+        place: args.place,
     };
     let bar = ProgressBar::new(0).with_style(
         ProgressStyle::with_template("pack {bar:40} {pos}/{len} rows {elapsed}")
@@ -59,6 +71,9 @@ pub(super) fn pack_command(args: PackArgs) -> Result<()> {
         bar.set_position(u64::from(done));
     })?;
     bar.finish_and_clear();
+    if let Some(objects) = &summary.objects {
+        println!("{objects}");
+    }
     let voids = if summary.voids > 0 {
         format!(
             ", {} voids filled holding at most {} rows",

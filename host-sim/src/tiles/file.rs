@@ -23,14 +23,19 @@
 //! | 4 | CRC-32 of the photo count and table |
 //! | 4 × photo tiles | CRC-32 of each photo tile record |
 //! | photo record × photo tiles | photo tile records |
+//! | 4, 4 | stick count, texel count (version 3) |
+//! | 8 × sticks | each stick's first texel (`u32`), texel count and height (U12.4, `u16` each) |
+//! | 3 × texels | the sticks' texels (RGB) |
+//! | 4 | CRC-32 of the stick section before it |
 //!
 //! Tiles are ordered by level, then row, then column. A record is the
 //! tile's heights (`u16`, row by row), colors (RGB), and cell bounds
-//! (`u16`): see [`terracast::tiles::Tile`]. Photo tiles (photos finer than
+//! (`u16`; on level 0, each point's stick, 0 where none stands, 1 for the
+//! stick table's first): see [`terracast::tiles::Tile`]. Photo tiles (photos finer than
 //! the height grid, [`terracast::tiles::PhotoTile`]) are ordered by photo,
 //! then fine level (the photo's texels first), then row, then column; a
 //! record is the tile's texels (RGB). A version-1 file is read as one
-//! without photos.
+//! without photos, a version-2 file as one without objects.
 
 use super::TILE;
 use crate::error::{Error, Result};
@@ -40,10 +45,10 @@ use std::path::{Path, PathBuf};
 use terracast::tiles::{
     photo_tiles, PhotoKey, PhotoTile, Tile, TileError, TileKey, TileSource, World,
 };
-use terracast::{DetailArea, HeightFilter};
+use terracast::{DetailArea, HeightFilter, Rgb, Stick, StickTable};
 
-/// The format version this build writes (it reads version 1 too).
-pub const FORMAT_VERSION: u32 = 2;
+/// The format version this build writes (it reads versions 1 and 2 too).
+pub const FORMAT_VERSION: u32 = 3;
 
 const MAGIC: &[u8; 8] = b"TCTILES\0";
 const HEADER_BYTES: u64 = 44;
@@ -55,6 +60,10 @@ const PHOTO_RECORD_BYTES: usize = TILE * TILE * 3;
 const PHOTO_ENTRY_BYTES: usize = 20;
 /// Photos a file holds at most (a [`PhotoKey`] names one in a byte).
 pub(crate) const MAX_PHOTOS: u64 = 256;
+/// Sticks a file holds at most (a level-0 point names one in 16 bits).
+pub(crate) const MAX_STICKS: u64 = u16::MAX as u64;
+/// Bytes of a stick's entry in the stick table.
+const STICK_ENTRY_BYTES: usize = 8;
 
 /// The header's byte for a height filter.
 fn filter_code(filter: HeightFilter) -> u8 {
@@ -228,6 +237,8 @@ pub struct TilesFile {
     record: Vec<u8>,
     photos: Photos,
     photo_checksums: Vec<u32>,
+    /// The objects' sticks and their texels (none before version 3).
+    sticks: Box<(Vec<Stick>, Vec<Rgb>)>,
 }
 
 impl TilesFile {
@@ -252,9 +263,9 @@ impl TilesFile {
         }
         let u32_at = |i: usize| u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
         let version = u32_at(8);
-        if version != FORMAT_VERSION && version != 1 {
+        if !(1..=FORMAT_VERSION).contains(&version) {
             return Err(fail(&format!(
-                "format version {version}, this build reads versions 1 and {FORMAT_VERSION}"
+                "format version {version}, this build reads versions 1 to {FORMAT_VERSION}"
             )));
         }
         if crc32fast::hash(&b[..40]) != u32_at(40) {
@@ -292,6 +303,12 @@ impl TilesFile {
         } else {
             read_photos(&mut file, header.file_bytes(), length).map_err(|e| fail(&e))?
         };
+        let sticks = Box::new(if version < 3 {
+            (Vec::new(), Vec::new())
+        } else {
+            read_sticks(&mut file, header.file_bytes() + photos.bytes(), length)
+                .map_err(|e| fail(&e))?
+        });
         Ok(Self {
             path: path.to_path_buf(),
             file,
@@ -300,6 +317,7 @@ impl TilesFile {
             record: vec![0; RECORD_BYTES],
             photos,
             photo_checksums,
+            sticks,
         })
     }
 
@@ -376,6 +394,70 @@ fn read_photos(
     Ok((photos, words(&sums)))
 }
 
+/// The stick section's bytes for `table`.
+fn stick_section(table: &StickTable<'_>) -> Vec<u8> {
+    let (sticks, texels) = (table.sticks(), table.texels());
+    let mut b = Vec::with_capacity(12 + STICK_ENTRY_BYTES * sticks.len() + 3 * texels.len());
+    b.extend_from_slice(&(sticks.len() as u32).to_le_bytes());
+    b.extend_from_slice(&(texels.len() as u32).to_le_bytes());
+    for stick in sticks {
+        b.extend_from_slice(&stick.first.to_le_bytes());
+        b.extend_from_slice(&stick.texels.to_le_bytes());
+        b.extend_from_slice(&stick.height.to_le_bytes());
+    }
+    texels.iter().for_each(|c| b.extend_from_slice(c));
+    let crc = crc32fast::hash(&b);
+    b.extend_from_slice(&crc.to_le_bytes());
+    b
+}
+
+/// Reads the stick section starting at `start` of a file `length` bytes
+/// long; why not, in words, when it is damaged or cut short.
+fn read_sticks(
+    file: &mut File,
+    start: u64,
+    length: u64,
+) -> std::result::Result<(Vec<Stick>, Vec<Rgb>), String> {
+    let cut = || "truncated: the stick table is missing or cut short".to_string();
+    if length < start + 8 {
+        return Err(cut());
+    }
+    let mut counts = [0u8; 8];
+    file.seek(SeekFrom::Start(start))
+        .and_then(|_| file.read_exact(&mut counts))
+        .map_err(|e| format!("cannot read the stick table: {e}"))?;
+    let [count, texel_count] = [words(&counts)[0], words(&counts)[1]].map(u64::from);
+    if count > MAX_STICKS {
+        return Err(format!(
+            "the stick table lists {count} sticks, a file holds at most {MAX_STICKS}: the file is damaged"
+        ));
+    }
+    let bytes = 8 + STICK_ENTRY_BYTES as u64 * count + 3 * texel_count + 4;
+    if length < start + bytes {
+        return Err(cut());
+    }
+    let mut section = vec![0u8; bytes as usize];
+    file.seek(SeekFrom::Start(start))
+        .and_then(|_| file.read_exact(&mut section))
+        .map_err(|e| format!("cannot read the stick table: {e}"))?;
+    let (entries, crc) = section.split_at(section.len() - 4);
+    if crc32fast::hash(entries) != words(crc)[0] {
+        return Err("stick table checksum mismatch: the file is damaged".into());
+    }
+    let (table, texels) = entries[8..].split_at(STICK_ENTRY_BYTES * count as usize);
+    let sticks: Vec<Stick> = table
+        .chunks_exact(STICK_ENTRY_BYTES)
+        .map(|e| Stick {
+            first: u32::from_le_bytes([e[0], e[1], e[2], e[3]]),
+            texels: u16::from_le_bytes([e[4], e[5]]),
+            height: u16::from_le_bytes([e[6], e[7]]),
+        })
+        .collect();
+    let texels: Vec<Rgb> = texels.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    StickTable::new(&sticks, &texels).map_err(|e| format!("stick table: {e}"))?;
+    Ok((sticks, texels))
+}
+
 impl TileSource<TILE> for TilesFile {
     fn world(&self) -> World {
         self.header.world
@@ -422,6 +504,11 @@ impl TileSource<TILE> for TilesFile {
             *texel = [c[0], c[1], c[2]];
         }
         Ok(PHOTO_RECORD_BYTES)
+    }
+
+    fn sticks(&self) -> StickTable<'_> {
+        // Checked when the file was opened.
+        StickTable::new(&self.sticks.0, &self.sticks.1).unwrap_or(StickTable::EMPTY)
     }
 }
 
@@ -526,8 +613,10 @@ impl TilesWriter {
         written
     }
 
-    /// Writes the header (with the final highest height) and the checksums.
-    pub fn finish(mut self, max_height: u16, roughness: u8) -> Result<()> {
+    /// Writes the header (with the final highest height), the checksums
+    /// and `sticks`, the table level 0's tiles name their points' sticks
+    /// in (empty without objects).
+    pub fn finish(mut self, max_height: u16, roughness: u8, sticks: &StickTable<'_>) -> Result<()> {
         let io = |e: std::io::Error| Error::new(format!("cannot finish the tiled file: {e}"));
         self.header.world.max_height = max_height;
         self.header.world.roughness = roughness;
@@ -543,6 +632,12 @@ impl TilesWriter {
         for c in &self.photo_checksums {
             self.file.write_all(&c.to_le_bytes()).map_err(io)?;
         }
+        self.file
+            .seek(SeekFrom::Start(
+                self.header.file_bytes() + self.photos.bytes(),
+            ))
+            .map_err(io)?;
+        self.file.write_all(&stick_section(sticks)).map_err(io)?;
         self.file.flush().map_err(io)
     }
 }

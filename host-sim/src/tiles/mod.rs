@@ -23,7 +23,7 @@ pub use procedural::ProceduralSource;
 use crate::error::{Error, Result};
 use std::path::Path;
 use terracast::tiles::{PhotoKey, PhotoTile, Tile, TileError, TileKey, TileSource, World};
-use terracast::DetailArea;
+use terracast::{DetailArea, StickTable};
 
 /// Points per tile side on the host.
 pub const TILE: usize = 64;
@@ -87,6 +87,12 @@ impl TileSource<TILE> for Terrain {
         match self {
             Self::Procedural(s) => s.load(key, tile),
             Self::File(s) => s.load(key, tile),
+        }
+    }
+    fn sticks(&self) -> StickTable<'_> {
+        match self {
+            Self::Procedural(_) => StickTable::EMPTY,
+            Self::File(s) => s.sticks(),
         }
     }
 }

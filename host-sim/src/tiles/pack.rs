@@ -22,9 +22,10 @@
 //! resolution, its fine levels cut into photo tiles
 //! ([`terracast::tiles::cut_photo_tile`]).
 
-use super::file::{Header, TilesWriter, MAX_PHOTOS};
+use super::file::{Header, TilesWriter, MAX_PHOTOS, MAX_STICKS};
 use super::TILE;
 use crate::error::{Error, Result};
+use crate::objects::placing::ScenePlan;
 use crate::outputs::Outputs;
 use crate::scene::geotiff::PhotoRowSource;
 use crate::scene::geotiff::{is_tiff, TiffHeightRows};
@@ -41,9 +42,12 @@ use std::io::{BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use terracast::roughness::RoughnessSum;
-use terracast::tiles::{cut_photo_tile, photo_tiles, PhotoKey, PhotoTile, Tile, TileKey, World};
+use terracast::tiles::{
+    cut_photo_tile, cut_stick_points, cut_tile, photo_tiles, PhotoKey, PhotoTile, Tile, TileKey,
+    World,
+};
 use terracast::wavelet_row;
-use terracast::{Detail, DetailArea, HeightFilter, Rgb, Terrain};
+use terracast::{Detail, DetailArea, HeightFilter, Rgb, StickTable, Terrain};
 
 /// What to pack.
 #[derive(Debug, Clone)]
@@ -61,12 +65,19 @@ pub struct PackInput {
     pub height_scale: f32,
     /// How coarse heights are made.
     pub filter: HeightFilter,
-    /// Seed of the coloring's texture (when there is no color map).
+    /// Seed of the coloring's texture (when there is no color map), and
+    /// of the objects' planting.
     pub seed: u64,
+    /// Plant a wood and a village on the map by a rule seeded with
+    /// `seed`, as `render --objects` plants them.
+    pub objects: bool,
+    /// Stand the objects of this scene file on the map (as `render
+    /// --place`).
+    pub place: Option<PathBuf>,
 }
 
 /// What `pack` wrote.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct PackSummary {
     /// Level-0 size.
     pub width: u32,
@@ -93,8 +104,12 @@ pub struct PackSummary {
     /// Most rows of a photo held at once (photos streamed).
     pub photo_rows_held_at_most: usize,
     /// Whether the input's rows were read as they were packed (else it
-    /// was loaded whole first: a color map in another image format).
+    /// was loaded whole first: a color map in another image format, or
+    /// objects to stand on the map).
     pub streamed: bool,
+    /// What stands on the map, in one line (as `render --objects`
+    /// reports it), when objects were planted or placed.
+    pub objects: Option<String>,
 }
 
 /// Packs `input` into `out`, calling `progress(rows done, rows)` now and
@@ -121,7 +136,18 @@ pub fn pack(
     for color in &input.colors {
         outputs.input("--color", color);
     }
+    if let Some(path) = &input.place {
+        outputs.input("--place", path);
+        for view in ScenePlan::view_paths(path) {
+            outputs.input("--place", &view);
+        }
+    }
     let out_id = outputs.output("--out", out)?;
+    if input.objects || input.place.is_some() {
+        let summary = pack_with_objects(input, outputs.temporary(out_id), progress)?;
+        outputs.commit()?;
+        return Ok(summary);
+    }
     // Heights stream (PNG, GeoTIFF, `.hgt`, voids and all) alone, with
     // GeoTIFF photos placed by their georeference, or with one PNG or TIFF
     // color map stretched over the map as `render` stretches it; anything
@@ -304,6 +330,76 @@ pub fn pack(
         void_rows_held_at_most,
         photo_rows_held_at_most,
         streamed: loaded.is_none(),
+        objects: None,
+    })
+}
+
+/// Packs `input`'s maps with objects standing on them into `out`: loaded
+/// whole (the planting needs the whole map, and so do the coarser
+/// levels' object heights), planted or placed as `render` stands them,
+/// and cut into tiles from the kernel's pyramid
+/// ([`terracast::Pyramid::build_with_sticks`]). Level 0's tiles name
+/// their points' sticks and the file carries the stick table
+/// ([`terracast::tiles::cut_stick_points`]). As in `render`, a photo
+/// finer than the grid is kept at the grid's resolution under objects.
+fn pack_with_objects(
+    input: &PackInput,
+    out: &Path,
+    progress: &mut dyn FnMut(u32, u32),
+) -> Result<PackSummary> {
+    let mut scene = load_scene_files(&input.height, &input.colors, input.height_scale, input.seed)?;
+    let plan = input.place.as_deref().map(ScenePlan::read).transpose()?;
+    let planted = scene.add_objects(plan.as_ref(), input.objects.then_some(input.seed))?;
+    let kernel = scene.to_kernel_with(input.filter)?;
+    let pyramid = kernel.pyramid()?;
+    let layer = kernel.sticks()?;
+    let table = layer.map_or(StickTable::EMPTY, |layer| layer.table());
+    if table.sticks().len() as u64 > MAX_STICKS {
+        return Err(Error::new(format!(
+            "{} distinct sticks stand on the map: a packed file holds at most {MAX_STICKS}",
+            table.sticks().len()
+        )));
+    }
+    let (width, depth) = (scene.width, scene.depth);
+    let world = World::new(width, depth, 0).ok_or_else(|| {
+        Error::new(format!(
+            "height map is {width}x{depth}: it needs at least 2x2 points"
+        ))
+    })?;
+    let header = Header::new(world, input.filter);
+    let mut writer = TilesWriter::create(out, header, Vec::new())?;
+    let mut tile = Box::new(Tile::<TILE>::EMPTY);
+    for level in 0..header.levels {
+        let (columns, rows) = world.tiles(level, TILE as u32);
+        for y in 0..rows {
+            for x in 0..columns {
+                let key = TileKey { level, x, y };
+                cut_tile(&pyramid, key, &mut tile);
+                if let Some(layer) = &layer {
+                    cut_stick_points(layer, (width, depth), key, &mut tile);
+                }
+                writer.write(key, &tile)?;
+            }
+            if level == 0 {
+                progress(((y + 1) * TILE as u32).min(depth), depth);
+            }
+        }
+    }
+    let max_height = terracast::Surface::extent(&pyramid).max_height;
+    writer.finish(max_height, pyramid.roughness(), &table)?;
+    Ok(PackSummary {
+        width,
+        depth,
+        levels: header.levels,
+        tiles: header.tiles,
+        photo_tiles: 0,
+        bytes: std::fs::metadata(out).map_or(0, |m| m.len()),
+        rows_held_at_most: depth as usize,
+        voids: 0,
+        void_rows_held_at_most: 0,
+        photo_rows_held_at_most: 0,
+        streamed: false,
+        objects: Some(planted),
     })
 }
 
@@ -1335,6 +1431,7 @@ impl Builder {
                 )));
             }
         }
-        self.writer.finish(max_height, roughness)
+        self.writer
+            .finish(max_height, roughness, &StickTable::EMPTY)
     }
 }

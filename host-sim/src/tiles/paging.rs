@@ -312,8 +312,9 @@ fn render_tiled_with<S: TileSource<TILE>, const M: usize>(
     let mut photos = PhotoPager::new(source, photo_slots);
     photos.cache.begin_frame();
     let photo_misses = photos.load_view(source, camera, (width, height), bias)?;
-    let surface =
-        TiledSurface::around(&cache, camera.eye).with_photos(&photos.cache, &photos.areas);
+    let surface = TiledSurface::around(&cache, camera.eye)
+        .with_photos(&photos.cache, &photos.areas)
+        .with_sticks(source.sticks());
     let (frame, mut stats) = render_surface_in(
         &surface,
         &local_camera(&surface, camera)?,
@@ -410,7 +411,8 @@ impl<'s, S: TileSource<TILE>> TiledViewer<'s, S> {
             .photos
             .load_view(&mut self.source, camera, size, bias)?;
         let surface = TiledSurface::around(&self.cache, camera.eye)
-            .with_photos(&self.photos.cache, &self.photos.areas);
+            .with_photos(&self.photos.cache, &self.photos.areas)
+            .with_sticks(self.source.sticks());
         let local = local_camera(&surface, camera)?;
         Ok((draw(&surface, &local), misses + photo_misses))
     }
@@ -657,8 +659,9 @@ fn page_flight_with<S: TileSource<TILE>, const M: usize>(
             .filter(|k| !photos.cache.pin(**k))
             .copied()
             .collect();
-        let surface =
-            TiledSurface::around(&cache, camera.eye).with_photos(&photos.cache, &photos.areas);
+        let surface = TiledSurface::around(&cache, camera.eye)
+            .with_photos(&photos.cache, &photos.areas)
+            .with_sticks(source.sticks());
         let (image, stats) = render_surface(
             &surface,
             &local_camera(&surface, &camera)?,
