@@ -111,7 +111,8 @@ pub struct TiledRender {
     pub footprint_tiles: usize,
     /// Of the resident tiles, those the frame read.
     pub touched_tiles: usize,
-    /// Terrain bytes resident when the frame was drawn.
+    /// Terrain bytes resident when the frame was drawn: tiles, photo
+    /// tiles and the stick table.
     pub resident_bytes: u64,
     /// Tiles loaded for the frame.
     pub tiles_loaded: u64,
@@ -323,7 +324,9 @@ fn render_tiled_with<S: TileSource<TILE>, const M: usize>(
         rays,
         atmosphere,
     )?;
-    let resident_bytes = (cache.resident_bytes() + photos.cache.resident_bytes()) as u64;
+    // The stick table is held whole, beside the tiles.
+    let resident_bytes =
+        (cache.resident_bytes() + photos.cache.resident_bytes() + source.sticks().bytes()) as u64;
     stats.resident_bytes = resident_bytes;
     let (cache_stats, photo_stats) = (cache.stats(), photos.cache.stats());
     let tiled = TiledRender {
@@ -476,7 +479,8 @@ pub struct PagedFrame {
     /// Tiles the cache rejected for a bad checksum while this frame was
     /// drawn (they stay missing and are drawn from a coarser level).
     pub rejected: u64,
-    /// Terrain bytes resident when the frame was drawn.
+    /// Terrain bytes resident when the frame was drawn: tiles, photo
+    /// tiles and the stick table.
     pub resident_bytes: u64,
     /// Bytes of the frame's own footprint.
     pub footprint_bytes: u64,
@@ -671,7 +675,9 @@ fn page_flight_with<S: TileSource<TILE>, const M: usize>(
         )?;
         let degraded = surface.degraded_samples();
         let touched = surface.touched_tiles();
-        let resident = (cache.resident_bytes() + photos.cache.resident_bytes()) as u64;
+        let resident = (cache.resident_bytes()
+            + photos.cache.resident_bytes()
+            + source.sticks().bytes()) as u64;
 
         // While the frame is drawn: what it lacked, then (with prefetch)
         // the next frame's footprint, pinned so that nothing evicts it
