@@ -780,6 +780,26 @@ fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
     std::fs::write(&damaged_sticks, &bytes[..bytes.len() - 2]).unwrap();
     let e = TilesFile::open(&damaged_sticks).unwrap_err().to_string();
     assert!(e.contains("truncated") && !e.contains('\n'), "{e}");
+    // A level-0 point naming a stick the file's table does not hold (its
+    // tile's checksum made to match): that tile is rejected.
+    let mut unknown = bytes.clone();
+    let tiles = u64::from_le_bytes(bytes[32..40].try_into().unwrap()) as usize;
+    let first_record = 44 + 4 * tiles;
+    let stick_of_first_point = first_record + TILE * TILE * 5;
+    unknown[stick_of_first_point] = 1;
+    let record = &unknown[first_record..first_record + TILE * TILE * 7];
+    let crc = crc32fast::hash(record);
+    unknown[44..48].copy_from_slice(&crc.to_le_bytes());
+    let named = temp("unknown-stick.tiles");
+    std::fs::write(&named, &unknown).unwrap();
+    let mut file = TilesFile::open(&named).unwrap();
+    let mut tile = Box::new(Tile::<TILE>::EMPTY);
+    let first = TileKey {
+        level: 0,
+        x: 0,
+        y: 0,
+    };
+    assert_eq!(file.load(first, &mut tile), Err(TileError::Checksum));
     // A version-1 file (no photo section) reads as one without photos.
     let tiles_end = bytes.len() - stick_section - 8;
     let old = temp("older.tiles");

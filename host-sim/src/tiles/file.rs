@@ -478,6 +478,18 @@ impl TileSource<TILE> for TilesFile {
             return Err(TileError::Checksum);
         }
         decode(&self.record, tile);
+        // A level-0 point naming a stick past the file's table is damage
+        // the checksum did not catch: rejected as a damaged tile is.
+        let sticks = self.sticks.0.len();
+        if key.level == 0
+            && tile
+                .bounds
+                .iter()
+                .flatten()
+                .any(|&p| usize::from(p) > sticks)
+        {
+            return Err(TileError::Checksum);
+        }
         Ok(RECORD_BYTES)
     }
 
