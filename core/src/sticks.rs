@@ -228,11 +228,12 @@ impl<'a> StickTable<'a> {
         Self::pair_of(texels, tops, z, terrain)
     }
 
-    /// Whether a stick stands at a point whose value is `point` and whose
-    /// height is `top` (U12.4) as high as `z` (Q16) or higher.
+    /// Whether a stick on a point whose height is `top` (U12.4) stands as
+    /// high as `z` (Q16) or higher: a crossing at `z` beside it is on its
+    /// wall ([`Grid::stands`]).
     #[inline(always)]
-    pub(crate) fn stands(point: u16, top: u16, z: i32) -> bool {
-        point != 0 && i32::from(top) << HEIGHT_TO_Q16 >= z
+    pub(crate) fn reaches(top: u16, z: i32) -> bool {
+        i32::from(top) << HEIGHT_TO_Q16 >= z
     }
 }
 
@@ -454,7 +455,7 @@ impl<G: Grid> Grid for StickGrid<'_, G> {
                 && self
                     .grid
                     .height(i)
-                    .is_some_and(|top| i32::from(top) << HEIGHT_TO_Q16 >= z)
+                    .is_some_and(|top| StickTable::reaches(top, z))
         };
         stands_at(index) || stands_at(index + across)
     }

@@ -416,11 +416,10 @@ impl<const T: usize, const N: usize, const M: usize> Grid for TiledGrid<'_, '_, 
             return false;
         }
         let stands_at = |i: isize| {
-            let point = self.stick_point(i);
-            point != 0
+            self.stick_point(i) != 0
                 && self
                     .height(i)
-                    .is_some_and(|top| StickTable::stands(point, top, z))
+                    .is_some_and(|top| StickTable::reaches(top, z))
         };
         stands_at(index) || stands_at(index + across)
     }

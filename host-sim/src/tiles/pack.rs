@@ -177,11 +177,7 @@ pub fn pack(
         report_filled(&input.height, voids, u64::from(width) * u64::from(depth));
     }
     heights.rewind()?;
-    let world = World::new(width, depth, 0).ok_or_else(|| {
-        Error::new(format!(
-            "height map is {width}x{depth}: it needs at least 2x2 points"
-        ))
-    })?;
+    let world = world_of(width, depth)?;
     // (Streamed, the color maps are photos placed by their georeference,
     // or one map stretched over the whole.)
     let mut colors = match (&loaded, &placed, input.colors.first()) {
@@ -361,11 +357,7 @@ fn pack_with_objects(
         )));
     }
     let (width, depth) = (scene.width, scene.depth);
-    let world = World::new(width, depth, 0).ok_or_else(|| {
-        Error::new(format!(
-            "height map is {width}x{depth}: it needs at least 2x2 points"
-        ))
-    })?;
+    let world = world_of(width, depth)?;
     let header = Header::new(world, input.filter);
     let mut writer = TilesWriter::create(out, header, Vec::new())?;
     let mut tile = Box::new(Tile::<TILE>::EMPTY);
@@ -400,6 +392,16 @@ fn pack_with_objects(
         photo_rows_held_at_most: 0,
         streamed: false,
         objects: Some(planted),
+    })
+}
+
+/// The world of a `width` × `depth` height map; a map too small to be
+/// one is refused in one line.
+fn world_of(width: u32, depth: u32) -> Result<World> {
+    World::new(width, depth, 0).ok_or_else(|| {
+        Error::new(format!(
+            "height map is {width}x{depth}: it needs at least 2x2 points"
+        ))
     })
 }
 

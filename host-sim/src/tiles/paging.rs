@@ -313,9 +313,10 @@ fn render_tiled_with<S: TileSource<TILE>, const M: usize>(
     let mut photos = PhotoPager::new(source, photo_slots);
     photos.cache.begin_frame();
     let photo_misses = photos.load_view(source, camera, (width, height), bias)?;
+    let sticks = source.sticks();
     let surface = TiledSurface::around(&cache, camera.eye)
         .with_photos(&photos.cache, &photos.areas)
-        .with_sticks(source.sticks());
+        .with_sticks(sticks);
     let (frame, mut stats) = render_surface_in(
         &surface,
         &local_camera(&surface, camera)?,
@@ -326,7 +327,7 @@ fn render_tiled_with<S: TileSource<TILE>, const M: usize>(
     )?;
     // The stick table is held whole, beside the tiles.
     let resident_bytes =
-        (cache.resident_bytes() + photos.cache.resident_bytes() + source.sticks().bytes()) as u64;
+        (cache.resident_bytes() + photos.cache.resident_bytes() + sticks.bytes()) as u64;
     stats.resident_bytes = resident_bytes;
     let (cache_stats, photo_stats) = (cache.stats(), photos.cache.stats());
     let tiled = TiledRender {
@@ -663,9 +664,10 @@ fn page_flight_with<S: TileSource<TILE>, const M: usize>(
             .filter(|k| !photos.cache.pin(**k))
             .copied()
             .collect();
+        let sticks = source.sticks();
         let surface = TiledSurface::around(&cache, camera.eye)
             .with_photos(&photos.cache, &photos.areas)
-            .with_sticks(source.sticks());
+            .with_sticks(sticks);
         let (image, stats) = render_surface(
             &surface,
             &local_camera(&surface, &camera)?,
@@ -675,9 +677,8 @@ fn page_flight_with<S: TileSource<TILE>, const M: usize>(
         )?;
         let degraded = surface.degraded_samples();
         let touched = surface.touched_tiles();
-        let resident = (cache.resident_bytes()
-            + photos.cache.resident_bytes()
-            + source.sticks().bytes()) as u64;
+        let resident =
+            (cache.resident_bytes() + photos.cache.resident_bytes() + sticks.bytes()) as u64;
 
         // While the frame is drawn: what it lacked, then (with prefetch)
         // the next frame's footprint, pinned so that nothing evicts it
