@@ -45,8 +45,9 @@ use panic_semihosting as _;
 use terracast::{
     max_lines, pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines,
     render_pixel_path, render_pixel_path_lean, render_pixel_path_tabled, tabulate_pixel_ownership,
-    Atmosphere, Camera, Coherence, Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Pyramid,
-    RenderOptions, Resolution, Rgb, Shading, Stick, Surface, View, WithSticks, U8F8,
+    Atmosphere, Camera, Coherence, Framebuffer, HeightFilter, HeightPath, NoProbe,
+    PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, Shading, Stick, Surface, View,
+    WithSticks, U8F8,
 };
 use terracast_board::governed;
 use terracast_board::scene::{BoardScene, MAX_STICKS};
@@ -253,6 +254,25 @@ const fn shading_named(name: &[u8]) -> Shading {
     }
 }
 
+/// Where the line caster reads heights: on each image line's plane (the
+/// default), or on each ray's own path when `TERRACAST_BOARD_HEIGHT_PATH`
+/// is `ray` at build time (scripts/board-check's third run, which leaves
+/// the governor's run out: that is the default's). Any other value stops
+/// the build.
+const HEIGHT_PATH: HeightPath = match option_env!("TERRACAST_BOARD_HEIGHT_PATH") {
+    Some(name) => height_path_named(name.as_bytes()),
+    None => HeightPath::DEFAULT,
+};
+
+/// See [`HEIGHT_PATH`]; empty is the default.
+const fn height_path_named(name: &[u8]) -> HeightPath {
+    match name {
+        b"" | b"line" => HeightPath::Line,
+        b"ray" => HeightPath::Ray,
+        _ => panic!("TERRACAST_BOARD_HEIGHT_PATH: `line` or `ray`"),
+    }
+}
+
 #[entry]
 fn main() -> ! {
     let code = match run() {
@@ -316,6 +336,7 @@ fn run() -> Result<(), &'static str> {
     let options = RenderOptions {
         resolution: RESOLUTION,
         shading: SHADING,
+        height_path: HEIGHT_PATH,
         ..RenderOptions::default()
     };
     let from_eye = RenderOptions {
@@ -416,7 +437,9 @@ fn run() -> Result<(), &'static str> {
         }
         None => {
             renders.all(&pyramid, views, frame, capture, &mut results)?;
-            if option_env!("TERRACAST_BOARD_DEFAULT_ONLY").is_none() {
+            if option_env!("TERRACAST_BOARD_DEFAULT_ONLY").is_none()
+                && matches!(HEIGHT_PATH, HeightPath::Line)
+            {
                 governed_run(&pyramid, views, &options, frame, &mut results)?;
             }
         }

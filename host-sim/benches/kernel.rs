@@ -42,7 +42,11 @@
 //!   (`--objects`) against the same scene bare, four views, each frame's
 //!   time against the bare one's.
 //!
-//! The `roll`, `atmosphere`, `governed` and `objects` tables are timed apart from criterion: the
+//! * `height path` (a table only): the default kernel reading heights on
+//!   each ray's own path (`HeightPath::Ray`) against on its line's plane,
+//!   level, pitched and rolled from the same eye.
+//!
+//! The `roll`, `atmosphere`, `governed`, `objects` and `height path` tables are timed apart from criterion: the
 //! renders a table compares take turns, 25 rounds, and each keeps its
 //! best, so that a change in the shared machine's load falls on all alike.
 //!
@@ -54,8 +58,8 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
 use terracast::{
-    render, render_level_columns, Atmosphere, Camera, Coherence, CountingProbe, Governor, NoProbe,
-    PreparedAtmosphere, RenderOptions, Resolution, View,
+    render, render_level_columns, Atmosphere, Camera, Coherence, CountingProbe, Governor,
+    HeightPath, NoProbe, PreparedAtmosphere, RenderOptions, Resolution, View,
 };
 use terracast_board::governed;
 use terracast_sim::baselines::{voxel_space, VoxelSpaceOptions};
@@ -499,6 +503,7 @@ fn main() {
     governed_table(&levels_for(&RenderOptions::default()), &governed, pixels);
     host_priced_table(&levels_for(&RenderOptions::default()), pixels);
     objects_table(pixels);
+    height_path_table(&levels_for(&RenderOptions::default()), pixels);
 
     println!("\n| roll (pitch 10) | steps/pixel | ns/pixel | time against roll 0 |");
     println!("|---|---|---|---|");
@@ -742,6 +747,45 @@ fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
             fog / off,
             flight / pixels as f64,
             flight / off
+        );
+    }
+}
+
+/// The cost of reading heights on each ray's own path: the default kernel
+/// with `HeightPath::Ray` against `HeightPath::Line`, level, pitched and
+/// rolled from the bench's eye, the renders taking turns.
+fn height_path_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
+    println!(
+        "\n| pitch | roll | on the line ns/pixel | on the ray's path ns/pixel | against the line |"
+    );
+    println!("|---|---|---|---|---|");
+    let line = RenderOptions::default();
+    let ray = RenderOptions {
+        height_path: HeightPath::Ray,
+        ..line
+    };
+    let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
+    for (pitch, roll) in [
+        (0.0, 0.0),
+        (2.0, 0.0),
+        (10.0, 0.0),
+        (10.0, 15.0),
+        (45.0, 30.0),
+    ] {
+        let camera = Camera {
+            roll_deg: roll,
+            ..camera(pitch)
+        };
+        let view = View::new(&camera, SIZE.0, SIZE.1).expect("view");
+        let best = best_in_turns(2, |i| {
+            let options = if i == 0 { &line } else { &ray };
+            render(levels, &view, options, &mut buffer, &mut NoProbe)
+        });
+        println!(
+            "| {pitch}° | {roll}° | {:.1} | {:.1} | {:.2}x |",
+            best[0] / pixels as f64,
+            best[1] / pixels as f64,
+            best[1] / best[0]
         );
     }
 }

@@ -11,8 +11,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 use terracast::{
     pyramid_cells, pyramid_points, render, Atmosphere, Camera, Coherence, CountingProbe, FrameCost,
-    Framebuffer, HeightFilter, NoProbe, PreparedAtmosphere, Prices, Pyramid, RenderOptions, Stick,
-    Surface, View, WithSticks,
+    Framebuffer, HeightFilter, HeightPath, NoProbe, PreparedAtmosphere, Prices, Pyramid,
+    RenderOptions, Stick, Surface, View, WithSticks,
 };
 use terracast_board::governed;
 use terracast_board::scene::{self, BoardScene, Header};
@@ -523,10 +523,11 @@ impl SceneFile {
 
     /// Renders every view as the firmware does: pyramid with the default
     /// height filter (and the scene's objects, if it has them), default
-    /// options, into a framebuffer and through the display driver; then
-    /// with every ray cast from the eye, and under the flight's atmosphere;
-    /// and, over a bare map, the governor's run.
-    pub fn render(&self) -> Result<(Vec<HostFrame>, Vec<GovernedFrame>)> {
+    /// options but for `height_path`, into a framebuffer and through the
+    /// display driver; then with every ray cast from the eye, and under the
+    /// flight's atmosphere; and, over a bare map, the governor's run (at
+    /// the default options).
+    pub fn render(&self, height_path: HeightPath) -> Result<(Vec<HostFrame>, Vec<GovernedFrame>)> {
         let scene = self.scene().map_err(|e| Error::new(e.to_string()))?;
         let header = scene.header;
         let terrain = scene.terrain().map_err(|e| Error::new(e.to_string()))?;
@@ -551,11 +552,11 @@ impl SceneFile {
             .map_err(|e| Error::new(format!("pyramid rejected: {e}")))?;
         match objects {
             Some(layer) => Ok((
-                Self::render_views(&WithSticks::new(&pyramid, layer), header)?,
+                Self::render_views(&WithSticks::new(&pyramid, layer), header, height_path)?,
                 Vec::new(),
             )),
             None => Ok((
-                Self::render_views(&pyramid, header)?,
+                Self::render_views(&pyramid, header, height_path)?,
                 governed_run(&pyramid, &header)?,
             )),
         }
@@ -563,9 +564,16 @@ impl SceneFile {
 
     /// Renders every view of `header` over `surface` (see
     /// [`SceneFile::render`]).
-    fn render_views<T: Surface>(surface: &T, header: Header) -> Result<Vec<HostFrame>> {
+    fn render_views<T: Surface>(
+        surface: &T,
+        header: Header,
+        height_path: HeightPath,
+    ) -> Result<Vec<HostFrame>> {
         let (width, height) = (header.image_width, header.image_height);
-        let options = RenderOptions::default();
+        let options = RenderOptions {
+            height_path,
+            ..RenderOptions::default()
+        };
         let from_eye = RenderOptions {
             coherence: Coherence::Off,
             ..options
@@ -652,8 +660,9 @@ fn governed_run<T: Surface>(surface: &T, header: &Header) -> Result<Vec<Governed
 }
 
 /// Checks the board's output in `from` (`frame-K.rgb`, `wire-K.bin`,
-/// `board-results.txt`) against the host kernel rendering `scene_path`.
-pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
+/// `board-results.txt`) against the host kernel rendering `scene_path`
+/// with its line caster reading heights on `height_path`.
+pub fn verify(scene_path: &Path, from: &Path, height_path: HeightPath) -> Result<BoardReport> {
     let file = SceneFile::read(scene_path)?;
     let header = file.scene().map_err(|e| Error::new(e.to_string()))?.header;
     let (width, height) = (header.image_width, header.image_height);
@@ -676,7 +685,7 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
             .filter(|(board, host)| board != host)
             .count())
     };
-    let (host_frames, run) = file.render()?;
+    let (host_frames, run) = file.render(height_path)?;
     for (index, host) in host_frames.into_iter().enumerate() {
         let differing_pixels = compare(format!("frame-{index}.rgb"), &host.rgb)?;
         let from_eye_differing_pixels =
@@ -745,14 +754,15 @@ pub fn verify(scene_path: &Path, from: &Path) -> Result<BoardReport> {
     })
 }
 
-/// The board's kernel renders of `report` (a scene with objects) against
-/// those of the same views without them, whose `board-results.txt` is in
-/// `without`: instructions a pixel of each and their ratio, as a table.
-pub fn against_without(report: &BoardReport, without: &Path) -> Result<String> {
+/// The board's kernel renders of `report` (a scene with objects, or heights
+/// read on each ray's path) against those of the same views without that,
+/// whose `board-results.txt` is in `without`: instructions a pixel of each
+/// and their ratio, as a table under the title `what`.
+pub fn against_without(report: &BoardReport, without: &Path, what: &str) -> Result<String> {
     let bare = parse_results(&read(&without.join("board-results.txt"))?)?;
     if bare.frames.len() != report.frames.len() {
         return Err(Error::new(format!(
-            "{} has {} views, the scene with objects {}",
+            "{} has {} views, the run against it {}",
             without.display(),
             bare.frames.len(),
             report.frames.len()
@@ -760,9 +770,8 @@ pub fn against_without(report: &BoardReport, without: &Path) -> Result<String> {
     }
     let pixels = f64::from(report.image.0) * f64::from(report.image.1);
     let (with_tick, bare_tick) = (report.instructions_per_tick, bare.instructions_per_tick()?);
-    let mut out = String::from(
-        "with objects against without (the same views): instructions a pixel\nview  without  with  ratio\n",
-    );
+    let mut out =
+        format!("{what} (the same views): instructions a pixel\nview  without  with  ratio\n");
     let (mut all_bare, mut all_with) = (0.0, 0.0);
     for (f, &(bare_ticks, ..)) in report.frames.iter().zip(&bare.frames) {
         let (without, with) = (

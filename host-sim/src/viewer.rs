@@ -23,8 +23,9 @@ use std::time::Instant;
 use terracast::config::{MAX_EYE_HEIGHT, PITCH_RANGE_DEG};
 use terracast::{
     render_line, render_line_by_footprint, AtmosphereFrame, Camera, Coherence, CountingProbe,
-    FrameCost, Governor, Grid, LinePlane, LinePool, LineShade, LineShare, PreparedAtmosphere,
-    Prices, Probe, RenderOptions, Resolution, Sample, Shading, Sink, Surface, View, Wait, U8F8,
+    FrameCost, Governor, Grid, HeightPath, LinePlane, LinePool, LineShade, LineShare,
+    PreparedAtmosphere, Prices, Probe, RenderOptions, Resolution, Sample, Shading, Sink, Surface,
+    View, Wait, U8F8,
 };
 
 /// How far above the ground the eye stays, voxels.
@@ -870,6 +871,13 @@ pub fn render_arguments(
         match options.shading {
             Shading::Subvoxel => "subvoxel",
             Shading::Nearest => "nearest",
+        }
+    ));
+    args.push(format!(
+        "--height-path={}",
+        match options.height_path {
+            HeightPath::Line => "line",
+            HeightPath::Ray => "ray",
         }
     ));
     args.push(format!("--out={out}"));

@@ -7,6 +7,7 @@ mod common;
 
 use common::{s, sim};
 use std::path::PathBuf;
+use terracast::HeightPath;
 use terracast_sim::board::SceneFile;
 
 fn fresh_dir(name: &str) -> PathBuf {
@@ -44,7 +45,10 @@ fn scene_and_board_output_with(name: &str, extra: &[&str], ticks: u32) -> (PathB
     assert!(out.contains("96x96 map, 6 views at 40x30"), "{out}");
     let board = dir.join("board");
     std::fs::create_dir_all(&board).unwrap();
-    let (frames, governed) = SceneFile::read(&scene).unwrap().render().unwrap();
+    let (frames, governed) = SceneFile::read(&scene)
+        .unwrap()
+        .render(HeightPath::Line)
+        .unwrap();
     assert_eq!(frames.len(), 6);
     let mut results = String::from("calibration instructions 4000 ticks 100\npyramid_ticks 7\n");
     for (k, frame) in frames.iter().enumerate() {
@@ -253,8 +257,14 @@ fn a_scene_with_objects_renders_them_and_is_compared_with_the_bare_map() {
     assert!(out.contains("   0       33    43  1.300x"), "{out}");
     assert!(out.contains(" all       33    43  1.300x"), "{out}");
     // The objects are in the frames.
-    let (bare, _) = SceneFile::read(&bare_scene).unwrap().render().unwrap();
-    let (planted, _) = SceneFile::read(&scene).unwrap().render().unwrap();
+    let (bare, _) = SceneFile::read(&bare_scene)
+        .unwrap()
+        .render(HeightPath::Line)
+        .unwrap();
+    let (planted, _) = SceneFile::read(&scene)
+        .unwrap()
+        .render(HeightPath::Line)
+        .unwrap();
     assert!(bare.iter().zip(&planted).any(|(b, p)| b.rgb != p.rgb));
 
     // A damaged objects section: one line that names it.

@@ -132,6 +132,7 @@ fn bad_input_gives_one_line_and_a_nonzero_exit() {
         (base(&["--eye", "nan,2,3"]), "--eye"),
         (base(&["--yaw", "abc"]), "abc"),
         (base(&["--size", "0x10"]), "size"),
+        (base(&["--height-path", "sideways"]), "--height-path"),
         (
             base(&["--vertical-samples", "3"]),
             "1, 2, 4, 8 or footprint",
@@ -255,6 +256,37 @@ fn procedural_scene_needs_no_data() {
     assert_eq!(image::open(&png).unwrap().width(), 64);
 }
 
+/// `--height-path ray` reads heights on each ray's own path: a level view
+/// (whose image lines go through every pixel center) is the same image,
+/// a pitched one is not.
+#[test]
+fn heights_on_each_rays_path_change_only_a_pitched_or_rolled_view() {
+    let render = |pitch: &str, height_path: &str| {
+        let png = temp(&format!("height-path-{pitch}-{height_path}.png"));
+        let (code, _, err) = sim(&[
+            "render",
+            "--procedural-size",
+            "256",
+            "--size",
+            "96x54",
+            "--eye",
+            "128,20,150",
+            "--yaw",
+            "90",
+            "--pitch",
+            pitch,
+            "--height-path",
+            height_path,
+            "--out",
+            s(&png),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        image::open(&png).unwrap().to_rgb8().into_raw()
+    };
+    assert_eq!(render("0", "line"), render("0", "ray"));
+    assert_ne!(render("12", "line"), render("12", "ray"));
+}
+
 #[test]
 fn a_tiles_file_renders_with_its_own_height_filter() {
     let (h, c) = maps_named("tiles-h.png", "tiles-c.png");
@@ -325,6 +357,7 @@ fn every_rendering_command_takes_the_kernel_settings_and_a_keyframed_path() {
         for settings in [
             &["--coherence", "off", "--resolution", "single"][..],
             &["--shading", "nearest", "--vertical-samples", "2"][..],
+            &["--height-path", "ray"][..],
         ] {
             let (code, _, err) = sim(with(settings));
             assert_eq!(code, 0, "{run:?} {settings:?}: {err}");

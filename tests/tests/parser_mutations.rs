@@ -213,7 +213,11 @@ fn board_scene_files_and_wire_captures() {
     mutate("board scene", "scene.tcb", (&valid, 256), 300, |_, path| {
         SceneFile::read(path).is_ok()
     });
-    let wire = SceneFile::read(&scene_path).unwrap().render().unwrap().0[0]
+    let wire = SceneFile::read(&scene_path)
+        .unwrap()
+        .render(terracast::HeightPath::Line)
+        .unwrap()
+        .0[0]
         .wire
         .clone();
     mutate("wire capture", "wire.bin", (&wire, 64), 300, |bytes, _| {

@@ -19,7 +19,7 @@
 //! terrains (800 by default) for a longer or shorter run. Each terrain is
 //! rendered from [`CAMERAS_A_CASE`] cameras with every setting on the
 //! pyramid and on level 0 alone, with rays by footprint and with the
-//! governor: the default run renders about 1.08 million views (it prints
+//! governor: the default run renders about 1.34 million views (it prints
 //! the count and the time).
 
 use proptest::prelude::*;
@@ -29,8 +29,8 @@ use terracast::config::{
 };
 use terracast::{
     level_count, pyramid_cells, pyramid_points, render, render_by_footprint, Camera, Coherence,
-    CountingProbe, Governor, HeightFilter, NoProbe, Pyramid, RenderOptions, Resolution, Rgb,
-    Sample, Shading, Sink, Terrain, VerticalSamples, View, ViewError, U8F8,
+    CountingProbe, Governor, HeightFilter, HeightPath, NoProbe, Pyramid, RenderOptions, Resolution,
+    Rgb, Sample, Shading, Sink, Terrain, VerticalSamples, View, ViewError, U8F8,
 };
 
 /// Terrains a default run draws: about a million views, a minute or two
@@ -255,6 +255,16 @@ fn settings() -> Vec<RenderOptions> {
         terrain_fit: false,
         ..RenderOptions::default()
     });
+    for resolution in [Resolution::Single, multi(256)] {
+        for shading in [Shading::Subvoxel, Shading::Nearest] {
+            all.push(RenderOptions {
+                resolution,
+                shading,
+                height_path: HeightPath::Ray,
+                ..RenderOptions::default()
+            });
+        }
+    }
     all
 }
 

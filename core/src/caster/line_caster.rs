@@ -42,7 +42,9 @@ use super::first_hit::first_hit;
 use super::footprint_color::{color_level, levels_color, narrower_side};
 use super::ray_caster::{Allowances, Unlimited};
 use super::walk::{along_weight, lerp, line_color};
-use super::{crossing_fraction, sky, Coherence, Frame, RenderOptions, Shading, VerticalSamples};
+use super::{
+    crossing_fraction, sky, Coherence, Frame, HeightPath, RenderOptions, Shading, VerticalSamples,
+};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_WALK_LEVEL};
 use crate::divide::div_ceil;
@@ -81,6 +83,8 @@ pub(crate) struct LineCaster<'s, 'v, T: Surface + ?Sized + 's> {
     first_hit: bool,
     /// Each hit takes its nearest voxel's color ([`Shading::Nearest`]).
     nearest: bool,
+    /// Each ray reads heights on its own path ([`HeightPath::Ray`]).
+    own_path: bool,
     sky: Sample,
 }
 
@@ -187,6 +191,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             plan: frame.lod,
             first_hit: frame.first_hit,
             nearest: options.shading == Shading::Nearest,
+            own_path: options.height_path == HeightPath::Ray,
             sky: sky(options),
         }
     }
@@ -294,20 +299,59 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         if pixels.no_rows_left() {
             return;
         }
-        // The pixel window in 32-bit words where the line's values fit.
         let a = allowances;
-        match (pixels.narrowed(), self.nearest) {
-            (Ok(pixels), true) => self.cast::<_, _, _, _, true>(&line, pixels, sink, probe, a),
-            (Ok(pixels), false) => self.cast::<_, _, _, _, false>(&line, pixels, sink, probe, a),
-            (Err(pixels), true) => self.cast::<_, _, _, _, true>(&line, pixels, sink, probe, a),
-            (Err(pixels), false) => self.cast::<_, _, _, _, false>(&line, pixels, sink, probe, a),
+        match (self.nearest, self.own_path) {
+            (false, false) => {
+                self.cast_in_words::<_, _, _, false, false>(&line, pixels, sink, probe, a)
+            }
+            (true, false) => {
+                self.cast_in_words::<_, _, _, true, false>(&line, pixels, sink, probe, a)
+            }
+            (false, true) => {
+                self.cast_in_words::<_, _, _, false, true>(&line, pixels, sink, probe, a)
+            }
+            (true, true) => {
+                self.cast_in_words::<_, _, _, true, true>(&line, pixels, sink, probe, a)
+            }
         }
     }
 
-    /// Casts `line`'s rays through `pixels`, its pixels, into `sink`.
+    /// [`LineCaster::cast`] with the pixel window in 32-bit words where
+    /// the line's values fit.
+    #[inline(always)]
+    fn cast_in_words<
+        S: Sink,
+        P: Probe,
+        A: Allowances,
+        const NEAREST: bool,
+        const OWN_PATH: bool,
+    >(
+        &self,
+        line: &Line,
+        pixels: OwnedPixels,
+        sink: &mut S,
+        probe: &mut P,
+        allowances: &mut A,
+    ) {
+        let a = allowances;
+        match pixels.narrowed() {
+            Ok(px) => self.cast::<_, _, _, _, NEAREST, OWN_PATH>(line, px, sink, probe, a),
+            Err(px) => self.cast::<_, _, _, _, NEAREST, OWN_PATH>(line, px, sink, probe, a),
+        }
+    }
+
+    /// Casts `line`'s rays through `pixels`, its pixels, into `sink`; with
+    /// `OWN_PATH` each ray reads heights on its own path.
     /// Out of line: the loop's state then has the registers to itself.
     #[inline(never)]
-    fn cast<W: WindowWord, S: Sink, P: Probe, A: Allowances, const NEAREST: bool>(
+    fn cast<
+        W: WindowWord,
+        S: Sink,
+        P: Probe,
+        A: Allowances,
+        const NEAREST: bool,
+        const OWN_PATH: bool,
+    >(
         &self,
         line: &Line,
         mut pixels: OwnedPixels<W>,
@@ -379,6 +423,13 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 }
                 previous_dz = dz;
                 let dz = i64::from(dz);
+                // How far aside of the line this ray reads heights: its
+                // drift (within 2^14, `Plane::drift_of`) on its own path.
+                let height_drift = if OWN_PATH {
+                    walk.plane.drift_of_word(run_word, pixel.offset) as i32
+                } else {
+                    0
+                };
                 let z0 = view.eye[2].to_bits() + ((walk.plane.delta0 * dz) >> COORD_FRAC_BITS);
                 if at.is_none() {
                     if levels {
@@ -399,16 +450,29 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                             let d = line.pixel_direction(&pixel);
                             self.clear_until(&walk, &d, allowance, probe)
                         })
-                        .and_then(|from| self.start(&walk, from, z0, dz, probe));
+                        .and_then(|from| {
+                            self.start::<_, OWN_PATH>(&walk, from, z0, dz, height_drift, probe)
+                        });
                     fetches.take();
                 }
                 let hit = at.as_mut().and_then(|at| {
-                    let z = self.climb(&walk, at, (z0, dz), &mut fetches, probe)?;
+                    let z = self.climb::<_, _, OWN_PATH>(
+                        &walk,
+                        at,
+                        (z0, dz),
+                        height_drift,
+                        &mut fetches,
+                        probe,
+                    )?;
                     let ray = HitRay {
                         dz: dz as i32,
                         color_reach: self.plan.color_reach(run),
                         // Within 2^14 (`Plane::drift_of`).
-                        drift: walk.plane.drift_of_word(run_word, pixel.offset) as i32,
+                        drift: if OWN_PATH {
+                            height_drift
+                        } else {
+                            walk.plane.drift_of_word(run_word, pixel.offset) as i32
+                        },
                     };
                     Some(self.hit::<P, NEAREST>(&walk, at, z, &ray, probe))
                 });
@@ -440,12 +504,13 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// when the ray never comes down to the terrain or the map has no
     /// height there.
     #[inline(never)]
-    fn start<P: Probe>(
+    fn start<P: Probe, const OWN_PATH: bool>(
         &self,
         walk: &LineWalk,
         from: i32,
         z0: i64,
         dz: i64,
+        drift: i32,
         probe: &mut P,
     ) -> Option<At> {
         let mut k = from.max(walk.first);
@@ -472,7 +537,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             level,
             index,
             minor,
-            height: self.height(walk, index, minor, level, probe)?,
+            height: self.height_at::<P, OWN_PATH>(walk, (k, index, minor, level), drift, probe)?,
             before_k: k,
             before: None,
         })
@@ -522,6 +587,34 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         (index, (plane.minor0 + k * plane.dminor) as i32)
     }
 
+    /// How far (Q16) a ray drifting `drift` reads heights aside of the
+    /// line at sample `k`: its drift times the sample's distance, as its
+    /// colors are looked up (`LineCaster::hit`).
+    #[inline(always)]
+    fn aside_at(walk: &LineWalk, k: i32, drift: i32) -> i32 {
+        // Within 2^31: the drift is within 2^14, the distance inside the map.
+        ((i64::from(drift) * (i64::from(walk.delta0) + (i64::from(k) << COORD_FRAC_BITS)))
+            >> COORD_FRAC_BITS) as i32
+    }
+
+    /// [`LineCaster::height`] at sample `k`, at `minor` on the line or,
+    /// with `OWN_PATH`, on the path of a ray drifting `drift`.
+    #[inline(always)]
+    fn height_at<P: Probe, const OWN_PATH: bool>(
+        &self,
+        walk: &LineWalk,
+        (k, index, minor, level): (i32, isize, i32, u8),
+        drift: i32,
+        probe: &mut P,
+    ) -> Option<i32> {
+        let minor = if OWN_PATH {
+            walk.aside(minor, Self::aside_at(walk, k, drift))
+        } else {
+            minor
+        };
+        self.height(walk, index, minor, level, probe)
+    }
+
     /// The blended height (Q16) at the point of `level`'s major grid line
     /// `index` at minor coordinate `minor`: the two heights across the
     /// level's minor grid line, weighted by the minor coordinate's fraction
@@ -547,7 +640,9 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
 
     /// Climbs to a ray whose height at sample 0 is `z0` (Q16), `dz` a
     /// sample: from `at`, where the ray before hit, steps on the line's
-    /// schedule while above the surface. Returns the ray's height at its
+    /// schedule while above the surface (with `OWN_PATH`, reading heights
+    /// on the path of a ray drifting `drift`; at `at` itself it compares
+    /// with the height the ray before read). Returns the ray's height at its
     /// hit, or `None` when it leaves the map or rises above the highest
     /// terrain (and so does every ray of the line after it).
     ///
@@ -556,11 +651,12 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// is shaded there as if it hit (the next ray, higher, climbs on from
     /// it: the surface is below both there).
     #[inline(always)]
-    fn climb<P: Probe, F: Fetches>(
+    fn climb<P: Probe, F: Fetches, const OWN_PATH: bool>(
         &self,
         walk: &LineWalk,
         at: &mut At,
         (z0, dz): (i64, i64),
+        drift: i32,
         fetches: &mut F,
         probe: &mut P,
     ) -> Option<i64> {
@@ -583,6 +679,15 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             let (stride, z_step) = (1 << level, dz << level);
             let (mut k, mut index, mut minor, mut height) =
                 (here.k, here.index, here.minor, here.height);
+            // The ray's own path: aside of the line by the drift times the
+            // distance, one product where a level's run begins and an add
+            // a step (the product of the drift and a whole number of
+            // samples is exact).
+            let (mut aside, aside_step) = if OWN_PATH {
+                (Self::aside_at(walk, k, drift), drift << level)
+            } else {
+                (0, 0)
+            };
             // As far as the fetches left reach (no limit: the level's end).
             let (from, run_end) = (k, fetches.run_end(k, stride, end));
             while k + stride <= run_end {
@@ -591,7 +696,13 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 index += step;
                 minor += minor_step;
                 z += z_step;
-                height = self.height(walk, index, minor, level, probe)?;
+                let read_at = if OWN_PATH {
+                    aside += aside_step;
+                    walk.aside(minor, aside)
+                } else {
+                    minor
+                };
+                height = self.height(walk, index, read_at, level, probe)?;
                 if z <= i64::from(height) {
                     *at = At {
                         k,
@@ -645,7 +756,12 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 level,
                 index,
                 minor,
-                height: self.height(walk, index, minor, level, probe)?,
+                height: self.height_at::<P, OWN_PATH>(
+                    walk,
+                    (next, index, minor, level),
+                    drift,
+                    probe,
+                )?,
                 before_k: k,
                 before: Some(height),
             };

@@ -32,7 +32,7 @@ mod ray_caster;
 pub(crate) mod walk;
 
 pub use budget::{FrameCost, FrameWork, Governor, LineShare, Prices};
-pub use options::{Coherence, RenderOptions, Resolution, Shading, VerticalSamples};
+pub use options::{Coherence, HeightPath, RenderOptions, Resolution, Shading, VerticalSamples};
 pub use per_line::{
     render_level_columns, render_pixel_lines, render_pixel_path, render_pixel_path_lean,
     render_pixel_path_tabled, tabulate_pixel_ownership, ColumnsError,

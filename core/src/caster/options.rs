@@ -107,6 +107,36 @@ pub enum Shading {
     Nearest,
 }
 
+/// Where a ray of the line caster reads the terrain's heights.
+///
+/// A line's rays share one vertical plane, the image of its pixel line,
+/// and a pixel's center lies up to half a pixel beside the line (under
+/// pitch or roll). Its colors are always looked up where its own ray
+/// crosses (the line's minor coordinate moved by the
+/// ray's drift times its distance); its heights, by this.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HeightPath {
+    /// On the line's plane: every ray of a line steps on the same
+    /// heights, so a ray resumes exactly where the ray below it hit
+    /// (Cohen-Or's vertical coherence), and at single resolution the
+    /// image is [`Coherence::Exact`]'s bit for bit.
+    Line,
+    /// On the ray's own path: each height fetch is moved across the line
+    /// by the ray's drift times its distance, stepped with the walk (an
+    /// add a step). A silhouette then lies where the pixel's own ray sees
+    /// it, not up to half a pixel aside; the price is exactness of the
+    /// coherence (a ray resumes on the heights the ray below it read on
+    /// its path) and a few instructions a step. The line caster's only
+    /// ([`Coherence::AcrossLevels`] with one ray a pixel); the per-ray
+    /// settings walk the line's plane.
+    Ray,
+}
+
+impl HeightPath {
+    /// The default: [`HeightPath::Line`].
+    pub const DEFAULT: Self = Self::Line;
+}
+
 /// Settings of the caster.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RenderOptions {
@@ -129,6 +159,8 @@ pub struct RenderOptions {
     /// switch by the ratio as given. No effect on smooth maps, nor on surfaces whose roughness
     /// is unknown.
     pub terrain_fit: bool,
+    /// Where the line caster's rays read heights.
+    pub height_path: HeightPath,
     /// Color of rays that leave the terrain.
     pub sky: Rgb,
 }
@@ -167,6 +199,7 @@ impl Default for RenderOptions {
             vertical_samples: VerticalSamples::One,
             shading: Shading::Subvoxel,
             terrain_fit: true,
+            height_path: HeightPath::DEFAULT,
             sky: DEFAULT_SKY,
         }
     }
