@@ -426,11 +426,14 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 // How far aside of the line this ray reads heights: its
                 // drift (within 2^14, `Plane::drift_of`) on its own path.
                 let height_drift = if OWN_PATH {
-                    walk.plane.drift_of_word(run_word, pixel.offset) as i32
+                    walk.plane.full_drift_of_word(run_word, pixel.offset) as i32
                 } else {
                     0
                 };
                 let z0 = view.eye[2].to_bits() + ((walk.plane.delta0 * dz) >> COORD_FRAC_BITS);
+                // A ray resuming where the ray before it hit (not one just
+                // started): on its own path it reads that sample again.
+                let resumed = OWN_PATH && at.is_some();
                 if at.is_none() {
                     if levels {
                         // Along the line the component rises (or falls)
@@ -456,6 +459,9 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                     fetches.take();
                 }
                 let hit = at.as_mut().and_then(|at| {
+                    if resumed {
+                        self.reread::<P>(&walk, at, height_drift, probe)?;
+                    }
                     let z = self.climb::<_, _, OWN_PATH>(
                         &walk,
                         at,
@@ -613,6 +619,31 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             minor
         };
         self.height(walk, index, minor, level, probe)
+    }
+
+    /// Where a ray drifting `drift` resumes at `at`, the ray before it's
+    /// hit: the heights of that sample and of the one before it (when it
+    /// was a step on the same level) read again on this ray's own path,
+    /// so that it compares and places its crossing with its own heights.
+    /// `None` outside the map. Out of line: the default's walk is
+    /// compiled as it is without it.
+    #[inline(never)]
+    fn reread<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        at: &mut At,
+        drift: i32,
+        probe: &mut P,
+    ) -> Option<()> {
+        let (index, minor) = self.position(walk, at.k, at.level);
+        at.height =
+            self.height_at::<P, true>(walk, (at.k, index, minor, at.level), drift, probe)?;
+        if at.before.is_some() && at.k - at.before_k == 1 << at.level {
+            let (index, minor) = self.position(walk, at.before_k, at.level);
+            let before = (at.before_k, index, minor, at.level);
+            at.before = Some(self.height_at::<P, true>(walk, before, drift, probe)?);
+        }
+        Some(())
     }
 
     /// The blended height (Q16) at the point of `level`'s major grid line

@@ -122,13 +122,16 @@ pub enum HeightPath {
     /// image is [`Coherence::Exact`]'s bit for bit.
     Line,
     /// On the ray's own path: each height fetch is moved across the line
-    /// by the ray's drift times its distance, stepped with the walk (an
-    /// add a step). A silhouette then lies where the pixel's own ray sees
-    /// it, not up to half a pixel aside; the price is exactness of the
-    /// coherence (a ray resumes on the heights the ray below it read on
-    /// its path) and a few instructions a step. The line caster's only
-    /// ([`Coherence::AcrossLevels`] with one ray a pixel); the per-ray
-    /// settings walk the line's plane.
+    /// by the ray's drift (in full, where the colors' is bounded) times its
+    /// distance, stepped with the walk (an add a step), and a ray that
+    /// resumes where the ray below it hit reads that sample and the one
+    /// before it again on its own path. A silhouette then lies where the
+    /// pixel's own ray sees it, not up to half a pixel aside; the price is
+    /// exactness of the coherence (a resumed ray takes it that it clears
+    /// the surface before that sample, as the ray below did on its path),
+    /// two fetches a resumed ray and a few instructions a step. The line
+    /// caster's only ([`Coherence::AcrossLevels`] with one ray a pixel);
+    /// the per-ray settings walk the line's plane.
     Ray,
 }
 

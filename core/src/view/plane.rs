@@ -155,6 +155,36 @@ impl Plane {
         )
     }
 
+    /// [`Plane::drift_of_word`] with the across step shifted into the
+    /// divide's range instead of bounded to it: the drift of the pixel
+    /// center's own ray in full. The bounded one saturates on many lines
+    /// at usual image widths (the across step shifted as far as the run is
+    /// often above 2^30), which the colors of a line's rays are measured
+    /// with; a ray that reads heights on its own path takes this one.
+    #[inline]
+    pub fn full_drift_of_word(&self, run: i32, offset: i64) -> i64 {
+        if run <= 0 || offset == 0 || self.across == 0 {
+            return 0;
+        }
+        // The run to 24 bits, or further where the across step needs it
+        // to fit the 32-bit divide.
+        let across_bits = 64 - self.across.unsigned_abs().leading_zeros();
+        let shift = (32 - run.leading_zeros())
+            .saturating_sub(24 - DIRECTION_WORD_SHIFT)
+            .max(across_bits.saturating_sub(30));
+        let run = if shift <= DIRECTION_WORD_SHIFT {
+            run << (DIRECTION_WORD_SHIFT - shift)
+        } else {
+            run >> (shift - DIRECTION_WORD_SHIFT)
+        };
+        let across = bound(self.across >> shift, 1 << 30) as i32;
+        let per_pixel = across / run.max(1);
+        bound(
+            (i64::from(per_pixel) * i64::from(offset as i32)) >> COORD_FRAC_BITS,
+            1 << 14,
+        )
+    }
+
     /// The drift's numerator, `across_minor − dminor·across_major`
     /// ([`Plane::drift`]): what every ray of the plane divides by its run.
     #[inline]

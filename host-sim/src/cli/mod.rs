@@ -412,8 +412,8 @@ struct KernelArgs {
     /// Kernel (--coherence across-levels, one ray a pixel): read heights
     /// on each image line's plane (`line`: every ray of a line on the same
     /// heights, coherence exact) or on each ray's own path (`ray`: a
-    /// pitched or rolled view's silhouettes half a pixel truer, a few
-    /// per cent slower).
+    /// pitched or rolled view's silhouettes half a pixel truer, and
+    /// slower; docs/kernel.md).
     #[arg(long, value_enum, default_value_t = HeightPathArg::Line)]
     height_path: HeightPathArg,
 }
