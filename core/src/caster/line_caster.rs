@@ -370,6 +370,8 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         // least, which they are scheduled by, to a third more.
         let (mut stretch_run, mut stretch_most) = (0, -1);
         let mut previous_dz = i32::MIN;
+        // On its own path: the drift `at`'s heights were read with.
+        let mut read_drift = 0;
         // The direction's major-axis component, which a ray's set-up needs
         // with its center's vertical one.
         let axis = [if walk.plane.key.x_major { 0 } else { 1 }];
@@ -432,8 +434,11 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 };
                 let z0 = view.eye[2].to_bits() + ((walk.plane.delta0 * dz) >> COORD_FRAC_BITS);
                 // A ray resuming where the ray before it hit (not one just
-                // started): on its own path it reads that sample again.
-                let resumed = OWN_PATH && at.is_some();
+                // started): on its own path it reads that sample again,
+                // unless the ray before drifted as far (a level view's rays
+                // do not drift at all).
+                let resumed = OWN_PATH && at.is_some() && height_drift != read_drift;
+                read_drift = height_drift;
                 if at.is_none() {
                     if levels {
                         // Along the line the component rises (or falls)
@@ -635,12 +640,16 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         drift: i32,
         probe: &mut P,
     ) -> Option<()> {
-        let (index, minor) = self.position(walk, at.k, at.level);
-        at.height =
-            self.height_at::<P, true>(walk, (at.k, index, minor, at.level), drift, probe)?;
+        let here = (at.k, at.index, at.minor, at.level);
+        at.height = self.height_at::<P, true>(walk, here, drift, probe)?;
+        let l = usize::from(at.level);
         if at.before.is_some() && at.k - at.before_k == 1 << at.level {
-            let (index, minor) = self.position(walk, at.before_k, at.level);
-            let before = (at.before_k, index, minor, at.level);
+            let before = (
+                at.before_k,
+                at.index - walk.step[l],
+                at.minor - walk.minor_step[l],
+                at.level,
+            );
             at.before = Some(self.height_at::<P, true>(walk, before, drift, probe)?);
         }
         Some(())
