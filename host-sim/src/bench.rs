@@ -26,7 +26,8 @@ use std::collections::HashSet;
 use std::fmt::Write as _;
 use std::sync::OnceLock;
 use terracast::{
-    Camera, Coherence, Probe, RenderOptions, Resolution, Shading, VerticalSamples, View, U8F8,
+    Camera, Coherence, HeightPath, Probe, RenderOptions, Resolution, Shading, VerticalSamples,
+    View, U8F8,
 };
 
 /// One way of rendering.
@@ -115,6 +116,13 @@ pub fn settings() -> Vec<Setting> {
             "kernel nearest color",
             RenderOptions {
                 shading: Shading::Nearest,
+                ..default
+            },
+        ),
+        kernel(
+            "kernel heights on each ray's path",
+            RenderOptions {
+                height_path: HeightPath::Ray,
                 ..default
             },
         ),
