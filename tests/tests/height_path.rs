@@ -8,10 +8,10 @@
 //! center: no ray drifts and the two images are the same. Elsewhere a
 //! pixel's center lies up to half a pixel beside its line; reading heights
 //! on its own path puts a silhouette where its own ray sees it. Held here:
-//! the level view identical, and as many heights read; on the others, sky agreement no lower on any
-//! view and higher over all of them, and the PSNR no more than 0.05 dB
-//! lower on any view and higher on average. The table it prints is in
-//! docs/figures.md.
+//! the level view identical, with as many heights read; on the others, sky
+//! agreement no lower on any view and higher over all of them, and the
+//! PSNR no more than 0.05 dB lower on any view and higher on average. The
+//! table it prints is in docs/figures.md.
 
 use terracast::{Camera, HeightPath, RenderOptions};
 use terracast_sim::kernel::render_kernel;

@@ -434,10 +434,10 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 };
                 let z0 = view.eye[2].to_bits() + ((walk.plane.delta0 * dz) >> COORD_FRAC_BITS);
                 // A ray resuming where the ray before it hit (not one just
-                // started): on its own path it reads that sample again,
-                // unless the ray before drifted as far (a level view's rays
-                // do not drift at all).
-                let resumed = OWN_PATH && at.is_some() && height_drift != read_drift;
+                // started) reads that sample again on its own path, unless
+                // the ray before drifted as far (a level view's rays do not
+                // drift at all).
+                let read_again = OWN_PATH && at.is_some() && height_drift != read_drift;
                 read_drift = height_drift;
                 if at.is_none() {
                     if levels {
@@ -464,7 +464,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                     fetches.take();
                 }
                 let hit = at.as_mut().and_then(|at| {
-                    if resumed {
+                    if read_again {
                         self.reread::<P>(&walk, at, height_drift, probe)?;
                     }
                     let z = self.climb::<_, _, OWN_PATH>(
@@ -642,8 +642,8 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     ) -> Option<()> {
         let here = (at.k, at.index, at.minor, at.level);
         at.height = self.height_at::<P, true>(walk, here, drift, probe)?;
-        let l = usize::from(at.level);
         if at.before.is_some() && at.k - at.before_k == 1 << at.level {
+            let l = usize::from(at.level);
             let before = (
                 at.before_k,
                 at.index - walk.step[l],
