@@ -25,6 +25,7 @@
 //! | 16 | 2 a voxel | a stick index a grid point (0: none) |
 //! | then, from a multiple of 4 | 8 a stick | first texel u32, texels u16, height u16 |
 //! | after them | 3 a texel | texels, RGB |
+//! | after them | 1 a texel, or none | texels' opacities, 255 opaque (none: all are) |
 //!
 //! The terrain's heights and colors are then the planted ones: a stick's
 //! top and its top texel where it stands.
@@ -211,6 +212,7 @@ struct Objects<'a> {
     points: &'a [u16],
     sticks: &'a [u8],
     texels: &'a [Rgb],
+    alphas: &'a [u8],
 }
 
 /// Why a scene file was refused.
@@ -278,14 +280,25 @@ impl<'a> Objects<'a> {
             .get(table..table + sticks * STICK_BYTES)
             .ok_or(SceneError::Truncated)?;
         let texels_at = table + sticks.len();
-        let texels = texels
+        let texels_end = texels
             .checked_mul(3)
-            .and_then(|len| bytes.get(texels_at..texels_at.checked_add(len)?))
+            .and_then(|len| texels_at.checked_add(len))
+            .filter(|&end| end <= bytes.len())
             .ok_or(SceneError::Truncated)?;
+        // The opacities: the rest of the section, none or one a texel.
+        let alphas = &bytes[texels_end..];
+        if !alphas.is_empty() && alphas.len() < texels {
+            return Err(SceneError::Truncated);
+        }
+        if alphas.len() > texels {
+            return Err(SceneError::Objects(StickError::AlphasLength));
+        }
         Ok(Self {
             points: bytemuck::try_cast_slice(points).map_err(|_| SceneError::Misaligned)?,
             sticks,
-            texels: bytemuck::try_cast_slice(texels).map_err(|_| SceneError::Misaligned)?,
+            texels: bytemuck::try_cast_slice(&bytes[texels_at..texels_end])
+                .map_err(|_| SceneError::Misaligned)?,
+            alphas,
         })
     }
 }
@@ -356,6 +369,7 @@ impl<'a> BoardScene<'a> {
             };
         }
         StickLayer::new(terrain, objects.points, sticks, objects.texels)
+            .and_then(|layer| layer.with_alphas(objects.alphas))
             .map(Some)
             .map_err(SceneError::Objects)
     }

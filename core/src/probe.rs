@@ -45,6 +45,13 @@ pub trait Probe {
     /// A ray was set up (one per pixel, or per vertical subsample).
     #[inline(always)]
     fn ray(&mut self) {}
+    /// A secondary ray was cast through texels less than opaque (complex
+    /// sticks, [`crate::StickTable::with_alphas`]): at most
+    /// [`crate::MAX_SEE_THROUGH`] a pixel. Its steps are reported as
+    /// [`Probe::visit`]s on level 0, its hit's colors as
+    /// [`Probe::color`]s (beyond [`MAX_COLOR_FETCHES_A_RAY`]).
+    #[inline(always)]
+    fn secondary_ray(&mut self) {}
     /// A frame's render starts image line `index`: the events up to the
     /// next call are that line's. [`crate::render`],
     /// [`crate::render_by_footprint`] and [`crate::Governor::render`]
@@ -83,6 +90,8 @@ pub struct CountingProbe {
     pub color_fetches: u64,
     /// Rays set up.
     pub rays: u64,
+    /// Secondary rays cast through texels less than opaque.
+    pub secondary_rays: u64,
     /// Walk steps on each pyramid level.
     pub steps_by_level: [u64; MAX_LEVELS],
     /// Rays that hit on each pyramid level.
@@ -117,5 +126,9 @@ impl Probe for CountingProbe {
     #[inline(always)]
     fn ray(&mut self) {
         self.rays += 1;
+    }
+    #[inline(always)]
+    fn secondary_ray(&mut self) {
+        self.secondary_rays += 1;
     }
 }

@@ -106,6 +106,8 @@ pub enum StickError {
         /// The grid point.
         point: usize,
     },
+    /// The opacities are neither none nor one a texel.
+    AlphasLength,
 }
 
 impl fmt::Display for StickError {
@@ -122,6 +124,9 @@ impl fmt::Display for StickError {
                 f,
                 "the stick at grid point {point} is taller than the height there (its base would be below 0)"
             ),
+            Self::AlphasLength => {
+                f.write_str("stick texel opacities must be none or one a texel")
+            }
         }
     }
 }
@@ -137,6 +142,8 @@ impl core::error::Error for StickError {}
 pub struct StickTable<'a> {
     sticks: &'a [Stick],
     texels: &'a [Rgb],
+    /// Each texel's opacity (255 opaque), or none: every texel opaque.
+    alphas: &'a [u8],
 }
 
 impl<'a> StickTable<'a> {
@@ -144,6 +151,7 @@ impl<'a> StickTable<'a> {
     pub const EMPTY: StickTable<'static> = StickTable {
         sticks: &[],
         texels: &[],
+        alphas: &[],
     };
 
     /// The table of `sticks` and their `texels`.
@@ -154,7 +162,33 @@ impl<'a> StickTable<'a> {
                 return Err(StickError::Texels { stick });
             }
         }
-        Ok(Self { sticks, texels })
+        Ok(Self {
+            sticks,
+            texels,
+            alphas: &[],
+        })
+    }
+
+    /// This table with each texel's opacity, `alphas[i]` texel `i`'s (255
+    /// opaque, 0 clear): its sticks are **complex** (Cohen-Or §2) where a
+    /// texel is less than opaque, and a ray that meets one sees through
+    /// it ([`Grid::seen_pair_at`]). None (an empty slice) keeps every
+    /// texel opaque.
+    pub fn with_alphas(self, alphas: &'a [u8]) -> Result<Self, StickError> {
+        if !alphas.is_empty() && alphas.len() != self.texels.len() {
+            return Err(StickError::AlphasLength);
+        }
+        Ok(Self { alphas, ..self })
+    }
+
+    /// The texels' opacities: none where every texel is opaque.
+    pub fn alphas(&self) -> &'a [u8] {
+        self.alphas
+    }
+
+    /// Whether a texel is less than opaque.
+    pub fn sees_through(&self) -> bool {
+        self.alphas.iter().any(|&a| a < u8::MAX)
     }
 
     /// The sticks.
@@ -172,9 +206,11 @@ impl<'a> StickTable<'a> {
         self.sticks.is_empty()
     }
 
-    /// Bytes of the table: its sticks and texels.
+    /// Bytes of the table: its sticks, texels and opacities.
     pub fn bytes(&self) -> usize {
-        core::mem::size_of_val(self.sticks) + core::mem::size_of_val(self.texels)
+        core::mem::size_of_val(self.sticks)
+            + core::mem::size_of_val(self.texels)
+            + self.alphas.len()
     }
 
     /// The texel at height `z` (Q16) of the stick a grid point whose value
@@ -190,13 +226,14 @@ impl<'a> StickTable<'a> {
     /// colors `terrain`) where a ray crosses the surface between them at
     /// height `z` (Q16), given each point's stick texel there (`None`
     /// where no stick stands; see [`StickLayer::pair`]).
+    /// The same choice for any value of a texel (its color, its opacity).
     #[inline(always)]
-    fn pair_of(
-        texels: (Option<Rgb>, Option<Rgb>),
+    fn pair_of<V: Copy>(
+        texels: (Option<V>, Option<V>),
         tops: (u16, u16),
         z: i32,
-        terrain: (Rgb, Rgb),
-    ) -> (Rgb, Rgb) {
+        terrain: (V, V),
+    ) -> (V, V) {
         let (first, second) = texels;
         let above = |top: u16| z > i32::from(top) << HEIGHT_TO_Q16;
         let c0 = match (first, second) {
@@ -228,6 +265,48 @@ impl<'a> StickTable<'a> {
         Self::pair_of(texels, tops, z, terrain)
     }
 
+    /// The texel at height `z` (Q16) of the stick a point whose value is
+    /// `point` and whose height is `top` (U12.4) holds, and its opacity
+    /// (255 where the table has none); `None` for plain terrain.
+    #[inline]
+    fn seen(&self, point: u16, top: u16, z: i32) -> Option<(Rgb, u8)> {
+        let stick = self.sticks.get(usize::from(point.checked_sub(1)?))?;
+        let texel = stick.texel_at(top, z);
+        let alpha = self.alphas.get(texel).copied().unwrap_or(u8::MAX);
+        Some((*self.texels.get(texel)?, alpha))
+    }
+
+    /// [`StickTable::pair`] with each color's opacity: a texel's, or
+    /// opaque terrain.
+    #[inline]
+    pub(crate) fn seen_pair(
+        &self,
+        points: (u16, u16),
+        tops: (u16, u16),
+        z: i32,
+        terrain: (Rgb, Rgb),
+    ) -> ((Rgb, u8), (Rgb, u8)) {
+        let seen = (
+            self.seen(points.0, tops.0, z),
+            self.seen(points.1, tops.1, z),
+        );
+        Self::pair_of(seen, tops, z, ((terrain.0, u8::MAX), (terrain.1, u8::MAX)))
+    }
+
+    /// The ground's height (U12.4) under a point whose value is `point`
+    /// and whose height is `top`: its stick's base, or `top` for plain
+    /// terrain.
+    #[inline]
+    pub(crate) fn ground(&self, point: u16, top: u16) -> u16 {
+        match point
+            .checked_sub(1)
+            .and_then(|i| self.sticks.get(usize::from(i)))
+        {
+            Some(stick) => top - stick.height.min(top),
+            None => top,
+        }
+    }
+
     /// Whether a stick on a point whose height is `top` (U12.4) stands as
     /// high as `z` (Q16) or higher: a crossing at `z` beside it is on its
     /// wall ([`Grid::stands`]).
@@ -244,6 +323,7 @@ pub struct StickLayer<'a> {
     points: &'a [u16],
     sticks: &'a [Stick],
     texels: &'a [Rgb],
+    alphas: &'a [u8],
 }
 
 impl<'a> StickLayer<'a> {
@@ -275,6 +355,16 @@ impl<'a> StickLayer<'a> {
             points,
             sticks,
             texels,
+            alphas: &[],
+        })
+    }
+
+    /// This layer with each texel's opacity ([`StickTable::with_alphas`]).
+    pub fn with_alphas(self, alphas: &'a [u8]) -> Result<Self, StickError> {
+        let table = self.table().with_alphas(alphas)?;
+        Ok(Self {
+            alphas: table.alphas,
+            ..self
         })
     }
 
@@ -283,6 +373,7 @@ impl<'a> StickLayer<'a> {
         StickTable {
             sticks: self.sticks,
             texels: self.texels,
+            alphas: self.alphas,
         }
     }
 
@@ -470,6 +561,33 @@ impl<G: Grid> Grid for StickGrid<'_, G> {
                 .texel(index, self.grid.height(index)?, z)
                 .unwrap_or(color),
         )
+    }
+    #[inline]
+    fn sees_through(&self) -> bool {
+        self.layer.is_some_and(|layer| !layer.alphas.is_empty())
+    }
+    #[inline(always)]
+    fn seen_pair_at(&self, index: isize, across: isize, z: i32) -> Option<((Rgb, u8), (Rgb, u8))> {
+        let (c0, c1) = self.grid.color_pair(index, across)?;
+        match &self.layer {
+            Some(layer) if layer.holds(index) || layer.holds(index + across) => {
+                let tops = self.grid.height_pair(index, across)?;
+                let points = (
+                    layer.point(index as usize),
+                    layer.point((index + across) as usize),
+                );
+                Some(layer.table().seen_pair(points, tops, z, (c0, c1)))
+            }
+            _ => Some(((c0, u8::MAX), (c1, u8::MAX))),
+        }
+    }
+    #[inline]
+    fn ground(&self, index: isize) -> Option<u16> {
+        let top = self.grid.height(index)?;
+        Some(match &self.layer {
+            Some(layer) => layer.table().ground(layer.point(index as usize), top),
+            None => top,
+        })
     }
 }
 

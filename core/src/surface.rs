@@ -81,6 +81,27 @@ pub trait Grid: Copy {
         let _ = z;
         self.color(index)
     }
+    /// Whether anything on this grid can be seen through (complex sticks,
+    /// [`crate::StickTable::with_alphas`]): if not, every color
+    /// [`Grid::seen_pair_at`] gives is opaque. Never, by default.
+    #[inline(always)]
+    fn sees_through(&self) -> bool {
+        false
+    }
+    /// [`Grid::color_pair_at`], each color with its opacity (255 opaque).
+    /// Opaque, by default.
+    #[inline(always)]
+    fn seen_pair_at(&self, index: isize, across: isize, z: i32) -> Option<((Rgb, u8), (Rgb, u8))> {
+        let (c0, c1) = self.color_pair_at(index, across, z)?;
+        Some(((c0, u8::MAX), (c1, u8::MAX)))
+    }
+    /// The height (U12.4) of the ground at `index`, under any object
+    /// standing there: what a ray that sees through the object meets.
+    /// [`Grid::height`], by default.
+    #[inline(always)]
+    fn ground(&self, index: isize) -> Option<u16> {
+        self.height(index)
+    }
 }
 
 /// A terrain and its coarser levels, as the caster reads them.

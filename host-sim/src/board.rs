@@ -86,6 +86,7 @@ pub fn write_scene(path: &Path, scene: &Scene, image: (u32, u32), views: &[Camer
             bytes.extend_from_slice(&scene::encode_stick(stick));
         }
         bytes.extend(objects.texels.iter().flatten());
+        bytes.extend_from_slice(objects.see_through_alphas());
     }
     std::fs::write(path, &bytes)
         .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))

@@ -48,6 +48,8 @@ pub struct LevelStats {
     /// Color fetches of the shading (a terrain ray makes one or two; the
     /// board's cost fit charges each).
     pub color_fetches: u64,
+    /// Secondary rays cast through see-through texels (complex sticks).
+    pub secondary_rays: u64,
     /// The surface's roughness (`terracast::roughness`, 1/64 units).
     pub roughness: u8,
     /// The factor the terrain fit scaled the pixel-to-voxel ratio by, Q16

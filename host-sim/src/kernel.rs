@@ -340,6 +340,7 @@ pub fn render_surface_in<T: Surface + ?Sized>(
             hits: probe.hits_by_level,
             bound_tests: probe.bound_tests,
             color_fetches: probe.color_fetches,
+            secondary_rays: probe.secondary_rays,
             roughness: surface.roughness(),
             terrain_fit: options.fit_for(surface.roughness()),
             governed,

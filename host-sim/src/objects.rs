@@ -34,6 +34,8 @@ pub struct Objects {
     pub sticks: Vec<Stick>,
     /// The sticks' texels.
     pub texels: Vec<Rgb>,
+    /// Each texel's opacity (255 opaque): one a texel.
+    pub alphas: Vec<u8>,
     /// Objects planted, by kind.
     pub trees: usize,
     /// Houses planted.
@@ -52,6 +54,7 @@ impl Objects {
             points: vec![0; points],
             sticks: Vec::new(),
             texels: Vec::new(),
+            alphas: Vec::new(),
             trees: 0,
             houses: 0,
             placed: 0,
@@ -62,7 +65,18 @@ impl Objects {
     /// with the sticks' tops as its heights).
     pub fn layer<'a>(&'a self, terrain: &Terrain<'_>) -> Result<StickLayer<'a>, String> {
         StickLayer::new(terrain, &self.points, &self.sticks, &self.texels)
+            .and_then(|layer| layer.with_alphas(self.see_through_alphas()))
             .map_err(|e| e.to_string())
+    }
+
+    /// The opacities the kernel takes: none where every texel is opaque,
+    /// so that opaque objects cost no test of them.
+    pub fn see_through_alphas(&self) -> &[u8] {
+        if self.alphas.iter().any(|&a| a < u8::MAX) {
+            &self.alphas
+        } else {
+            &[]
+        }
     }
 
     /// Grid points that hold a stick.
@@ -76,6 +90,7 @@ impl Objects {
         self.points.len() * 2
             + self.sticks.len() * std::mem::size_of::<Stick>()
             + self.texels.len() * 3
+            + self.see_through_alphas().len()
     }
 
     /// The texel of the stick at grid point `index`, whose top is `top`
@@ -83,12 +98,34 @@ impl Objects {
     /// [`StickLayer::texel`] picks it, the stick's texel at `z` above its
     /// base; `None` where no stick stands.
     pub fn texel(&self, index: usize, top: f64, z: f64) -> Option<Rgb> {
+        self.texels.get(self.texel_index(index, top, z)?).copied()
+    }
+
+    /// The opacity (0 to 1) of [`Objects::texel`]'s texel; `None` where no
+    /// stick stands.
+    pub fn alpha(&self, index: usize, top: f64, z: f64) -> Option<f64> {
+        let texel = self.texel_index(index, top, z)?;
+        Some(f64::from(self.alphas.get(texel).copied().unwrap_or(u8::MAX)) / 255.0)
+    }
+
+    /// Where in the texel table [`Objects::texel`] finds its texel.
+    fn texel_index(&self, index: usize, top: f64, z: f64) -> Option<usize> {
         let stick = self
             .sticks
             .get(usize::from(*self.points.get(index)?).checked_sub(1)?)?;
         let base = top - f64::from(stick.height) / 16.0;
         let texel = ((z - base).floor().max(0.0) as usize).min(usize::from(stick.texels) - 1);
-        self.texels.get(stick.first as usize + texel).copied()
+        Some(stick.first as usize + texel)
+    }
+
+    /// The ground's height under grid point `index`, whose top is `top`
+    /// voxels high: its stick's base, or `top` where none stands.
+    pub fn ground(&self, index: usize, top: f64) -> f64 {
+        let stick = self
+            .points
+            .get(index)
+            .and_then(|&p| self.sticks.get(usize::from(p).checked_sub(1)?));
+        stick.map_or(top, |stick| top - f64::from(stick.height) / 16.0)
     }
 
     /// Whether a stick stands at grid point `index` (top `top` voxels) as
@@ -99,13 +136,9 @@ impl Objects {
 
     /// Adds a stick of `height` (U12.4) with `texels` to the table, or
     /// finds the one already there; its index plus one.
-    fn stick(
-        &mut self,
-        table: &mut HashMap<(u16, Vec<Rgb>), u16>,
-        height: u16,
-        texels: Vec<Rgb>,
-    ) -> Option<u16> {
-        if let Some(&index) = table.get(&(height, texels.clone())) {
+    fn stick(&mut self, table: &mut StickKeys, height: u16, column: &Column) -> Option<u16> {
+        let key = (height, column.texels.clone(), column.alphas.clone());
+        if let Some(&index) = table.get(&key) {
             return Some(index);
         }
         if self.sticks.len() >= MAX_STICKS {
@@ -113,15 +146,20 @@ impl Objects {
         }
         self.sticks.push(Stick {
             first: self.texels.len() as u32,
-            texels: texels.len() as u16,
+            texels: column.texels.len() as u16,
             height,
         });
-        self.texels.extend_from_slice(&texels);
+        self.texels.extend_from_slice(&column.texels);
+        self.alphas
+            .extend((0..column.texels.len()).map(|i| column.alpha(i)));
         let index = self.sticks.len() as u16;
-        table.insert((height, texels), index);
+        table.insert(key, index);
         Some(index)
     }
 }
+
+/// The sticks a planting has added, by height, texels and opacities.
+type StickKeys = HashMap<(u16, Vec<Rgb>, Vec<u8>), u16>;
 
 /// One stick of an object: its grid point relative to the object's
 /// anchor, its height in voxels (whole) and its texels, bottom up (one a
@@ -136,6 +174,15 @@ pub struct Column {
     pub height: u16,
     /// The texels, bottom up.
     pub texels: Vec<Rgb>,
+    /// Their opacities (255 opaque), or none where all are opaque.
+    pub alphas: Vec<u8>,
+}
+
+impl Column {
+    /// The opacity of texel `i`.
+    pub fn alpha(&self, i: usize) -> u8 {
+        self.alphas.get(i).copied().unwrap_or(u8::MAX)
+    }
 }
 
 /// An object: its sticks around an anchor.
@@ -153,8 +200,8 @@ impl Shape {
     /// The library's object `name` ([`Shape::LIBRARY`]).
     pub fn library(name: &str) -> Option<Self> {
         let columns = match name {
-            "conifer" => conifer(3, 13, 10),
-            "broadleaf" => broadleaf(3, 11, 10),
+            "conifer" => conifer(3, 13, 10, LEAF_ALPHA),
+            "broadleaf" => broadleaf(3, 11, 10, LEAF_ALPHA),
             "house" => house(8, 6, 4, 3, [170, 60, 45]),
             "vehicle" => vehicle([40, 70, 150]),
             _ => return None,
@@ -203,17 +250,22 @@ impl Shape {
                     continue;
                 };
                 let height = (f64::from(source.height) * scale).round().max(1.0) as u16;
-                let texels = (0..height)
-                    .map(|z| {
-                        let at = (f64::from(z) / scale) as usize;
-                        source.texels[at.min(source.texels.len() - 1)]
-                    })
-                    .collect();
+                let from_texel = |z: u16| {
+                    let at = (f64::from(z) / scale) as usize;
+                    at.min(source.texels.len() - 1)
+                };
+                let texels = (0..height).map(|z| source.texels[from_texel(z)]).collect();
+                let alphas = if source.alphas.is_empty() {
+                    Vec::new()
+                } else {
+                    (0..height).map(|z| source.alpha(from_texel(z))).collect()
+                };
                 columns.push(Column {
                     dx,
                     dy,
                     height,
                     texels,
+                    alphas,
                 });
             }
         }
@@ -261,9 +313,10 @@ impl Shape {
 }
 
 /// A conifer: a cone of `radius` points, `height` voxels tall, dark green
-/// toward the ground and lighter up its height.
-fn conifer(radius: i32, height: u16, shade: u8) -> Vec<Column> {
-    footprint(radius, |d| {
+/// toward the ground and lighter up its height; the leaves of its outer
+/// ring at opacity `leaves`.
+fn conifer(radius: i32, height: u16, shade: u8, leaves: u8) -> Vec<Column> {
+    footprint(radius, leaves, |d| {
         let h = (f64::from(height) * (1.0 - d / (f64::from(radius) + 1.0)))
             .round()
             .max(2.0) as u16;
@@ -282,10 +335,14 @@ fn conifer(radius: i32, height: u16, shade: u8) -> Vec<Column> {
     })
 }
 
+/// A broadleaf tree's trunk.
+const TRUNK: Rgb = [90, 60, 35];
+
 /// A broadleaf tree: a dome of `radius` points, `height` voxels tall,
-/// its crown on a short brown trunk at the middle.
-fn broadleaf(radius: i32, height: u16, shade: u8) -> Vec<Column> {
-    footprint(radius, |d| {
+/// its crown on a short brown trunk at the middle; the leaves of its
+/// outer ring at opacity `leaves`.
+fn broadleaf(radius: i32, height: u16, shade: u8, leaves: u8) -> Vec<Column> {
+    footprint(radius, leaves, |d| {
         let r = f64::from(radius) + 0.5;
         let h = (f64::from(height) * (1.0 - (d / r).powi(2)).max(0.0).sqrt())
             .round()
@@ -293,7 +350,7 @@ fn broadleaf(radius: i32, height: u16, shade: u8) -> Vec<Column> {
         let texels = (0..h)
             .map(|z| {
                 if d < 1.0 && z < 2 {
-                    [90, 60, 35]
+                    TRUNK
                 } else {
                     let up = f64::from(z) / f64::from(height);
                     [
@@ -308,20 +365,40 @@ fn broadleaf(radius: i32, height: u16, shade: u8) -> Vec<Column> {
     })
 }
 
+/// The opacity of a tree's leaves on the outer ring of its crown, where
+/// they are seen through: a ray sees half through them (a secondary ray
+/// in the kernel).
+const LEAF_ALPHA: u8 = 128;
+
 /// The points within `radius` (and a half) of the anchor, each with the
-/// stick `column` gives for its distance.
-fn footprint(radius: i32, mut column: impl FnMut(f64) -> (u16, Vec<Rgb>)) -> Vec<Column> {
+/// stick `column` gives for its distance: its height and texels. The crown
+/// of the outer ring (every texel but a trunk's) is leaves at opacity
+/// `leaves`.
+fn footprint(
+    radius: i32,
+    leaves: u8,
+    mut column: impl FnMut(f64) -> (u16, Vec<Rgb>),
+) -> Vec<Column> {
     let mut columns = Vec::new();
     for dy in -radius..=radius {
         for dx in -radius..=radius {
             let d = f64::from(dx * dx + dy * dy).sqrt();
             if d <= f64::from(radius) + 0.5 {
                 let (height, texels) = column(d);
+                let alphas = if leaves < u8::MAX && d > f64::from(radius) - 0.5 {
+                    texels
+                        .iter()
+                        .map(|&t| if t == TRUNK { u8::MAX } else { leaves })
+                        .collect()
+                } else {
+                    Vec::new()
+                };
                 columns.push(Column {
                     dx,
                     dy,
                     height,
                     texels,
+                    alphas,
                 });
             }
         }
@@ -386,11 +463,17 @@ fn block(
                 dy,
                 height,
                 texels,
+                alphas: Vec::new(),
             });
         }
     }
     columns
 }
+
+/// Trees within this many grid points of their stand's edge (about two
+/// of the largest trees across) are on its boundary, and have see-through
+/// leaves.
+const BOUNDARY: f64 = 16.0;
 
 /// A small seeded generator (SplitMix64): the same planting for the same
 /// seed on every machine.
@@ -451,16 +534,21 @@ impl Planting<'_> {
         let water = scene.heights.iter().copied().fold(f32::MAX, f32::min);
         let area = f64::from(w) * f64::from(d);
         // Trees of a few shapes, each planted many times: the shapes share
-        // their sticks.
-        let shapes: Vec<Vec<Column>> = (0..12)
+        // their sticks. Each shape twice: opaque inside a stand, and with
+        // see-through leaves on its outer ring on the stand's boundary,
+        // where a ray may see through them to what is beyond (inside, it
+        // would see another tree: Cohen-Or's "only the boundary trees").
+        let shapes: Vec<[Vec<Column>; 2]> = (0..12)
             .map(|i| {
                 let (radius, height, shade) =
                     (2 + i % 3, 7 + 3 * (i % 4) as u16, (i * 7 % 20) as u8);
-                if i % 2 == 0 {
-                    conifer(radius, height, shade)
-                } else {
-                    broadleaf(radius, height - 2, shade)
-                }
+                [u8::MAX, LEAF_ALPHA].map(|leaves| {
+                    if i % 2 == 0 {
+                        conifer(radius, height, shade, leaves)
+                    } else {
+                        broadleaf(radius, height - 2, shade, leaves)
+                    }
+                })
             })
             .collect();
         // The village: houses on a loose grid around a flat spot.
@@ -522,7 +610,9 @@ impl Planting<'_> {
                     radius * random.unit().sqrt(),
                 );
                 let (x, y) = (cx + (r * a.cos()) as i32, cy + (r * a.sin()) as i32);
-                let shape = &shapes[random.below(0, shapes.len() as i32) as usize];
+                let boundary = r > radius - BOUNDARY;
+                let shape =
+                    &shapes[random.below(0, shapes.len() as i32) as usize][boundary as usize];
                 if planting
                     .place(shape, (x, y), |h, s| h > water + 1.0 && s < 2.5)
                     .is_ok()
@@ -539,7 +629,7 @@ impl Planting<'_> {
 pub struct Planting<'s> {
     scene: &'s mut Scene,
     objects: Objects,
-    table: HashMap<(u16, Vec<Rgb>), u16>,
+    table: StickKeys,
     taken: Vec<bool>,
 }
 
@@ -623,10 +713,7 @@ impl<'s> Planting<'s> {
         }
         let mut sticks = Vec::with_capacity(shape.len());
         for c in shape {
-            match self
-                .objects
-                .stick(&mut self.table, c.height * 16, c.texels.clone())
-            {
+            match self.objects.stick(&mut self.table, c.height * 16, c) {
                 Some(stick) => sticks.push(stick),
                 None => return Err(PlaceError::TableFull),
             }
@@ -700,6 +787,7 @@ mod tests {
                     dy: 0,
                     height: 600,
                     texels: vec![[1, 2, 3]; 600],
+                    alphas: Vec::new(),
                 })
                 .collect(),
         };

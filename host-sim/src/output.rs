@@ -83,6 +83,7 @@ pub fn stats_json(
     if let Some(levels) = &stats.levels {
         value["bound_tests"] = levels.bound_tests.into();
         value["color_fetches"] = levels.color_fetches.into();
+        value["secondary_rays"] = levels.secondary_rays.into();
         value["terrain_roughness"] = (f64::from(levels.roughness) / 64.0).into();
         value["terrain_fit"] = (f64::from(levels.terrain_fit) / 65536.0).into();
         if let Some(cost) = &levels.governed {

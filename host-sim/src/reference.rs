@@ -132,11 +132,24 @@ impl<'s> Reference<'s> {
         dir: [f64; 3],
         visits: &mut u64,
     ) -> Option<SurfaceHit> {
+        self.intersect_past(origin, dir, (0.0, &[]), visits)
+    }
+
+    /// [`Reference::intersect`] from ray parameter `from` on, over the
+    /// surface with the grid points in `lowered` at their ground (under
+    /// their sticks): the ray a see-through texel lets on.
+    fn intersect_past(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        (from, lowered): (f64, &[usize]),
+        visits: &mut u64,
+    ) -> Option<SurfaceHit> {
         let extent = [
             f64::from(self.scene.width - 1),
             f64::from(self.scene.depth - 1),
         ];
-        let (mut t, mut t_end) = (0.0f64, f64::INFINITY);
+        let (mut t, mut t_end) = (from, f64::INFINITY);
         for axis in 0..2 {
             if dir[axis] == 0.0 {
                 if origin[axis] < 0.0 || origin[axis] > extent[axis] {
@@ -184,7 +197,7 @@ impl<'s> Reference<'s> {
                 level = (level + 1).min(top);
             } else if level > 0 {
                 level -= 1;
-            } else if let Some(hit) = self.cell_hit(nx, ny, origin, dir, t, t_exit) {
+            } else if let Some(hit) = self.cell_hit((nx, ny, lowered), origin, dir, t, t_exit) {
                 return Some(hit);
             } else {
                 t = step_past(t_exit);
@@ -198,18 +211,25 @@ impl<'s> Reference<'s> {
     /// along the ray the patch height is quadratic in t.
     fn cell_hit(
         &self,
-        i: usize,
-        j: usize,
+        (i, j, lowered): (usize, usize, &[usize]),
         o: [f64; 3],
         d: [f64; 3],
         ta: f64,
         tb: f64,
     ) -> Option<SurfaceHit> {
         let s = self.scene;
-        let h00 = f64::from(s.height(i, j));
-        let h10 = f64::from(s.height(i + 1, j));
-        let h01 = f64::from(s.height(i, j + 1));
-        let h11 = f64::from(s.height(i + 1, j + 1));
+        let height = |a: usize, b: usize| {
+            let top = f64::from(s.height(a, b));
+            let index = b * s.width as usize + a;
+            match &s.objects {
+                Some(objects) if lowered.contains(&index) => objects.ground(index, top),
+                _ => top,
+            }
+        };
+        let h00 = height(i, j);
+        let h10 = height(i + 1, j);
+        let h01 = height(i, j + 1);
+        let h11 = height(i + 1, j + 1);
         let (b, c, dd) = (h10 - h00, h01 - h00, h00 - h10 - h01 + h11);
         let u0 = o[0] + ta * d[0] - i as f64;
         let v0 = o[1] + ta * d[1] - j as f64;
@@ -364,19 +384,50 @@ impl<'s> Reference<'s> {
         hit: Option<SurfaceHit>,
         coloring: &ReferenceColoring,
     ) -> [f64; 3] {
-        let hit_color = |hit: SurfaceHit| {
-            self.scene
-                .color_at_height(hit.x, hit.y, eye_z + hit.t * dir[2])
-        };
+        let sky = coloring.sky.map(f64::from);
+        let hit_color = |hit: SurfaceHit| self.seen_through(eye_z, dir, hit, sky);
         match &coloring.atmosphere {
-            None => hit.map_or(coloring.sky.map(f64::from), hit_color),
+            None => hit.map_or(sky, hit_color),
             Some(air) => {
                 let at = hit.map(|hit| (hit.t * length(dir), eye_z + hit.t * dir[2]));
                 air.exact(dir, eye_z, at, hit.map_or([0.0; 3], hit_color))
             }
         }
     }
+
+    /// The color a ray from an eye at height `eye_z` along `dir` sees at
+    /// `hit`: where the texels there are less than opaque, composited in
+    /// order with what the ray meets through them (the points it saw
+    /// through lowered to their ground), up to [`SEE_THROUGH_LAYERS`]
+    /// layers; `sky` where it meets nothing more.
+    fn seen_through(&self, eye_z: f64, dir: [f64; 3], hit: SurfaceHit, sky: [f64; 3]) -> [f64; 3] {
+        let mut layers = Vec::new();
+        let mut lowered = Vec::new();
+        let mut at = Some(hit);
+        let mut behind = sky;
+        while let Some(hit) = at {
+            let z = eye_z + hit.t * dir[2];
+            let (color, alpha, clear) = self.scene.seen_at_height(hit.x, hit.y, z, &lowered);
+            if alpha >= 1.0 || layers.len() == SEE_THROUGH_LAYERS {
+                behind = color;
+                break;
+            }
+            layers.push((color, alpha));
+            lowered.extend(clear);
+            // The ray's origin in the map: back from the hit along `dir`.
+            let from = [hit.x - hit.t * dir[0], hit.y - hit.t * dir[1], eye_z];
+            at = self.intersect_past(from, dir, (hit.t, &lowered), &mut 0);
+        }
+        layers.iter().rev().fold(behind, |behind, (color, alpha)| {
+            std::array::from_fn(|k| color[k] * alpha + behind[k] * (1.0 - alpha))
+        })
+    }
 }
+
+/// Layers of see-through texels the reference composites a ray through
+/// (more than the kernel's [`terracast::MAX_SEE_THROUGH`] secondary rays:
+/// the reference's is the exact picture).
+pub const SEE_THROUGH_LAYERS: usize = 8;
 
 /// The smallest root of `a·s² + b·s + c` in `[0, span]`, given `c > 0`.
 fn smallest_root_in(a: f64, b: f64, c: f64, span: f64) -> Option<f64> {

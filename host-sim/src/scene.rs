@@ -347,8 +347,22 @@ impl Scene {
     /// lower than `z` beside a stick that stands as high shows that
     /// stick's texel, the wall's (as the kernel's `StickLayer::pair`).
     pub fn color_at_height(&self, x: f64, y: f64, z: f64) -> [f64; 3] {
+        self.seen_at_height(x, y, z, &[]).0
+    }
+
+    /// [`Scene::color_at_height`] and the opacity (0 to 1) of what it
+    /// shows, blended alike, for a ray that sees through the points in
+    /// `lowered` (no longer walls); and the cell's corners whose texels
+    /// there are less than opaque.
+    pub fn seen_at_height(
+        &self,
+        x: f64,
+        y: f64,
+        z: f64,
+        lowered: &[usize],
+    ) -> ([f64; 3], f64, Vec<usize>) {
         let Some(objects) = &self.objects else {
-            return self.color_at(x, y);
+            return (self.color_at(x, y), 1.0, Vec::new());
         };
         let (i, j, fx, fy) = self.cell_at(x, y);
         let w = self.width as usize;
@@ -356,19 +370,26 @@ impl Scene {
         let top = |c: usize| f64::from(self.heights[c]);
         let wall = corners
             .iter()
-            .filter(|&&c| objects.stands(c, top(c), z))
+            .filter(|&&c| !lowered.contains(&c) && objects.stands(c, top(c), z))
             .max_by(|&&a, &&b| top(a).total_cmp(&top(b)))
-            .and_then(|&c| objects.texel(c, top(c), z));
+            .and_then(|&c| Some((objects.texel(c, top(c), z)?, objects.alpha(c, top(c), z)?)));
         let seen = corners.map(|c| {
-            let own = objects.texel(c, top(c), z);
-            let seen = match (own, wall) {
+            let own = objects.texel(c, top(c), z).zip(objects.alpha(c, top(c), z));
+            match (own, wall) {
                 (Some(texel), _) => texel,
                 (None, Some(texel)) if top(c) < z => texel,
-                _ => self.colors[c],
-            };
-            seen.map(f64::from)
+                _ => (self.colors[c], 1.0),
+            }
         });
-        bilinear(seen, fx, fy)
+        let color = bilinear(seen.map(|(c, _)| c.map(f64::from)), fx, fy);
+        let alpha = bilinear(seen.map(|(_, a)| [a; 3]), fx, fy)[0];
+        let clear = corners
+            .iter()
+            .zip(&seen)
+            .filter(|(_, (_, a))| *a < 1.0)
+            .map(|(&c, _)| c)
+            .collect();
+        (color, alpha, clear)
     }
 
     /// Highest height in voxels.

@@ -701,6 +701,10 @@ fn objects_pack_into_tiles_and_render_as_from_the_maps() {
         tiles_as_cut(&mut file, &pyramid, Some(&layer), "objects"),
         summary.tiles
     );
+    // The wood's boundary trees see through their leaves: the file keeps
+    // the opacities.
+    assert!(file.sticks().sees_through());
+    assert_eq!(file.sticks().alphas(), objects_alphas(&scene));
     // Among the objects: low over the first stick, looking along +x.
     let objects = scene.objects.as_ref().unwrap();
     let first = objects.points.iter().position(|&p| p != 0).unwrap();
@@ -724,6 +728,11 @@ fn objects_pack_into_tiles_and_render_as_from_the_maps() {
         "{planted}: {} tiles, {} bytes, every tile and view identical",
         summary.tiles, summary.bytes
     );
+}
+
+/// The opacities of `scene`'s planted objects the kernel takes.
+fn objects_alphas(scene: &Scene) -> &[u8] {
+    scene.objects.as_ref().unwrap().see_through_alphas()
 }
 
 /// The bytes of a `.tiles` file with the header's version set to
@@ -765,10 +774,19 @@ fn damaged_and_foreign_files_are_refused_and_bad_tiles_rejected() {
     let e = TilesFile::open(&versioned).unwrap_err().to_string();
     assert!(e.contains("format version 9"), "{e}");
     // A version-2 file (no stick section) reads as one without objects.
-    let stick_section = 12;
+    let stick_section = 16;
     let old = temp("version-2.tiles");
     std::fs::write(&old, as_version(&bytes[..bytes.len() - stick_section], 2)).unwrap();
     assert!(TilesFile::open(&old).unwrap().sticks().is_empty());
+    // A version-3 file: its stick section without the opacity count.
+    let mut section = vec![0u8; 8];
+    section.extend_from_slice(&crc32fast::hash(&section).to_le_bytes());
+    let mut version_3 = as_version(&bytes[..bytes.len() - stick_section], 3);
+    version_3.extend_from_slice(&section);
+    let old = temp("version-3.tiles");
+    std::fs::write(&old, version_3).unwrap();
+    let version_3 = TilesFile::open(&old).unwrap();
+    assert!(version_3.sticks().is_empty() && version_3.sticks().alphas().is_empty());
     // A damaged stick table, and one cut short: refused in one line.
     let mut table = bytes.clone();
     let at = bytes.len() - 3;

@@ -741,6 +741,13 @@ impl<P: Probe> Probe for Metered<'_, P> {
         meter.add(&meter.rays, 1, meter.prices.get().per_ray);
         self.inner.ray();
     }
+    /// A secondary ray costs the frame as a ray does.
+    #[inline(always)]
+    fn secondary_ray(&mut self) {
+        let meter = self.meter;
+        meter.add(&meter.rays, 1, meter.prices.get().per_ray);
+        self.inner.secondary_ray();
+    }
     #[inline(always)]
     fn line(&mut self, index: u32) {
         self.inner.line(index);

@@ -56,6 +56,11 @@ use crate::view::plane::{slope_quotient, Plane, DIRECTION_WORD_SHIFT};
 use crate::view::words::saturate;
 use crate::{LinePlane, Sample, Sink, View};
 
+mod see_through;
+
+use see_through::NearHit;
+pub use see_through::{MAX_SEE_THROUGH, SEE_THROUGH_REACH};
+
 /// Heights are U12.4; the walk compares them in Q16.
 const HEIGHT_TO_Q16: u32 = COORD_FRAC_BITS - HEIGHT_FRAC_BITS;
 const ONE: i64 = 1 << COORD_FRAC_BITS;
@@ -911,6 +916,19 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             if let Some(color) = self.detail_color(walk, at, &far, probe) {
                 return sample(color);
             }
+        }
+        if self.grids[0].sees_through() {
+            let near = NearHit {
+                k: at.k,
+                index: at.index,
+                minor: at.minor,
+                z,
+                dz,
+                drift,
+                elevation: elevation(),
+                t: if above.is_some() { t } else { 256 },
+            };
+            return sample(self.see_through(walk, &near, probe));
         }
         let (on_hit, hit_cell) =
             self.line_color(walk, 0, (at.index, at.minor), aside, elevation(), probe);

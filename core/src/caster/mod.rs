@@ -43,6 +43,7 @@ use crate::sink::{Sample, Sink};
 use crate::surface::Surface;
 use crate::view::lod::LodPlan;
 use crate::view::View;
+pub use line_caster::{MAX_SEE_THROUGH, SEE_THROUGH_REACH};
 use ray_caster::{RayCaster, Unlimited};
 
 /// What every line of a frame shares.

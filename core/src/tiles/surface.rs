@@ -435,6 +435,32 @@ impl<const T: usize, const N: usize, const M: usize> Grid for TiledGrid<'_, '_, 
         }
         Some(table.texel(point, self.height(index)?, z).unwrap_or(color))
     }
+    #[inline]
+    fn sees_through(&self) -> bool {
+        self.sticks.is_some_and(|table| !table.alphas().is_empty())
+    }
+    #[inline]
+    fn seen_pair_at(&self, index: isize, across: isize, z: i32) -> Option<((Rgb, u8), (Rgb, u8))> {
+        let colors = self.color_pair(index, across)?;
+        let opaque = ((colors.0, u8::MAX), (colors.1, u8::MAX));
+        let Some(table) = &self.sticks else {
+            return Some(opaque);
+        };
+        let points = (self.stick_point(index), self.stick_point(index + across));
+        if points == (0, 0) {
+            return Some(opaque);
+        }
+        let tops = self.height_pair(index, across)?;
+        Some(table.seen_pair(points, tops, z, colors))
+    }
+    #[inline]
+    fn ground(&self, index: isize) -> Option<u16> {
+        let top = self.height(index)?;
+        Some(match &self.sticks {
+            Some(table) => table.ground(self.stick_point(index), top),
+            None => top,
+        })
+    }
 }
 
 impl<'c, 'a, const T: usize, const N: usize, const M: usize> Surface

@@ -157,6 +157,7 @@ impl Sculpture<'_> {
                     dy: y as i32,
                     height: top as u16,
                     texels,
+                    alphas: Vec::new(),
                 });
             }
         }

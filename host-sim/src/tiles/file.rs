@@ -24,8 +24,10 @@
 //! | 4 × photo tiles | CRC-32 of each photo tile record |
 //! | photo record × photo tiles | photo tile records |
 //! | 4, 4 | stick count, texel count (version 3) |
+//! | 4 | opacity count: 0, or the texel count (version 4) |
 //! | 8 × sticks | each stick's first texel (`u32`), texel count and height (U12.4, `u16` each) |
 //! | 3 × texels | the sticks' texels (RGB) |
+//! | opacities | each texel's opacity, 255 opaque (version 4; none where all are) |
 //! | 4 | CRC-32 of the stick section before it |
 //!
 //! Tiles are ordered by level, then row, then column. A record is the
@@ -35,7 +37,8 @@
 //! the height grid, [`terracast::tiles::PhotoTile`]) are ordered by photo,
 //! then fine level (the photo's texels first), then row, then column; a
 //! record is the tile's texels (RGB). A version-1 file is read as one
-//! without photos, a version-2 file as one without objects.
+//! without photos, a version-2 file as one without objects, a version-3
+//! file as one whose objects are opaque.
 
 use super::TILE;
 use crate::error::{Error, Result};
@@ -47,8 +50,8 @@ use terracast::tiles::{
 };
 use terracast::{DetailArea, HeightFilter, Rgb, Stick, StickTable};
 
-/// The format version this build writes (it reads versions 1 and 2 too).
-pub const FORMAT_VERSION: u32 = 3;
+/// The format version this build writes (it reads versions 1 to 3 too).
+pub const FORMAT_VERSION: u32 = 4;
 
 const MAGIC: &[u8; 8] = b"TCTILES\0";
 const HEADER_BYTES: u64 = 44;
@@ -237,8 +240,9 @@ pub struct TilesFile {
     record: Vec<u8>,
     photos: Photos,
     photo_checksums: Vec<u32>,
-    /// The objects' sticks and their texels (none before version 3).
-    sticks: Box<(Vec<Stick>, Vec<Rgb>)>,
+    /// The objects' sticks, their texels and the texels' opacities (none
+    /// before version 3; no opacities before version 4).
+    sticks: Box<Sticks>,
 }
 
 impl TilesFile {
@@ -304,10 +308,10 @@ impl TilesFile {
             read_photos(&mut file, header.file_bytes(), length).map_err(|e| fail(&e))?
         };
         let sticks = Box::new(if version < 3 {
-            (Vec::new(), Vec::new())
+            Sticks::default()
         } else {
-            read_sticks(&mut file, header.file_bytes() + photos.bytes(), length)
-                .map_err(|e| fail(&e))?
+            let start = header.file_bytes() + photos.bytes();
+            read_sticks(&mut file, (start, length), version).map_err(|e| fail(&e))?
         });
         Ok(Self {
             path: path.to_path_buf(),
@@ -394,45 +398,64 @@ fn read_photos(
     Ok((photos, words(&sums)))
 }
 
+/// A file's objects: sticks, texels, opacities (none where all opaque).
+#[derive(Debug, Default)]
+struct Sticks {
+    sticks: Vec<Stick>,
+    texels: Vec<Rgb>,
+    alphas: Vec<u8>,
+}
+
 /// The stick section's bytes for `table`.
 fn stick_section(table: &StickTable<'_>) -> Vec<u8> {
-    let (sticks, texels) = (table.sticks(), table.texels());
-    let mut b = Vec::with_capacity(12 + STICK_ENTRY_BYTES * sticks.len() + 3 * texels.len());
+    let (sticks, texels, alphas) = (table.sticks(), table.texels(), table.alphas());
+    let mut b =
+        Vec::with_capacity(16 + STICK_ENTRY_BYTES * sticks.len() + 3 * texels.len() + alphas.len());
     b.extend_from_slice(&(sticks.len() as u32).to_le_bytes());
     b.extend_from_slice(&(texels.len() as u32).to_le_bytes());
+    b.extend_from_slice(&(alphas.len() as u32).to_le_bytes());
     for stick in sticks {
         b.extend_from_slice(&stick.first.to_le_bytes());
         b.extend_from_slice(&stick.texels.to_le_bytes());
         b.extend_from_slice(&stick.height.to_le_bytes());
     }
     texels.iter().for_each(|c| b.extend_from_slice(c));
+    b.extend_from_slice(alphas);
     let crc = crc32fast::hash(&b);
     b.extend_from_slice(&crc.to_le_bytes());
     b
 }
 
 /// Reads the stick section starting at `start` of a file `length` bytes
-/// long; why not, in words, when it is damaged or cut short.
+/// long, of format `version`; why not, in words, when it is damaged or
+/// cut short.
 fn read_sticks(
     file: &mut File,
-    start: u64,
-    length: u64,
-) -> std::result::Result<(Vec<Stick>, Vec<Rgb>), String> {
+    (start, length): (u64, u64),
+    version: u32,
+) -> std::result::Result<Sticks, String> {
     let cut = || "truncated: the stick table is missing or cut short".to_string();
-    if length < start + 8 {
+    // Version 3 has no opacity count.
+    let counted = if version >= 4 { 12 } else { 8 };
+    if length < start + counted {
         return Err(cut());
     }
-    let mut counts = [0u8; 8];
+    let mut counts = [0u8; 12];
     file.seek(SeekFrom::Start(start))
-        .and_then(|_| file.read_exact(&mut counts))
+        .and_then(|_| file.read_exact(&mut counts[..counted as usize]))
         .map_err(|e| format!("cannot read the stick table: {e}"))?;
-    let [count, texel_count] = [words(&counts)[0], words(&counts)[1]].map(u64::from);
+    let [count, texel_count, alpha_count] = [0, 1, 2].map(|i| u64::from(words(&counts)[i]));
     if count > MAX_STICKS {
         return Err(format!(
             "the stick table lists {count} sticks, a file holds at most {MAX_STICKS}: the file is damaged"
         ));
     }
-    let bytes = 8 + STICK_ENTRY_BYTES as u64 * count + 3 * texel_count + 4;
+    if alpha_count != 0 && alpha_count != texel_count {
+        return Err(format!(
+            "the stick table lists {alpha_count} opacities for {texel_count} texels: the file is damaged"
+        ));
+    }
+    let bytes = counted + STICK_ENTRY_BYTES as u64 * count + 3 * texel_count + alpha_count + 4;
     if length < start + bytes {
         return Err(cut());
     }
@@ -444,7 +467,8 @@ fn read_sticks(
     if crc32fast::hash(entries) != words(crc)[0] {
         return Err("stick table checksum mismatch: the file is damaged".into());
     }
-    let (table, texels) = entries[8..].split_at(STICK_ENTRY_BYTES * count as usize);
+    let (table, rest) = entries[counted as usize..].split_at(STICK_ENTRY_BYTES * count as usize);
+    let (texels, alphas) = rest.split_at(3 * texel_count as usize);
     let sticks: Vec<Stick> = table
         .chunks_exact(STICK_ENTRY_BYTES)
         .map(|e| Stick {
@@ -454,8 +478,14 @@ fn read_sticks(
         })
         .collect();
     let texels: Vec<Rgb> = texels.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    StickTable::new(&sticks, &texels).map_err(|e| format!("stick table: {e}"))?;
-    Ok((sticks, texels))
+    StickTable::new(&sticks, &texels)
+        .and_then(|table| table.with_alphas(alphas))
+        .map_err(|e| format!("stick table: {e}"))?;
+    Ok(Sticks {
+        sticks,
+        texels,
+        alphas: alphas.to_vec(),
+    })
 }
 
 impl TileSource<TILE> for TilesFile {
@@ -480,7 +510,7 @@ impl TileSource<TILE> for TilesFile {
         decode(&self.record, tile);
         // A level-0 point naming a stick past the file's table is damage
         // the checksum did not catch: rejected as a damaged tile is.
-        let sticks = self.sticks.0.len();
+        let sticks = self.sticks.sticks.len();
         if key.level == 0
             && tile
                 .bounds
@@ -520,7 +550,14 @@ impl TileSource<TILE> for TilesFile {
 
     fn sticks(&self) -> StickTable<'_> {
         // Checked when the file was opened.
-        StickTable::new(&self.sticks.0, &self.sticks.1).unwrap_or(StickTable::EMPTY)
+        let Sticks {
+            sticks,
+            texels,
+            alphas,
+        } = &*self.sticks;
+        StickTable::new(sticks, texels)
+            .and_then(|table| table.with_alphas(alphas))
+            .unwrap_or(StickTable::EMPTY)
     }
 }
 
