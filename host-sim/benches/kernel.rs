@@ -809,9 +809,13 @@ fn objects_table(pixels: u64) {
         .expect("sticks")
         .expect("objects planted");
     let with_sticks = terracast::WithSticks::new(&pyramids[1], sticks);
+    // The same planting with every texel opaque: what the see-through
+    // leaves (complex sticks and their secondary rays) cost.
+    let opaque =
+        terracast::WithSticks::new(&pyramids[1], sticks.with_alphas(&[]).expect("no opacities"));
     println!("\nobjects: {planting}");
-    println!("\n| view | bare ns/pixel | with objects ns/pixel | against bare | bare steps/pixel | with objects steps/pixel |");
-    println!("|---|---|---|---|---|---|");
+    println!("\n| view | bare ns/pixel | with objects ns/pixel | against bare | bare steps/pixel | with objects steps/pixel | secondary rays/pixel | objects opaque ns/pixel | opaque against bare |");
+    println!("|---|---|---|---|---|---|---|---|---|");
     let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
     for (name, camera) in views {
         let view = View::new(&camera, SIZE.0, SIZE.1).expect("view");
@@ -825,17 +829,22 @@ fn objects_table(pixels: u64) {
             &mut buffer,
             &mut planted_steps,
         );
-        let best = best_in_turns(2, |i| match i {
+        let best = best_in_turns(3, |i| match i {
             0 => render(&pyramids[0], &view, &default, &mut buffer, &mut NoProbe),
-            _ => render(&with_sticks, &view, &default, &mut buffer, &mut NoProbe),
+            1 => render(&with_sticks, &view, &default, &mut buffer, &mut NoProbe),
+            _ => render(&opaque, &view, &default, &mut buffer, &mut NoProbe),
         });
+        let per_pixel = |count: u64| count as f64 / pixels as f64;
         println!(
-            "| {name} | {:.1} | {:.1} | {:.2}x | {:.2} | {:.2} |",
+            "| {name} | {:.1} | {:.1} | {:.2}x | {:.2} | {:.2} | {:.3} | {:.1} | {:.2}x |",
             best[0] / pixels as f64,
             best[1] / pixels as f64,
             best[1] / best[0],
-            bare_steps.steps as f64 / pixels as f64,
-            planted_steps.steps as f64 / pixels as f64,
+            per_pixel(bare_steps.steps),
+            per_pixel(planted_steps.steps),
+            per_pixel(planted_steps.secondary_rays),
+            best[2] / pixels as f64,
+            best[2] / best[0],
         );
     }
 }

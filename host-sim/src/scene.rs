@@ -533,14 +533,15 @@ impl KernelScene {
             .map_err(|e| Error::new(format!("objects rejected by the kernel: {e}")))
     }
 
-    /// Bytes of the objects' stick table, its sticks and their texels (0
-    /// without objects): what a parallel machine's processors hold whole,
+    /// Bytes of the objects' stick table, its sticks, their texels and
+    /// the texels' opacities (0 without objects): what a parallel machine's processors hold whole,
     /// where a stick point's voxel holds an index into it in place of a
     /// color (see [`crate::sim::simulate_with_sticks`]).
     pub fn stick_table_bytes(&self) -> u64 {
         self.objects.as_ref().map_or(0, |objects| {
             (std::mem::size_of_val(objects.sticks.as_slice())
-                + std::mem::size_of_val(objects.texels.as_slice())) as u64
+                + std::mem::size_of_val(objects.texels.as_slice())
+                + objects.see_through_alphas().len()) as u64
         })
     }
 

@@ -273,6 +273,10 @@ pub struct TiledGrid<'s, 'c, 'a, const T: usize, const N: usize, const M: usize 
     sticks: Option<StickTable<'s>>,
 }
 
+/// A grid-line cell where a stick stands: the stick table, its two
+/// points' stick values and their heights.
+type SticksOnPair<'s> = (StickTable<'s>, (u16, u16), (u16, u16));
+
 impl<'s, const T: usize, const N: usize, const M: usize> TiledGrid<'s, '_, '_, T, N, M> {
     /// The tile resolved ahead ([`Grid::near`]), if it holds world point
     /// `(x, y)`.
@@ -319,6 +323,18 @@ impl<'s, const T: usize, const N: usize, const M: usize> TiledGrid<'s, '_, '_, T
             }
             None => 0,
         }
+    }
+
+    /// Where a stick stands at level-0 point `index` or `index + across`:
+    /// the stick table, the two points' values and their heights.
+    #[inline(always)]
+    fn sticks_on_pair(&self, index: isize, across: isize) -> Option<SticksOnPair<'s>> {
+        let table = self.sticks?;
+        let points = (self.stick_point(index), self.stick_point(index + across));
+        if points == (0, 0) {
+            return None;
+        }
+        Some((table, points, self.height_pair(index, across)?))
     }
 
     /// `field` (a tile's heights or colors at a row and column) of the
@@ -400,15 +416,10 @@ impl<const T: usize, const N: usize, const M: usize> Grid for TiledGrid<'_, '_, 
     #[inline]
     fn color_pair_at(&self, index: isize, across: isize, z: i32) -> Option<(Rgb, Rgb)> {
         let colors = self.color_pair(index, across)?;
-        let Some(table) = &self.sticks else {
-            return Some(colors);
-        };
-        let points = (self.stick_point(index), self.stick_point(index + across));
-        if points == (0, 0) {
-            return Some(colors);
-        }
-        let tops = self.height_pair(index, across)?;
-        Some(table.pair(points, tops, z, colors))
+        Some(match self.sticks_on_pair(index, across) {
+            Some((table, points, tops)) => table.pair(points, tops, z, colors),
+            None => colors,
+        })
     }
     #[inline]
     fn stands(&self, index: isize, across: isize, z: i32) -> bool {
@@ -442,16 +453,10 @@ impl<const T: usize, const N: usize, const M: usize> Grid for TiledGrid<'_, '_, 
     #[inline]
     fn seen_pair_at(&self, index: isize, across: isize, z: i32) -> Option<((Rgb, u8), (Rgb, u8))> {
         let colors = self.color_pair(index, across)?;
-        let opaque = ((colors.0, u8::MAX), (colors.1, u8::MAX));
-        let Some(table) = &self.sticks else {
-            return Some(opaque);
-        };
-        let points = (self.stick_point(index), self.stick_point(index + across));
-        if points == (0, 0) {
-            return Some(opaque);
-        }
-        let tops = self.height_pair(index, across)?;
-        Some(table.seen_pair(points, tops, z, colors))
+        Some(match self.sticks_on_pair(index, across) {
+            Some((table, points, tops)) => table.seen_pair(points, tops, z, colors),
+            None => ((colors.0, u8::MAX), (colors.1, u8::MAX)),
+        })
     }
     #[inline]
     fn ground(&self, index: isize) -> Option<u16> {
