@@ -106,9 +106,9 @@ enum Through {
 impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
     /// The color of `hit`: both grid lines' colors and opacities at the
     /// crossing, composited with what the secondary rays see through it
-    /// where it is less than opaque. Out of line: only a surface with
-    /// complex sticks takes it.
-    #[inline(never)]
+    /// where it is less than opaque ([`LineCaster::see_behind`], out of
+    /// line: most hits are opaque).
+    #[inline(always)]
     pub(super) fn see_through<P: Probe>(
         &self,
         walk: &LineWalk,
@@ -120,10 +120,25 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
             count: 0,
         };
         let crossing = (hit.k, hit.t, hit.elevation);
-        let (mut color, mut alpha) = self.shade_crossing(walk, hit, crossing, &mut lowered, probe);
+        let (color, alpha) = self.shade_crossing(walk, hit, crossing, &mut lowered, probe);
         if alpha >= 255 {
             return color;
         }
+        self.see_behind(walk, hit, (color, alpha), lowered, probe)
+    }
+
+    /// `hit`'s color and opacity (less than opaque) composited with what
+    /// the secondary rays see through it, the points it sees through in
+    /// `lowered`.
+    #[inline(never)]
+    fn see_behind<P: Probe>(
+        &self,
+        walk: &LineWalk,
+        hit: &NearHit,
+        (mut color, mut alpha): (Rgb, u32),
+        mut lowered: Lowered,
+        probe: &mut P,
+    ) -> Rgb {
         // Front to back: each layer's color and opacity.
         let mut layers = [([0u8; 3], 0u32); MAX_SEE_THROUGH];
         let (mut count, mut from) = (0, hit.k);
@@ -300,7 +315,9 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
     /// The color and opacity where `hit`'s ray crosses the surface `t`/256
     /// of the way from sample `k − 1` to `k`, at height `elevation` (Q16):
     /// both grid lines' blended by the along weight (the hit's line's alone
-    /// where `t` is 256). Its points less than opaque join `lowered`.
+    /// where `t` is 256). Where the crossing is less than opaque, its
+    /// points less than opaque join `lowered`.
+    #[inline(always)]
     fn shade_crossing<P: Probe>(
         &self,
         walk: &LineWalk,
@@ -312,7 +329,9 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
         let aside = Self::aside_at(walk, k, hit.drift);
         let on_hit = self.line_shade(walk, hit, (k, aside, elevation), probe);
         if t >= 256 {
-            Self::lower(walk, &on_hit, lowered);
+            if on_hit.alpha < 255 {
+                Self::lower(walk, &on_hit, lowered);
+            }
             return (on_hit.color, on_hit.alpha);
         }
         let before = self.line_shade(walk, hit, (k - 1, aside - hit.drift, elevation), probe);
@@ -333,12 +352,13 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
             (true, false) => 0,
             _ => t,
         };
-        Self::lower(walk, &on_hit, lowered);
-        Self::lower(walk, &before, lowered);
-        (
-            lerp(before.color, on_hit.color, t),
-            blend(before.alpha, on_hit.alpha, t),
-        )
+        let alpha = blend(before.alpha, on_hit.alpha, t);
+        // Only a crossing less than opaque lets a secondary ray on.
+        if alpha < 255 {
+            Self::lower(walk, &on_hit, lowered);
+            Self::lower(walk, &before, lowered);
+        }
+        (lerp(before.color, on_hit.color, t), alpha)
     }
 }
 
