@@ -20,7 +20,7 @@
 //! coherence is untouched: every primary ray stops at a stick's surface,
 //! as with opaque sticks, so the next ray of the line resumes there.
 
-use super::{LineCaster, LineWalk};
+use super::{LineCaster, LineWalk, HEIGHT_TO_Q16};
 use crate::caster::crossing_fraction;
 use crate::caster::walk::lerp;
 use crate::color::Rgb;
@@ -37,7 +37,6 @@ pub const SEE_THROUGH_REACH: i32 = 256;
 /// Points a pixel's rays lower: the two of each of the two grid lines a
 /// hit is shaded from, for the primary ray and each secondary one.
 const MAX_LOWERED: usize = 4 * (MAX_SEE_THROUGH + 1);
-const HEIGHT_TO_Q16: u32 = COORD_FRAC_BITS - crate::config::HEIGHT_FRAC_BITS;
 
 /// A near hit on level 0, as [`LineCaster::see_through`] takes it.
 #[derive(Clone, Copy)]
@@ -274,8 +273,8 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
             Self::aside_at(walk, start, hit.drift),
             ray_height(hit, start),
         );
-        let (mut index, _) = Self::sample_at(walk, hit, start, 0);
         let steps = start - hit.k;
+        let mut index = hit.index + steps as isize * walk.step[0];
         let mut minor = hit
             .minor
             .saturating_add(steps.saturating_mul(walk.minor_step[0]));
