@@ -318,7 +318,7 @@ impl<'s> Reference<'s> {
                                         );
                                         let hit = self.intersect(rays.eye, dir, &mut count);
                                         for (sum, coloring) in sums.iter_mut().zip(colorings) {
-                                            let c = self.ray_color(rays.eye[2], dir, hit, coloring);
+                                            let c = self.ray_color(rays.eye, dir, hit, coloring);
                                             (0..3).for_each(|k| sum[k] += c[k]);
                                         }
                                     }
@@ -374,18 +374,19 @@ impl<'s> Reference<'s> {
         (frames, stats)
     }
 
-    /// What a ray from an eye at height `eye_z` along `dir` that meets the
+    /// What a ray from `eye` along `dir` that meets the
     /// surface at `hit` (or nowhere) shows under `coloring`'s sky and
     /// atmosphere.
     fn ray_color(
         &self,
-        eye_z: f64,
+        eye: [f64; 3],
         dir: [f64; 3],
         hit: Option<SurfaceHit>,
         coloring: &ReferenceColoring,
     ) -> [f64; 3] {
+        let eye_z = eye[2];
         let sky = coloring.sky.map(f64::from);
-        let hit_color = |hit: SurfaceHit| self.seen_through(eye_z, dir, hit, sky);
+        let hit_color = |hit: SurfaceHit| self.seen_through(eye, dir, hit, sky);
         match &coloring.atmosphere {
             None => hit.map_or(sky, hit_color),
             Some(air) => {
@@ -395,18 +396,24 @@ impl<'s> Reference<'s> {
         }
     }
 
-    /// The color a ray from an eye at height `eye_z` along `dir` sees at
+    /// The color a ray from `eye` along `dir` sees at
     /// `hit`: where the texels there are less than opaque, composited in
     /// order with what the ray meets through them (the points it saw
     /// through lowered to their ground), up to [`SEE_THROUGH_LAYERS`]
     /// layers; `sky` where it meets nothing more.
-    fn seen_through(&self, eye_z: f64, dir: [f64; 3], hit: SurfaceHit, sky: [f64; 3]) -> [f64; 3] {
+    fn seen_through(
+        &self,
+        eye: [f64; 3],
+        dir: [f64; 3],
+        hit: SurfaceHit,
+        sky: [f64; 3],
+    ) -> [f64; 3] {
         let mut layers = Vec::new();
         let mut lowered = Vec::new();
         let mut at = Some(hit);
         let mut behind = sky;
         while let Some(hit) = at {
-            let z = eye_z + hit.t * dir[2];
+            let z = eye[2] + hit.t * dir[2];
             let (color, alpha, clear) = self.scene.seen_at_height(hit.x, hit.y, z, &lowered);
             if alpha >= 1.0 || layers.len() == SEE_THROUGH_LAYERS {
                 behind = color;
@@ -414,9 +421,7 @@ impl<'s> Reference<'s> {
             }
             layers.push((color, alpha));
             lowered.extend(clear);
-            // The ray's origin in the map: back from the hit along `dir`.
-            let from = [hit.x - hit.t * dir[0], hit.y - hit.t * dir[1], eye_z];
-            at = self.intersect_past(from, dir, (hit.t, &lowered), &mut 0);
+            at = self.intersect_past(eye, dir, (hit.t, &lowered), &mut 0);
         }
         layers.iter().rev().fold(behind, |behind, (color, alpha)| {
             std::array::from_fn(|k| color[k] * alpha + behind[k] * (1.0 - alpha))

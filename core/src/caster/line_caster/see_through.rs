@@ -216,14 +216,21 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
         }
     }
 
-    /// The index of sample `k`'s major grid line on level 0 and its minor
-    /// coordinate `aside` (Q16) across `hit`'s line.
-    fn sample_at(walk: &LineWalk, hit: &NearHit, k: i32, aside: i32) -> (isize, i32) {
+    /// The index of sample `k`'s major grid line on level 0 and the line's
+    /// minor coordinate there (Q16), `hit`'s line stepped from its sample.
+    fn on_line(walk: &LineWalk, hit: &NearHit, k: i32) -> (isize, i32) {
         let steps = k - hit.k;
         let index = hit.index + steps as isize * walk.step[0];
         let minor = hit
             .minor
             .saturating_add(steps.saturating_mul(walk.minor_step[0]));
+        (index, minor)
+    }
+
+    /// [`LineCaster::on_line`], its minor coordinate moved `aside` (Q16)
+    /// across the line.
+    fn sample_at(walk: &LineWalk, hit: &NearHit, k: i32, aside: i32) -> (isize, i32) {
+        let (index, minor) = Self::on_line(walk, hit, k);
         (index, walk.aside(minor, aside))
     }
 
@@ -273,11 +280,7 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
             Self::aside_at(walk, start, hit.drift),
             ray_height(hit, start),
         );
-        let steps = start - hit.k;
-        let mut index = hit.index + steps as isize * walk.step[0];
-        let mut minor = hit
-            .minor
-            .saturating_add(steps.saturating_mul(walk.minor_step[0]));
+        let (mut index, mut minor) = Self::on_line(walk, hit, start);
         let at = |index, minor, aside, z| (index, walk.aside(minor, aside), z);
         let mut above = if start >= walk.first {
             self.clearance(walk, at(index, minor, aside, z), lowered, probe)
