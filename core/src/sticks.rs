@@ -277,7 +277,9 @@ impl<'a> StickTable<'a> {
     }
 
     /// [`StickTable::pair`] with each color's opacity: a texel's, or
-    /// opaque terrain.
+    /// opaque terrain. A point `lowered` (a secondary ray sees through
+    /// its stick) is plain terrain at its ground: it shows no texel of its
+    /// own and is no wall.
     #[inline]
     pub(crate) fn seen_pair(
         &self,
@@ -285,12 +287,23 @@ impl<'a> StickTable<'a> {
         tops: (u16, u16),
         z: i32,
         terrain: (Rgb, Rgb),
+        lowered: (bool, bool),
     ) -> ((Rgb, u8), (Rgb, u8)) {
-        let seen = (
-            self.seen(points.0, tops.0, z),
-            self.seen(points.1, tops.1, z),
-        );
-        Self::pair_of(seen, tops, z, ((terrain.0, u8::MAX), (terrain.1, u8::MAX)))
+        let seen_at = |point: u16, top: u16, lowered: bool| {
+            if lowered {
+                (None, self.ground(point, top))
+            } else {
+                (self.seen(point, top, z), top)
+            }
+        };
+        let (seen0, top0) = seen_at(points.0, tops.0, lowered.0);
+        let (seen1, top1) = seen_at(points.1, tops.1, lowered.1);
+        Self::pair_of(
+            (seen0, seen1),
+            (top0, top1),
+            z,
+            ((terrain.0, u8::MAX), (terrain.1, u8::MAX)),
+        )
     }
 
     /// The ground's height (U12.4) under a point whose value is `point`
@@ -567,7 +580,13 @@ impl<G: Grid> Grid for StickGrid<'_, G> {
         self.layer.is_some_and(|layer| !layer.alphas.is_empty())
     }
     #[inline(always)]
-    fn seen_pair_at(&self, index: isize, across: isize, z: i32) -> Option<((Rgb, u8), (Rgb, u8))> {
+    fn seen_pair_at(
+        &self,
+        index: isize,
+        across: isize,
+        z: i32,
+        lowered: (bool, bool),
+    ) -> Option<((Rgb, u8), (Rgb, u8))> {
         let (c0, c1) = self.grid.color_pair(index, across)?;
         match &self.layer {
             Some(layer) if layer.holds(index) || layer.holds(index + across) => {
@@ -576,7 +595,7 @@ impl<G: Grid> Grid for StickGrid<'_, G> {
                     layer.point(index as usize),
                     layer.point((index + across) as usize),
                 );
-                Some(layer.table().seen_pair(points, tops, z, (c0, c1)))
+                Some(layer.table().seen_pair(points, tops, z, (c0, c1), lowered))
             }
             _ => Some(((c0, u8::MAX), (c1, u8::MAX))),
         }

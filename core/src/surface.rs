@@ -88,10 +88,19 @@ pub trait Grid: Copy {
     fn sees_through(&self) -> bool {
         false
     }
-    /// [`Grid::color_pair_at`], each color with its opacity (255 opaque).
-    /// Opaque, by default.
+    /// [`Grid::color_pair_at`], each color with its opacity (255 opaque),
+    /// for a ray that sees through the sticks of the points `lowered`
+    /// says: such a point is plain terrain at its [`Grid::ground`].
+    /// Opaque, by default, where nothing can be seen through.
     #[inline(always)]
-    fn seen_pair_at(&self, index: isize, across: isize, z: i32) -> Option<((Rgb, u8), (Rgb, u8))> {
+    fn seen_pair_at(
+        &self,
+        index: isize,
+        across: isize,
+        z: i32,
+        lowered: (bool, bool),
+    ) -> Option<((Rgb, u8), (Rgb, u8))> {
+        let _ = lowered;
         let (c0, c1) = self.color_pair_at(index, across, z)?;
         Some(((c0, u8::MAX), (c1, u8::MAX)))
     }

@@ -464,6 +464,72 @@ mod tests {
         assert_eq!(smallest_root_in(1.0, 0.0, 1.0, 10.0), None);
     }
 
+    /// The center pixel of a view along x, from x = 2 at height 5, of
+    /// [`hedge_seen_by`]'s hedge.
+    fn through_a_hedge(front: u8) -> Rgb {
+        let camera = Camera::looking([2.0, 16.0, 5.0], 0.0, 0.0);
+        hedge_seen_by(camera, 9, front)[4 * 9 + 4]
+    }
+
+    /// A `side` × `side` view by `camera` of a flat map with a hedge two
+    /// points thick across x = 20 and 21 (rows 4 to 27), six voxels tall
+    /// on ground two high: the front row red at opacity `front`, the back
+    /// row blue and opaque, grass under both.
+    fn hedge_seen_by(camera: Camera, side: u32, front: u8) -> Vec<Rgb> {
+        const SIDE: u32 = 32;
+        let n = (SIDE * SIDE) as usize;
+        let grass = [40, 120, 40];
+        let mut scene = Scene::new(SIDE, SIDE, vec![2.0; n], vec![grass; n]).unwrap();
+        let mut objects = crate::objects::Objects::empty(n);
+        objects.sticks = (0..2)
+            .map(|first| terracast::Stick {
+                first,
+                texels: 1,
+                height: 6 * 16,
+            })
+            .collect();
+        objects.texels = vec![[250, 0, 0], [0, 0, 250]];
+        objects.alphas = vec![front, u8::MAX];
+        for y in 4..28 {
+            for (x, stick) in [(20, 1), (21, 2)] {
+                let i = y * SIDE as usize + x;
+                objects.points[i] = stick;
+                scene.heights[i] += 6.0;
+            }
+        }
+        scene.objects = Some(objects);
+        let reference = Reference::new(&scene);
+        let options = ReferenceOptions {
+            supersample: 1,
+            ..ReferenceOptions::default()
+        };
+        reference.render(&camera, side, side, &options).0.colors
+    }
+
+    #[test]
+    fn texels_seen_through_blend_by_their_opacity_with_what_is_behind() {
+        assert_eq!(through_a_hedge(u8::MAX), [250, 0, 0]);
+        // Clear: the blue row behind, and none of the red in front.
+        assert_eq!(through_a_hedge(0), [0, 0, 250]);
+        let half = through_a_hedge(128);
+        assert!(
+            (124..=127).contains(&half[0]) && half[1] == 0 && (123..=126).contains(&half[2]),
+            "{half:?}"
+        );
+        // From any side, a clear row shows none of its red: its points are
+        // plain ground to the rays through it, and a clear texel lends its
+        // color nothing where it is blended with an opaque one. (The grass,
+        // the blue row and the sky, blended in any way, have less red than
+        // green.)
+        for eye in [[2.0, 9.0, 12.0], [10.0, 16.0, 20.0], [10.0, 2.0, 9.0]] {
+            for (yaw, pitch) in [(0.0, -10.0), (20.0, 0.0), (35.0, -20.0), (-25.0, -30.0)] {
+                let frame = hedge_seen_by(Camera::looking(eye, yaw, pitch), 32, 0);
+                let reddened = frame.iter().filter(|c| c[0] > c[1]).count();
+                assert_eq!(reddened, 0, "{eye:?} yaw {yaw} pitch {pitch}");
+            }
+        }
+    }
+
     #[test]
     fn one_pass_for_several_colorings_renders_each_as_alone() {
         let scene = crate::scene::procedural(64, 2);

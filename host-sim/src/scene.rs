@@ -351,9 +351,10 @@ impl Scene {
     }
 
     /// [`Scene::color_at_height`] and the opacity (0 to 1) of what it
-    /// shows, blended alike, for a ray that sees through the points in
-    /// `lowered` (no longer walls); and the cell's corners whose texels
-    /// there are less than opaque.
+    /// shows, blended alike (the colors weighted by their opacities), for
+    /// a ray that sees through the points in `lowered` (plain ground at
+    /// their sticks' bases, no longer walls); and the cell's corners whose
+    /// texels there are less than opaque.
     pub fn seen_at_height(
         &self,
         x: f64,
@@ -367,22 +368,40 @@ impl Scene {
         let (i, j, fx, fy) = self.cell_at(x, y);
         let w = self.width as usize;
         let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)].map(|(a, b)| b * w + a);
+        // A lowered corner is plain ground under the stick seen through:
+        // no texel of its own, no wall.
         let top = |c: usize| f64::from(self.heights[c]);
+        let stick_at = |c: usize| {
+            if lowered.contains(&c) {
+                return None;
+            }
+            objects.texel(c, top(c), z).zip(objects.alpha(c, top(c), z))
+        };
+        let height = |c: usize| {
+            if lowered.contains(&c) {
+                objects.ground(c, top(c))
+            } else {
+                top(c)
+            }
+        };
         let wall = corners
             .iter()
             .filter(|&&c| !lowered.contains(&c) && objects.stands(c, top(c), z))
             .max_by(|&&a, &&b| top(a).total_cmp(&top(b)))
-            .and_then(|&c| Some((objects.texel(c, top(c), z)?, objects.alpha(c, top(c), z)?)));
-        let seen = corners.map(|c| {
-            let own = objects.texel(c, top(c), z).zip(objects.alpha(c, top(c), z));
-            match (own, wall) {
-                (Some(texel), _) => texel,
-                (None, Some(texel)) if top(c) < z => texel,
-                _ => (self.colors[c], 1.0),
-            }
+            .and_then(|&c| stick_at(c));
+        let seen = corners.map(|c| match (stick_at(c), wall) {
+            (Some(texel), _) => texel,
+            (None, Some(texel)) if height(c) < z => texel,
+            _ => (self.colors[c], 1.0),
         });
-        let color = bilinear(seen.map(|(c, _)| c.map(f64::from)), fx, fy);
+        // Colors blend weighted by their opacities (premultiplied): a
+        // clear texel lends its color nothing to what is seen through it.
         let alpha = bilinear(seen.map(|(_, a)| [a; 3]), fx, fy)[0];
+        let color = if alpha > 0.0 && seen.iter().any(|&(_, a)| a < 1.0) {
+            bilinear(seen.map(|(c, a)| c.map(|v| f64::from(v) * a)), fx, fy).map(|v| v / alpha)
+        } else {
+            bilinear(seen.map(|(c, _)| c.map(f64::from)), fx, fy)
+        };
         let clear = corners
             .iter()
             .zip(&seen)

@@ -451,10 +451,16 @@ impl<const T: usize, const N: usize, const M: usize> Grid for TiledGrid<'_, '_, 
         self.sticks.is_some_and(|table| !table.alphas().is_empty())
     }
     #[inline]
-    fn seen_pair_at(&self, index: isize, across: isize, z: i32) -> Option<((Rgb, u8), (Rgb, u8))> {
+    fn seen_pair_at(
+        &self,
+        index: isize,
+        across: isize,
+        z: i32,
+        lowered: (bool, bool),
+    ) -> Option<((Rgb, u8), (Rgb, u8))> {
         let colors = self.color_pair(index, across)?;
         Some(match self.sticks_on_pair(index, across) {
-            Some((table, points, tops)) => table.seen_pair(points, tops, z, colors),
+            Some((table, points, tops)) => table.seen_pair(points, tops, z, colors, lowered),
             None => ((colors.0, u8::MAX), (colors.1, u8::MAX)),
         })
     }

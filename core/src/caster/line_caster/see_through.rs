@@ -119,7 +119,8 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
             count: 0,
         };
         let crossing = (hit.k, hit.t, hit.elevation);
-        let (color, alpha) = self.shade_crossing(walk, hit, crossing, &mut lowered, probe);
+        let (color, alpha) =
+            self.shade_crossing::<false, _>(walk, hit, crossing, &mut lowered, probe);
         if alpha >= 255 {
             return color;
         }
@@ -160,8 +161,13 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
                     let elevation = saturate(
                         ray_height(hit, k) - ((i64::from(256 - t) * i64::from(hit.dz)) >> 8),
                     );
-                    (color, alpha) =
-                        self.shade_crossing(walk, hit, (k, t, elevation), &mut lowered, probe);
+                    (color, alpha) = self.shade_crossing::<true, _>(
+                        walk,
+                        hit,
+                        (k, t, elevation),
+                        &mut lowered,
+                        probe,
+                    );
                     from = k;
                 }
             }
@@ -186,13 +192,16 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
     }
 
     /// The shading of the grid line of level 0 at sample `k` of `hit`'s
-    /// line, `aside` (Q16) across it, at height `z` (Q16).
+    /// line, `aside` (Q16) across it, at height `z` (Q16); for a
+    /// `SECONDARY` ray, the points in `lowered` plain terrain at their
+    /// ground (a primary ray has lowered none: it skips the test).
     #[inline(always)]
-    fn line_shade<P: Probe>(
+    fn line_shade<const SECONDARY: bool, P: Probe>(
         &self,
         walk: &LineWalk,
         hit: &NearHit,
         (k, aside, z): (i32, i32, i32),
+        lowered: &Lowered,
         probe: &mut P,
     ) -> LineShade {
         let (index, minor) = Self::sample_at(walk, hit, k, aside);
@@ -200,13 +209,21 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
         let cell = index + (minor >> COORD_FRAC_BITS) as isize * across;
         let weight = ((minor >> (COORD_FRAC_BITS - WEIGHT_BITS)) & ((1 << WEIGHT_BITS) - 1)) as u32;
         probe.color(0, cell as usize);
-        match self.grids[0].seen_pair_at(cell, across, z) {
-            Some(((c0, a0), (c1, a1))) => LineShade {
-                color: lerp(c0, c1, weight),
-                alpha: blend(u32::from(a0), u32::from(a1), weight),
-                cell,
-                alphas: (a0, a1),
-            },
+        let lowered = if SECONDARY {
+            (lowered.holds(cell), lowered.holds(cell + across))
+        } else {
+            (false, false)
+        };
+        match self.grids[0].seen_pair_at(cell, across, z, lowered) {
+            Some(((c0, a0), (c1, a1))) => {
+                let (color, alpha) = mix((c0, u32::from(a0)), (c1, u32::from(a1)), weight);
+                LineShade {
+                    color,
+                    alpha,
+                    cell,
+                    alphas: (a0, a1),
+                }
+            }
             None => LineShade {
                 color: self.sky.color,
                 alpha: 255,
@@ -317,10 +334,11 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
     /// The color and opacity where `hit`'s ray crosses the surface `t`/256
     /// of the way from sample `k − 1` to `k`, at height `elevation` (Q16):
     /// both grid lines' blended by the along weight (the hit's line's alone
-    /// where `t` is 256). Where the crossing is less than opaque, its
-    /// points less than opaque join `lowered`.
+    /// where `t` is 256), as a `SECONDARY` ray or the primary sees it.
+    /// Where the crossing is less than opaque, its points less than opaque
+    /// join `lowered`.
     #[inline(always)]
-    fn shade_crossing<P: Probe>(
+    fn shade_crossing<const SECONDARY: bool, P: Probe>(
         &self,
         walk: &LineWalk,
         hit: &NearHit,
@@ -329,20 +347,27 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
         probe: &mut P,
     ) -> (Rgb, u32) {
         let aside = Self::aside_at(walk, k, hit.drift);
-        let on_hit = self.line_shade(walk, hit, (k, aside, elevation), probe);
+        let on_hit =
+            self.line_shade::<SECONDARY, _>(walk, hit, (k, aside, elevation), lowered, probe);
         if t >= 256 {
             if on_hit.alpha < 255 {
                 Self::lower(walk, &on_hit, lowered);
             }
             return (on_hit.color, on_hit.alpha);
         }
-        let before = self.line_shade(walk, hit, (k - 1, aside - hit.drift, elevation), probe);
+        let before = self.line_shade::<SECONDARY, _>(
+            walk,
+            hit,
+            (k - 1, aside - hit.drift, elevation),
+            lowered,
+            probe,
+        );
         // Where an object stands on one grid line and not on the other, the
         // crossing is on its wall (`walk::along_weight`); a point lowered by
         // the rays before stands no more.
         let (grid, across) = (&self.grids[0], walk.across[0]);
         let stands = |cell: isize| {
-            if lowered.count == 0 {
+            if !SECONDARY || lowered.count == 0 {
                 return grid.stands(cell, across, elevation);
             }
             [cell, cell + across]
@@ -354,13 +379,17 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
             (true, false) => 0,
             _ => t,
         };
-        let alpha = blend(before.alpha, on_hit.alpha, t);
+        let (color, alpha) = mix(
+            (before.color, before.alpha),
+            (on_hit.color, on_hit.alpha),
+            t,
+        );
         // Only a crossing less than opaque lets a secondary ray on.
         if alpha < 255 {
             Self::lower(walk, &on_hit, lowered);
             Self::lower(walk, &before, lowered);
         }
-        (lerp(before.color, on_hit.color, t), alpha)
+        (color, alpha)
     }
 }
 
@@ -370,6 +399,22 @@ fn ray_height(hit: &NearHit, k: i32) -> i64 {
 }
 
 /// `a` blended toward `b` by `t`/256, rounded.
+/// Two colors with their opacities (of 255) blended `t`/256 of the way
+/// from the first to the second, the colors weighted by their opacities
+/// (as premultiplied colors blend): a clear texel lends its color nothing
+/// to what is seen through it.
+fn mix((c0, a0): (Rgb, u32), (c1, a1): (Rgb, u32), t: u32) -> (Rgb, u32) {
+    let t = t.min(256);
+    let alpha = blend(a0, a1, t);
+    let (w0, w1) = (a0 * (256 - t), a1 * t);
+    if a0 == a1 || w0 + w1 == 0 {
+        return (lerp(c0, c1, t), alpha);
+    }
+    // The second color's share of what is opaque, of 256.
+    let share = (w1 * 256 + (w0 + w1) / 2) / (w0 + w1);
+    (lerp(c0, c1, share), alpha)
+}
+
 fn blend(a: u32, b: u32, t: u32) -> u32 {
     let t = t.min(256);
     (a * (256 - t) + b * t + 128) >> 8
@@ -396,14 +441,20 @@ mod tests {
     /// `front` (texel alphas given, or none), the back row's blue; seen
     /// from x = 2, looking along x.
     fn hedge(alphas: Option<[u8; 2]>) -> Vec<Rgb> {
+        hedge_from(Camera::looking([2.0, 16.0, 5.0], 0.0, 0.0), alphas)
+    }
+
+    /// [`hedge`], seen by `camera`.
+    fn hedge_from(camera: Camera, alphas: Option<[u8; 2]>) -> Vec<Rgb> {
         let n = (SIDE * SIDE) as usize;
-        let (mut heights, mut colors, mut points) = (vec![GROUND; n], vec![GRASS; n], vec![0; n]);
+        // The ground under the hedge stays grass: what a ray that sees
+        // through the front row meets at its foot.
+        let (mut heights, colors, mut points) = (vec![GROUND; n], vec![GRASS; n], vec![0; n]);
         for y in 4..28 {
-            for (x, stick, color) in [(20, 1, FRONT), (21, 2, BACK)] {
+            for (x, stick) in [(20, 1), (21, 2)] {
                 let i = y * SIDE as usize + x;
                 heights[i] += TALL;
                 points[i] = stick;
-                colors[i] = color;
             }
         }
         let terrain = Terrain::new(SIDE, SIDE, &heights, &colors).unwrap();
@@ -427,7 +478,7 @@ mod tests {
             None => layer,
         };
         let pyramid = Pyramid::flat(terrain);
-        let view = View::new(&Camera::looking([2.0, 16.0, 5.0], 0.0, 0.0), 48, 36).unwrap();
+        let view = View::new(&camera, 48, 36).unwrap();
         let mut pixels = vec![[0; 3]; 48 * 36];
         let mut frame = Framebuffer::new(&mut pixels, 48, 36).unwrap();
         let surface = WithSticks::new(&pyramid, layer);
@@ -458,7 +509,25 @@ mod tests {
         assert!(!opaque.contains(&BACK), "{opaque:?}");
         let clear = middle_column(&hedge(Some([0, 255])));
         assert!(clear.contains(&BACK), "{clear:?}");
-        assert!(clear.iter().all(|c| c[0] < 200), "{clear:?}");
+        // From any side, no pixel shows any of the clear row's red: a
+        // point seen through is plain ground to the secondary rays, and a
+        // clear texel lends its color nothing where it is blended with an
+        // opaque one. (The grass, the blue row and the sky, blended in any
+        // way, have less red than green.)
+        for eye in [
+            [2.0, 16.0, 5.0],
+            [2.0, 9.0, 12.0],
+            [10.0, 16.0, 20.0],
+            [10.0, 2.0, 9.0],
+        ] {
+            for yaw in [0.0, 20.0, 35.0, -25.0] {
+                for pitch in [0.0, -10.0, -20.0, -30.0, -45.0] {
+                    let frame = hedge_from(Camera::looking(eye, yaw, pitch), Some([0, 255]));
+                    let reddened = frame.iter().filter(|c| c[0] > c[1]).count();
+                    assert_eq!(reddened, 0, "{eye:?} yaw {yaw} pitch {pitch}");
+                }
+            }
+        }
     }
 
     #[test]
