@@ -144,6 +144,10 @@ pub struct StickTable<'a> {
     texels: &'a [Rgb],
     /// Each texel's opacity (255 opaque), or none: every texel opaque.
     alphas: &'a [u8],
+    /// The smallest point value whose stick is complex (a texel less than
+    /// opaque): a point below it shows only opaque texels
+    /// ([`StickTable::first_complex`]).
+    first_complex: u16,
 }
 
 impl<'a> StickTable<'a> {
@@ -152,6 +156,7 @@ impl<'a> StickTable<'a> {
         sticks: &[],
         texels: &[],
         alphas: &[],
+        first_complex: u16::MAX,
     };
 
     /// The table of `sticks` and their `texels`.
@@ -166,6 +171,7 @@ impl<'a> StickTable<'a> {
             sticks,
             texels,
             alphas: &[],
+            first_complex: u16::MAX,
         })
     }
 
@@ -173,12 +179,45 @@ impl<'a> StickTable<'a> {
     /// opaque, 0 clear): its sticks are **complex** (Cohen-Or §2) where a
     /// texel is less than opaque, and a ray that meets one sees through
     /// it ([`Grid::seen_pair_at`]). None (an empty slice) keeps every
-    /// texel opaque.
+    /// texel opaque. Put the complex sticks after the opaque ones in the
+    /// table: a hit on a stick before the first complex one is shaded as an
+    /// opaque one is, with no opacity to look up
+    /// ([`StickTable::first_complex`]).
     pub fn with_alphas(self, alphas: &'a [u8]) -> Result<Self, StickError> {
         if !alphas.is_empty() && alphas.len() != self.texels.len() {
             return Err(StickError::AlphasLength);
         }
-        Ok(Self { alphas, ..self })
+        // Every stick's texels lie in the table (checked by `new`).
+        let complex = |s: &Stick| {
+            let first = s.first as usize;
+            alphas
+                .get(first..first + usize::from(s.texels))
+                .is_some_and(|a| a.iter().any(|&a| a < u8::MAX))
+        };
+        let first_complex = self
+            .sticks
+            .iter()
+            .position(complex)
+            .map_or(u16::MAX, |i| u16::try_from(i + 1).unwrap_or(u16::MAX));
+        Ok(Self {
+            alphas,
+            first_complex,
+            ..self
+        })
+    }
+
+    /// The smallest point value whose stick is complex (`u16::MAX` where
+    /// none is): every point whose value is below it is plain terrain or
+    /// an opaque stick.
+    pub fn first_complex(&self) -> u16 {
+        self.first_complex
+    }
+
+    /// Whether a point whose value is `point` holds a stick that may be
+    /// less than opaque somewhere (a complex stick, or one after it).
+    #[inline(always)]
+    pub(crate) fn may_see_through(&self, point: u16) -> bool {
+        point >= self.first_complex
     }
 
     /// The texels' opacities: none where every texel is opaque.
@@ -337,6 +376,7 @@ pub struct StickLayer<'a> {
     sticks: &'a [Stick],
     texels: &'a [Rgb],
     alphas: &'a [u8],
+    first_complex: u16,
 }
 
 impl<'a> StickLayer<'a> {
@@ -369,6 +409,7 @@ impl<'a> StickLayer<'a> {
             sticks,
             texels,
             alphas: &[],
+            first_complex: u16::MAX,
         })
     }
 
@@ -377,6 +418,7 @@ impl<'a> StickLayer<'a> {
         let table = self.table().with_alphas(alphas)?;
         Ok(Self {
             alphas: table.alphas,
+            first_complex: table.first_complex,
             ..self
         })
     }
@@ -387,7 +429,15 @@ impl<'a> StickLayer<'a> {
             sticks: self.sticks,
             texels: self.texels,
             alphas: self.alphas,
+            first_complex: self.first_complex,
         }
+    }
+
+    /// Whether grid point `index` holds a stick that may be less than
+    /// opaque somewhere ([`StickTable::first_complex`]).
+    #[inline(always)]
+    pub fn may_see_through(&self, index: isize) -> bool {
+        self.point(index as usize) >= self.first_complex
     }
 
     /// The value of grid point `index` of level 0 (row by row): 0 for
@@ -580,6 +630,12 @@ impl<G: Grid> Grid for StickGrid<'_, G> {
         self.layer.is_some_and(|layer| !layer.alphas.is_empty())
     }
     #[inline(always)]
+    fn may_see_through(&self, index: isize, across: isize) -> bool {
+        self.layer.is_some_and(|layer| {
+            layer.may_see_through(index) || layer.may_see_through(index + across)
+        })
+    }
+    #[inline(always)]
     fn seen_pair_at(
         &self,
         index: isize,
@@ -636,6 +692,26 @@ impl<'s, T: Surface + ?Sized> Surface for WithSticks<'s, T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_first_complex_stick_is_found_by_its_texels_opacities() {
+        let stick = |first| Stick {
+            first,
+            texels: 2,
+            height: 2 << HEIGHT_FRAC_BITS,
+        };
+        let sticks = [stick(0), stick(2), stick(4)];
+        let texels = [[9; 3]; 6];
+        let table = StickTable::new(&sticks, &texels).unwrap();
+        assert_eq!(table.first_complex(), u16::MAX);
+        let opaque = table.with_alphas(&[255; 6]).unwrap();
+        assert_eq!(opaque.first_complex(), u16::MAX);
+        // The second stick's top texel is less than opaque: point value 2.
+        let second = table.with_alphas(&[255, 255, 255, 254, 0, 255]).unwrap();
+        assert_eq!(second.first_complex(), 2);
+        assert!(!second.may_see_through(0) && !second.may_see_through(1));
+        assert!(second.may_see_through(2) && second.may_see_through(3));
+    }
     use crate::{
         pyramid_cells, pyramid_points, render, Camera, Coherence, Framebuffer, HeightFilter,
         NoProbe, Pyramid, RenderOptions, Resolution, View,

@@ -88,6 +88,16 @@ pub trait Grid: Copy {
     fn sees_through(&self) -> bool {
         false
     }
+    /// Whether a ray crossing the grid line between `index` and `index +
+    /// across` may see through what stands there (a complex stick at
+    /// either point, [`crate::StickTable::first_complex`]): if not, the
+    /// colors there are opaque and shaded as [`Grid::color_pair_at`]'s.
+    /// Never, by default.
+    #[inline(always)]
+    fn may_see_through(&self, index: isize, across: isize) -> bool {
+        let _ = (index, across);
+        false
+    }
     /// [`Grid::color_pair_at`], each color with its opacity (255 opaque),
     /// for a ray that sees through the sticks of the points `lowered`
     /// says: such a point is plain terrain at its [`Grid::ground`].

@@ -156,6 +156,32 @@ impl Objects {
         table.insert(key, index);
         Some(index)
     }
+
+    /// Puts the complex sticks (a texel less than opaque) after the opaque
+    /// ones in the table, each part in its order, and renames the points
+    /// to match: the kernel shades a hit on a stick before the first
+    /// complex one as an opaque hit, with no opacity to look up
+    /// ([`terracast::StickTable::first_complex`]). The same objects.
+    pub fn order_complex_last(&mut self) {
+        let complex = |s: &Stick| {
+            let first = s.first as usize;
+            self.alphas
+                .get(first..first + usize::from(s.texels))
+                .is_some_and(|a| a.iter().any(|&a| a < u8::MAX))
+        };
+        let (opaque, see_through): (Vec<usize>, Vec<usize>) =
+            (0..self.sticks.len()).partition(|&i| !complex(&self.sticks[i]));
+        let order: Vec<usize> = opaque.into_iter().chain(see_through).collect();
+        // A point's new value, by its old one (0 stays plain terrain).
+        let mut renamed = vec![0u16; self.sticks.len() + 1];
+        for (new, &old) in order.iter().enumerate() {
+            renamed[old + 1] = new as u16 + 1;
+        }
+        self.sticks = order.iter().map(|&i| self.sticks[i]).collect();
+        for point in &mut self.points {
+            *point = renamed[usize::from(*point)];
+        }
+    }
 }
 
 /// The sticks a planting has added, by height, texels and opacities.
@@ -518,7 +544,7 @@ fn slope(scene: &Scene, x: i32, y: i32) -> f32 {
 pub fn plant(scene: &mut Scene, seed: u64) -> Objects {
     let mut planting = Planting::new(scene);
     planting.plant(seed);
-    planting.objects
+    planting.finish()
 }
 
 impl Planting<'_> {
@@ -672,8 +698,10 @@ impl<'s> Planting<'s> {
         }
     }
 
-    /// What stands on the scene.
-    pub fn finish(self) -> Objects {
+    /// What stands on the scene, its complex sticks last in the table
+    /// ([`Objects::order_complex_last`]).
+    pub fn finish(mut self) -> Objects {
+        self.objects.order_complex_last();
         self.objects
     }
 
@@ -800,6 +828,44 @@ mod tests {
         let why = tall.too_large_at(8.0).unwrap();
         assert!(why.contains("4800 voxels tall"), "{why}");
         assert!(Shape::library("house").unwrap().too_large_at(8.0).is_none());
+    }
+
+    #[test]
+    fn a_planting_puts_its_complex_sticks_last_and_keeps_every_point() {
+        let mut scene = procedural(256, 3);
+        let mut planting = Planting::new(&mut scene);
+        planting.plant(3);
+        let unordered = planting.objects.clone();
+        let ordered = planting.finish();
+        let stick_at = |objects: &Objects, i: usize| {
+            let point = usize::from(objects.points[i]);
+            (point != 0).then(|| {
+                let stick = objects.sticks[point - 1];
+                let texels = stick.first as usize..stick.first as usize + usize::from(stick.texels);
+                (
+                    stick.height,
+                    objects.texels[texels.clone()].to_vec(),
+                    objects.alphas[texels].to_vec(),
+                )
+            })
+        };
+        // The same stick at every point, whatever its index.
+        for i in 0..unordered.points.len() {
+            assert_eq!(stick_at(&unordered, i), stick_at(&ordered, i));
+        }
+        let first_complex = |objects: &Objects| {
+            let table = terracast::StickTable::new(&objects.sticks, &objects.texels).unwrap();
+            table.with_alphas(&objects.alphas).unwrap().first_complex()
+        };
+        // The planting adds complex sticks among the opaque ones; ordered,
+        // every stick from the first complex one on is complex.
+        let first = usize::from(first_complex(&ordered));
+        assert!(first_complex(&unordered) < first_complex(&ordered));
+        assert!(first > 1 && first <= ordered.sticks.len());
+        for stick in &ordered.sticks[first - 1..] {
+            let alphas = &ordered.alphas[stick.first as usize..][..usize::from(stick.texels)];
+            assert!(alphas.iter().any(|&a| a < u8::MAX));
+        }
     }
 
     #[test]

@@ -705,6 +705,14 @@ fn objects_pack_into_tiles_and_render_as_from_the_maps() {
     // the opacities.
     assert!(file.sticks().sees_through());
     assert_eq!(file.sticks().alphas(), objects_alphas(&scene));
+    // Its complex sticks after the opaque ones, as the planting ordered
+    // them: a hit on an opaque one reads no opacity.
+    let first_complex = file.sticks().first_complex();
+    assert_eq!(first_complex, layer.table().first_complex());
+    assert!(
+        usize::from(first_complex) > 1
+            && usize::from(first_complex) <= layer.table().sticks().len()
+    );
     // Among the objects: low over the first stick, looking along +x.
     let objects = scene.objects.as_ref().unwrap();
     let first = objects.points.iter().position(|&p| p != 0).unwrap();

@@ -917,19 +917,20 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 return sample(color);
             }
         }
-        if self.grids[0].sees_through() {
-            let near = NearHit {
-                k: at.k,
-                index: at.index,
-                minor: at.minor,
-                z,
-                dz,
-                drift,
-                elevation: elevation(),
-                t: if above.is_some() { t } else { 256 },
-            };
-            return sample(self.see_through(walk, &near, probe));
-        }
+        // A crossing by a complex stick is shaded with its opacities, and
+        // seen through where it is less than opaque (out of line: few hits
+        // are on one). The test compiles out for a grid that has none.
+        let near = |t| NearHit {
+            k: at.k,
+            index: at.index,
+            minor: at.minor,
+            z,
+            dz,
+            drift,
+            elevation: elevation(),
+            t,
+        };
+        let (grid, across) = (&self.grids[0], walk.across[0]);
         let (on_hit, hit_cell) =
             self.line_color(walk, 0, (at.index, at.minor), aside, elevation(), probe);
         let color = if above.is_some() && t < 256 {
@@ -941,10 +942,19 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 elevation(),
                 probe,
             );
+            if grid.sees_through()
+                && (grid.may_see_through(before_cell, across)
+                    || grid.may_see_through(hit_cell, across))
+            {
+                return sample(self.see_through(walk, &near(t), probe));
+            }
             let cells = (before_cell, hit_cell);
-            let t = along_weight(&self.grids[0], cells, walk.across[0], elevation(), t);
+            let t = along_weight(grid, cells, across, elevation(), t);
             lerp(before, on_hit, t)
         } else {
+            if grid.sees_through() && grid.may_see_through(hit_cell, across) {
+                return sample(self.see_through(walk, &near(256), probe));
+            }
             on_hit
         };
         sample(color)

@@ -451,6 +451,13 @@ impl<const T: usize, const N: usize, const M: usize> Grid for TiledGrid<'_, '_, 
         self.sticks.is_some_and(|table| !table.alphas().is_empty())
     }
     #[inline]
+    fn may_see_through(&self, index: isize, across: isize) -> bool {
+        self.sticks.is_some_and(|table| {
+            table.may_see_through(self.stick_point(index))
+                || table.may_see_through(self.stick_point(index + across))
+        })
+    }
+    #[inline]
     fn seen_pair_at(
         &self,
         index: isize,

@@ -14,6 +14,10 @@
 //! terrain or leaves the map sees the sky; one that finds nothing within
 //! [`SEE_THROUGH_REACH`] samples leaves the texels before it opaque.
 //!
+//! The caster shades a hit here only where a complex stick stands on a
+//! grid line it is shaded from ([`Grid::may_see_through`]); it shades
+//! every other hit as an opaque one, at no cost for the opacities.
+//!
 //! Only near hits on level 0 see through: past the color reach and on the
 //! coarser levels the pyramid's filtered colors stand for the objects, so
 //! small cavities are filled there and cost no ray. The primary ray's
@@ -105,9 +109,9 @@ enum Through {
 impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
     /// The color of `hit`: both grid lines' colors and opacities at the
     /// crossing, composited with what the secondary rays see through it
-    /// where it is less than opaque ([`LineCaster::see_behind`], out of
-    /// line: most hits are opaque).
-    #[inline(always)]
+    /// where it is less than opaque ([`LineCaster::see_behind`]). Out of
+    /// line: the caster takes it only for a crossing by a complex stick.
+    #[inline(never)]
     pub(super) fn see_through<P: Probe>(
         &self,
         walk: &LineWalk,
@@ -253,25 +257,27 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
 
     /// The ray's clearance (Q16) at height `z` (Q16) over the blended
     /// height where it is at `(index, minor)` (a major grid line of level
-    /// 0 and a minor coordinate, Q16), the points in `lowered` at their
-    /// ground; `None` outside the map.
+    /// 0 and a minor coordinate, Q16), the points in `lowered` (if any
+    /// may be on this grid line) at their ground; `None` outside the map.
     #[inline(always)]
     fn clearance<P: Probe>(
         &self,
         walk: &LineWalk,
         (index, minor, z): (isize, i32, i64),
-        lowered: &Lowered,
+        lowered: Option<&Lowered>,
         probe: &mut P,
     ) -> Option<i32> {
         let across = walk.across[0];
         let cell = index + (minor >> COORD_FRAC_BITS) as isize * across;
         let grid = &self.grids[0];
         let (mut h0, mut h1) = grid.height_pair(cell, across)?;
-        if lowered.holds(cell) {
-            h0 = grid.ground(cell)?;
-        }
-        if lowered.holds(cell + across) {
-            h1 = grid.ground(cell + across)?;
+        if let Some(lowered) = lowered {
+            if lowered.holds(cell) {
+                h0 = grid.ground(cell)?;
+            }
+            if lowered.holds(cell + across) {
+                h1 = grid.ground(cell + across)?;
+            }
         }
         probe.visit(0, cell as usize);
         let (h0, h1) = (i32::from(h0), i32::from(h1));
@@ -283,7 +289,9 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
 
     /// Walks `hit`'s ray on from sample `from` over the surface with
     /// `lowered`'s points at their ground, to its next hit. Its position
-    /// steps by adds: its drift aside grows by the drift a sample.
+    /// steps by adds: its drift aside grows by the drift a sample. The
+    /// points lowered are on the grid lines of the hits before, none past
+    /// sample `from`'s: the samples after it need no test of them.
     fn through<P: Probe>(
         &self,
         walk: &LineWalk,
@@ -300,7 +308,7 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
         let (mut index, mut minor) = Self::on_line(walk, hit, start);
         let at = |index, minor, aside, z| (index, walk.aside(minor, aside), z);
         let mut above = if start >= walk.first {
-            self.clearance(walk, at(index, minor, aside, z), lowered, probe)
+            self.clearance(walk, at(index, minor, aside, z), Some(lowered), probe)
                 .filter(|&c| c > 0)
         } else {
             None
@@ -315,6 +323,7 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
             if dz >= 0 && z > self.highest {
                 return Through::Sky;
             }
+            let lowered = (k == from).then_some(lowered);
             let Some(below) = self.clearance(walk, at(index, minor, aside, z), lowered, probe)
             else {
                 return Through::Sky;
@@ -398,23 +407,34 @@ fn ray_height(hit: &NearHit, k: i32) -> i64 {
     hit.z + i64::from(k - hit.k) * i64::from(hit.dz)
 }
 
-/// `a` blended toward `b` by `t`/256, rounded.
 /// Two colors with their opacities (of 255) blended `t`/256 of the way
 /// from the first to the second, the colors weighted by their opacities
 /// (as premultiplied colors blend): a clear texel lends its color nothing
-/// to what is seen through it.
+/// to what is seen through it. Inline where the opacities are equal
+/// (most crossings: opaque), out of line where they differ.
+#[inline(always)]
 fn mix((c0, a0): (Rgb, u32), (c1, a1): (Rgb, u32), t: u32) -> (Rgb, u32) {
     let t = t.min(256);
     let alpha = blend(a0, a1, t);
-    let (w0, w1) = (a0 * (256 - t), a1 * t);
-    if a0 == a1 || w0 + w1 == 0 {
+    if a0 == a1 {
         return (lerp(c0, c1, t), alpha);
+    }
+    (mix_unequal((c0, a0), (c1, a1), t), alpha)
+}
+
+/// [`mix`]'s color where the opacities differ.
+#[inline(never)]
+fn mix_unequal((c0, a0): (Rgb, u32), (c1, a1): (Rgb, u32), t: u32) -> Rgb {
+    let (w0, w1) = (a0 * (256 - t), a1 * t);
+    if w0 + w1 == 0 {
+        return lerp(c0, c1, t);
     }
     // The second color's share of what is opaque, of 256.
     let share = (w1 * 256 + (w0 + w1) / 2) / (w0 + w1);
-    (lerp(c0, c1, share), alpha)
+    lerp(c0, c1, share)
 }
 
+/// `a` blended toward `b` by `t`/256, rounded.
 fn blend(a: u32, b: u32, t: u32) -> u32 {
     let t = t.min(256);
     (a * (256 - t) + b * t + 128) >> 8
@@ -446,12 +466,19 @@ mod tests {
 
     /// [`hedge`], seen by `camera`.
     fn hedge_from(camera: Camera, alphas: Option<[u8; 2]>) -> Vec<Rgb> {
+        hedge_in_order(camera, alphas, true)
+    }
+
+    /// [`hedge_from`], the front row's stick first in the stick table or
+    /// (`front_first` false) second.
+    fn hedge_in_order(camera: Camera, alphas: Option<[u8; 2]>, front_first: bool) -> Vec<Rgb> {
         let n = (SIDE * SIDE) as usize;
         // The ground under the hedge stays grass: what a ray that sees
         // through the front row meets at its foot.
         let (mut heights, colors, mut points) = (vec![GROUND; n], vec![GRASS; n], vec![0; n]);
+        let (front, back) = if front_first { (1, 2) } else { (2, 1) };
         for y in 4..28 {
-            for (x, stick) in [(20, 1), (21, 2)] {
+            for (x, stick) in [(20, front), (21, back)] {
                 let i = y * SIDE as usize + x;
                 heights[i] += TALL;
                 points[i] = stick;
@@ -470,8 +497,10 @@ mod tests {
                 height: TALL,
             },
         ];
-        let texels = [FRONT, BACK];
-        let opacities = alphas.unwrap_or_default();
+        let (texels, opacities) = match (front_first, alphas.unwrap_or_default()) {
+            (true, opacities) => ([FRONT, BACK], opacities),
+            (false, [a, b]) => ([BACK, FRONT], [b, a]),
+        };
         let layer = StickLayer::new(&terrain, &points, &sticks, &texels).unwrap();
         let layer = match alphas {
             Some(_) => layer.with_alphas(&opacities).unwrap(),
@@ -500,6 +529,28 @@ mod tests {
     #[test]
     fn opaque_texels_render_as_without_opacities() {
         assert_eq!(hedge(Some([255, 255])), hedge(None));
+    }
+
+    #[test]
+    fn the_stick_tables_order_does_not_change_the_image() {
+        // Front first, every stick from the first complex one on: every
+        // hit is shaded with its opacities. Back first (opaque before
+        // complex, as `StickTable::with_alphas` asks), a hit on the back
+        // row alone is shaded as an opaque one.
+        for alphas in [[0, 255], [128, 255], [128, 64]] {
+            for (eye, yaw, pitch) in [
+                ([2.0, 16.0, 5.0], 0.0, 0.0),
+                ([10.0, 2.0, 9.0], 35.0, -10.0),
+                ([2.0, 9.0, 12.0], 20.0, -20.0),
+            ] {
+                let camera = Camera::looking(eye, yaw, pitch);
+                assert_eq!(
+                    hedge_in_order(camera, Some(alphas), true),
+                    hedge_in_order(camera, Some(alphas), false),
+                    "{alphas:?} {eye:?}"
+                );
+            }
+        }
     }
 
     #[test]
