@@ -377,6 +377,9 @@ pub struct StickLayer<'a> {
     texels: &'a [Rgb],
     alphas: &'a [u8],
     first_complex: u16,
+    /// Whether [`StickLayer::raise_coarse`] raises the coarse levels by
+    /// the complex sticks too (fills their cavities there).
+    fills_cavities: bool,
 }
 
 impl<'a> StickLayer<'a> {
@@ -410,6 +413,7 @@ impl<'a> StickLayer<'a> {
             texels,
             alphas: &[],
             first_complex: u16::MAX,
+            fills_cavities: true,
         })
     }
 
@@ -421,6 +425,19 @@ impl<'a> StickLayer<'a> {
             first_complex: table.first_complex,
             ..self
         })
+    }
+
+    /// This layer, raising the coarse levels
+    /// ([`crate::Pyramid::build_with_sticks`]) by its opaque sticks only: a
+    /// complex stick is filtered with the ground around it there, as the
+    /// terrain is, so the cavities of its see-through texels are not
+    /// filled on the coarse levels (Cohen-Or fills them, the default; this
+    /// measures what filling them does).
+    pub fn with_cavities_open(self) -> Self {
+        Self {
+            fills_cavities: false,
+            ..self
+        }
     }
 
     /// The stick table.
@@ -499,6 +516,8 @@ impl<'a> StickLayer<'a> {
     /// the top of every stick nearest each of their points, so that a
     /// coarse level keeps an object's silhouette rather than filtering it
     /// down with the ground around it. Visits each stick once a level.
+    /// A complex stick raises them only where the layer fills cavities
+    /// ([`StickLayer::with_cavities_open`]).
     ///
     /// [`Pyramid::build`]: crate::Pyramid::build
     pub(crate) fn raise_coarse(&self, terrain: &Terrain<'_>, coarse: &mut [u16]) {
@@ -516,8 +535,9 @@ impl<'a> StickLayer<'a> {
             offset += w * d;
         }
         let row = width as usize;
+        let raises = |point: u16| point != 0 && (self.fills_cavities || point < self.first_complex);
         for (index, (&point, &top)) in self.points.iter().zip(terrain.heights()).enumerate() {
-            if point == 0 {
+            if !raises(point) {
                 continue;
             }
             let (x, y) = (index % row, index / row);
@@ -982,6 +1002,14 @@ mod tests {
         assert_ne!(filtered, raised);
         // Colors are filtered either way.
         assert_eq!(filtered_colors, raised_colors);
+        // Cavities open, a complex stick raises nothing and an opaque one
+        // raises as before.
+        let (see_through, opaque) = (vec![128; texels.len()], vec![255; texels.len()]);
+        let open = |alphas| layer.with_alphas(alphas).unwrap().with_cavities_open();
+        assert_eq!(build(Some(&open(&see_through))).0, filtered);
+        assert_eq!(build(Some(&open(&opaque))).0, raised);
+        let filled = layer.with_alphas(&see_through).unwrap();
+        assert_eq!(build(Some(&filled)).0, raised);
         // And the raised pyramid renders: the first hit's bounds hold the
         // raised heights, so a ray through the bounds sees what the walk
         // alone sees.

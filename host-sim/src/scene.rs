@@ -63,6 +63,10 @@ pub enum ObjectHeights {
     Max,
     /// Filtered with the ground around them, as the terrain's heights are.
     Filtered,
+    /// Raised by the opaque sticks only, the complex ones (see-through
+    /// leaves) filtered with the ground: their cavities are not filled on
+    /// the coarse levels ([`terracast::StickLayer::with_cavities_open`]).
+    CavitiesOpen,
 }
 
 /// A scene in the kernel's storage format with its pyramid; lends a
@@ -481,11 +485,15 @@ impl Scene {
             .map_err(|e| Error::new(format!("terrain rejected by the kernel: {e}")))?;
         // Coarse levels keep the objects' silhouettes unless asked not to.
         let sticks = match &scene.objects {
-            Some(objects) if object_heights == ObjectHeights::Max => Some(
-                objects
+            Some(objects) if object_heights != ObjectHeights::Filtered => {
+                let layer = objects
                     .layer(&terrain)
-                    .map_err(|e| Error::new(format!("objects rejected by the kernel: {e}")))?,
-            ),
+                    .map_err(|e| Error::new(format!("objects rejected by the kernel: {e}")))?;
+                Some(match object_heights {
+                    ObjectHeights::CavitiesOpen => layer.with_cavities_open(),
+                    _ => layer,
+                })
+            }
             _ => None,
         };
         Pyramid::build_with_sticks(
