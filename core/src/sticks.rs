@@ -428,11 +428,12 @@ impl<'a> StickLayer<'a> {
     }
 
     /// This layer, raising the coarse levels
-    /// ([`crate::Pyramid::build_with_sticks`]) by its opaque sticks only: a
-    /// complex stick is filtered with the ground around it there, as the
-    /// terrain is, so the cavities of its see-through texels are not
-    /// filled on the coarse levels (Cohen-Or fills them, the default; this
-    /// measures what filling them does).
+    /// ([`crate::Pyramid::build_with_sticks`]) by its opaque sticks only
+    /// (those before the table's first complex one: all of them, where the
+    /// complex sticks come last): a complex stick is filtered with the
+    /// ground around it there, as the terrain is, so the cavities of its
+    /// see-through texels are not filled on the coarse levels (Cohen-Or
+    /// fills them, the default; this measures what filling them does).
     pub fn with_cavities_open(self) -> Self {
         Self {
             fills_cavities: false,
