@@ -72,6 +72,15 @@ pub struct Stick {
 }
 
 impl Stick {
+    /// Whether it is **complex**: a texel of it less than opaque in
+    /// `alphas` (one a texel of its table, or none: every texel opaque).
+    pub fn is_complex(&self, alphas: &[u8]) -> bool {
+        let first = self.first as usize;
+        alphas
+            .get(first..first + usize::from(self.texels))
+            .is_some_and(|a| a.iter().any(|&a| a < u8::MAX))
+    }
+
     /// Where in the texel table its texel at height `z` (Q16) lies, on a
     /// point whose height is `top` (U12.4): the voxels above its base,
     /// within its texels.
@@ -187,17 +196,10 @@ impl<'a> StickTable<'a> {
         if !alphas.is_empty() && alphas.len() != self.texels.len() {
             return Err(StickError::AlphasLength);
         }
-        // Every stick's texels lie in the table (checked by `new`).
-        let complex = |s: &Stick| {
-            let first = s.first as usize;
-            alphas
-                .get(first..first + usize::from(s.texels))
-                .is_some_and(|a| a.iter().any(|&a| a < u8::MAX))
-        };
         let first_complex = self
             .sticks
             .iter()
-            .position(complex)
+            .position(|s| s.is_complex(alphas))
             .map_or(u16::MAX, |i| u16::try_from(i + 1).unwrap_or(u16::MAX));
         Ok(Self {
             alphas,

@@ -163,14 +163,8 @@ impl Objects {
     /// complex one as an opaque hit, with no opacity to look up
     /// ([`terracast::StickTable::first_complex`]). The same objects.
     pub fn order_complex_last(&mut self) {
-        let complex = |s: &Stick| {
-            let first = s.first as usize;
-            self.alphas
-                .get(first..first + usize::from(s.texels))
-                .is_some_and(|a| a.iter().any(|&a| a < u8::MAX))
-        };
         let (opaque, see_through): (Vec<usize>, Vec<usize>) =
-            (0..self.sticks.len()).partition(|&i| !complex(&self.sticks[i]));
+            (0..self.sticks.len()).partition(|&i| !self.sticks[i].is_complex(&self.alphas));
         let order: Vec<usize> = opaque.into_iter().chain(see_through).collect();
         // A point's new value, by its old one (0 stays plain terrain).
         let mut renamed = vec![0u16; self.sticks.len() + 1];
@@ -863,8 +857,7 @@ mod tests {
         assert!(first_complex(&unordered) < first_complex(&ordered));
         assert!(first > 1 && first <= ordered.sticks.len());
         for stick in &ordered.sticks[first - 1..] {
-            let alphas = &ordered.alphas[stick.first as usize..][..usize::from(stick.texels)];
-            assert!(alphas.iter().any(|&a| a < u8::MAX));
+            assert!(stick.is_complex(&ordered.alphas));
         }
     }
 

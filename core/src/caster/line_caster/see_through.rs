@@ -89,6 +89,8 @@ struct LineShade {
     cell: isize,
     /// The opacities of its two points.
     alphas: (u8, u8),
+    /// Which of them a secondary ray sees through (plain ground to it).
+    lowered: (bool, bool),
 }
 
 /// How a secondary ray ends.
@@ -226,6 +228,7 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
                     alpha,
                     cell,
                     alphas: (a0, a1),
+                    lowered,
                 }
             }
             None => LineShade {
@@ -233,6 +236,7 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
                 alpha: 255,
                 cell,
                 alphas: (u8::MAX, u8::MAX),
+                lowered,
             },
         }
     }
@@ -375,15 +379,15 @@ impl<T: Surface + ?Sized> LineCaster<'_, '_, T> {
         // crossing is on its wall (`walk::along_weight`); a point lowered by
         // the rays before stands no more.
         let (grid, across) = (&self.grids[0], walk.across[0]);
-        let stands = |cell: isize| {
-            if !SECONDARY || lowered.count == 0 {
-                return grid.stands(cell, across, elevation);
+        let stands = |line: &LineShade| {
+            if !SECONDARY {
+                return grid.stands(line.cell, across, elevation);
             }
-            [cell, cell + across]
-                .iter()
-                .any(|&i| !lowered.holds(i) && grid.stands(i, 0, elevation))
+            let (cell, (lowered0, lowered1)) = (line.cell, line.lowered);
+            (!lowered0 && grid.stands(cell, 0, elevation))
+                || (!lowered1 && grid.stands(cell + across, 0, elevation))
         };
-        let t = match (stands(before.cell), stands(on_hit.cell)) {
+        let t = match (stands(&before), stands(&on_hit)) {
             (false, true) => 256,
             (true, false) => 0,
             _ => t,
