@@ -179,6 +179,27 @@ struct At {
     before: Option<i32>,
 }
 
+impl At {
+    /// Its sample: `(k, index, minor, level)`.
+    fn here(&self) -> (i32, isize, i32, u8) {
+        (self.k, self.index, self.minor, self.level)
+    }
+
+    /// The sample before it, where its height is known and was a step on
+    /// the same level (the one its crossing is placed with).
+    fn sample_before(&self, walk: &LineWalk) -> Option<(i32, isize, i32, u8)> {
+        let l = usize::from(self.level);
+        (self.before.is_some() && self.k - self.before_k == 1 << self.level).then(|| {
+            (
+                self.before_k,
+                self.index - walk.step[l],
+                self.minor - walk.minor_step[l],
+                self.level,
+            )
+        })
+    }
+}
+
 impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     pub fn new(surface: &'s T, view: &'v View, options: &RenderOptions) -> Self {
         let frame = Frame::new(surface, view, options);
@@ -469,8 +490,13 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                     fetches.take();
                 }
                 let hit = at.as_mut().and_then(|at| {
+                    // Resuming where the ray before it hit, a ray that
+                    // drifts otherwise compares with that sample's height
+                    // read again on its own path.
+                    let resumed_at = at.k;
                     if read_again {
-                        self.reread::<P>(&walk, at, height_drift, probe)?;
+                        at.height =
+                            self.height_at::<P, true>(&walk, at.here(), height_drift, probe)?;
                     }
                     let z = self.climb::<_, _, OWN_PATH>(
                         &walk,
@@ -480,6 +506,16 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                         &mut fetches,
                         probe,
                     )?;
+                    // Hit where it resumed, the ray places its crossing
+                    // with the sample before too, read again on its own
+                    // path; a ray that stepped read that sample itself.
+                    if read_again && at.k == resumed_at {
+                        if let Some(before) = at.sample_before(&walk) {
+                            let height =
+                                self.height_at::<P, true>(&walk, before, height_drift, probe)?;
+                            at.before = Some(height);
+                        }
+                    }
                     let ray = HitRay {
                         dz: dz as i32,
                         color_reach: self.plan.color_reach(run),
@@ -608,9 +644,11 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// colors are looked up (`LineCaster::hit`).
     #[inline(always)]
     fn aside_at(walk: &LineWalk, k: i32, drift: i32) -> i32 {
-        // Within 2^31: the drift is within 2^14, the distance inside the map.
-        ((i64::from(drift) * (i64::from(walk.delta0) + (i64::from(k) << COORD_FRAC_BITS)))
-            >> COORD_FRAC_BITS) as i32
+        // `drift · (delta0 + k·2^16) / 2^16`, rounded down: the whole
+        // samples' part is exact, so it is the sample 0 part rounded plus
+        // `drift · k`. In words: the drift is within 2^14, `delta0` below
+        // 2^16, `k` below 2^15.
+        ((drift * walk.delta0) >> COORD_FRAC_BITS) + drift * k
     }
 
     /// [`LineCaster::height`] at sample `k`, at `minor` on the line or,
@@ -629,35 +667,6 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
             minor
         };
         self.height(walk, index, minor, level, probe)
-    }
-
-    /// Where a ray drifting `drift` resumes at `at`, the ray before it's
-    /// hit: the heights of that sample and of the one before it (when it
-    /// was a step on the same level) read again on this ray's own path,
-    /// so that it compares and places its crossing with its own heights.
-    /// `None` outside the map. Out of line: the default's walk is
-    /// compiled as it is without it.
-    #[inline(never)]
-    fn reread<P: Probe>(
-        &self,
-        walk: &LineWalk,
-        at: &mut At,
-        drift: i32,
-        probe: &mut P,
-    ) -> Option<()> {
-        let here = (at.k, at.index, at.minor, at.level);
-        at.height = self.height_at::<P, true>(walk, here, drift, probe)?;
-        if at.before.is_some() && at.k - at.before_k == 1 << at.level {
-            let l = usize::from(at.level);
-            let before = (
-                at.before_k,
-                at.index - walk.step[l],
-                at.minor - walk.minor_step[l],
-                at.level,
-            );
-            at.before = Some(self.height_at::<P, true>(walk, before, drift, probe)?);
-        }
-        Some(())
     }
 
     /// The blended height (Q16) at the point of `level`'s major grid line
