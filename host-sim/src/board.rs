@@ -170,6 +170,8 @@ pub struct BoardReport {
     pub instructions_per_tick: f64,
     /// The governor's run (`terracast_board::governed`), on a bare map.
     pub governed: Vec<GovernedCheck>,
+    /// Whether the scene has objects (a stick table).
+    pub objects: bool,
 }
 
 /// One frame of the governor's run on the board.
@@ -665,7 +667,8 @@ fn governed_run<T: Surface>(surface: &T, header: &Header) -> Result<Vec<Governed
 /// with its line caster reading heights on `height_path`.
 pub fn verify(scene_path: &Path, from: &Path, height_path: HeightPath) -> Result<BoardReport> {
     let file = SceneFile::read(scene_path)?;
-    let header = file.scene().map_err(|e| Error::new(e.to_string()))?.header;
+    let scene = file.scene().map_err(|e| Error::new(e.to_string()))?;
+    let (header, objects) = (scene.header, scene.stick_count() > 0);
     let (width, height) = (header.image_width, header.image_height);
     let results = parse_results(&read(&from.join("board-results.txt"))?)?;
     let pixels = width as usize * height as usize;
@@ -752,6 +755,7 @@ pub fn verify(scene_path: &Path, from: &Path, height_path: HeightPath) -> Result
         pyramid_ticks: results.pyramid_ticks,
         instructions_per_tick: results.instructions_per_tick()?,
         governed,
+        objects,
     })
 }
 

@@ -27,6 +27,17 @@ fn scene_and_board_output(name: &str) -> (PathBuf, PathBuf) {
 /// A small scene written with the extra `board scene` arguments `extra`,
 /// and what the board would have written for it, `ticks` a frame.
 fn scene_and_board_output_with(name: &str, extra: &[&str], ticks: u32) -> (PathBuf, PathBuf) {
+    scene_and_board_output_on(name, extra, ticks, HeightPath::Line)
+}
+
+/// As [`scene_and_board_output_with`], the frames rendered reading heights
+/// on `height_path`.
+fn scene_and_board_output_on(
+    name: &str,
+    extra: &[&str],
+    ticks: u32,
+    height_path: HeightPath,
+) -> (PathBuf, PathBuf) {
     let dir = fresh_dir(name);
     let scene = dir.join("scene.tcb");
     let mut args = vec![
@@ -47,7 +58,7 @@ fn scene_and_board_output_with(name: &str, extra: &[&str], ticks: u32) -> (PathB
     std::fs::create_dir_all(&board).unwrap();
     let (frames, governed) = SceneFile::read(&scene)
         .unwrap()
-        .render(HeightPath::Line)
+        .render(height_path)
         .unwrap();
     assert_eq!(frames.len(), 6);
     let mut results = String::from("calibration instructions 4000 ticks 100\npyramid_ticks 7\n");
@@ -236,6 +247,38 @@ fn exceeded_budget_fails_and_missing_or_bad_files_are_named() {
         err.contains("'--procedural-size ") && err.contains("from 2 to 800"),
         "{err}"
     );
+}
+
+#[test]
+fn objects_read_on_each_rays_path_are_compared_with_the_bare_map_on_its_lines() {
+    let (_, bare_board) = scene_and_board_output("objects-ray-bare");
+    let (scene, board) =
+        scene_and_board_output_on("objects-ray", &["--objects"], 1500, HeightPath::Ray);
+    let verify = |height_path: &str| {
+        sim(&[
+            "board",
+            "verify",
+            "--scene",
+            s(&scene),
+            "--from",
+            s(&board),
+            "--height-path",
+            height_path,
+            "--without",
+            s(&bare_board),
+        ])
+    };
+    let (code, out, err) = verify("ray");
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("with objects on each ray's path against without on each line's plane"),
+        "{out}"
+    );
+    assert!(out.contains(" all       33    50  1.500x"), "{out}");
+    // Its frames are not the line caster's on each line's plane.
+    let (code, _, err) = verify("line");
+    assert_ne!(code, 0);
+    assert!(err.contains("differ"), "{err}");
 }
 
 #[test]

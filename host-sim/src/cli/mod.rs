@@ -543,9 +543,13 @@ fn board_verify_command(args: BoardVerifyArgs) -> Result<()> {
     let report = verify(&args.scene, &args.from, height_path)?;
     print!("{}", report.table());
     if let Some(without) = &args.without {
-        let what = match height_path {
-            HeightPath::Line => "with objects against without",
-            HeightPath::Ray => "heights on each ray's path against on each line's plane",
+        let what = match (report.objects, height_path) {
+            (true, HeightPath::Line) => "with objects against without",
+            (false, HeightPath::Ray) => "heights on each ray's path against on each line's plane",
+            (true, HeightPath::Ray) => {
+                "with objects on each ray's path against without on each line's plane"
+            }
+            (false, HeightPath::Line) => "against the run without",
         };
         print!("{}", against_without(&report, without, what)?);
     }
