@@ -644,11 +644,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// colors are looked up (`LineCaster::hit`).
     #[inline(always)]
     fn aside_at(walk: &LineWalk, k: i32, drift: i32) -> i32 {
-        // `drift · (delta0 + k·2^16) / 2^16`, rounded down: the whole
-        // samples' part is exact, so it is the sample 0 part rounded plus
-        // `drift · k`. In words: the drift is within 2^14, `delta0` below
-        // 2^16, `k` below 2^15.
-        ((drift * walk.delta0) >> COORD_FRAC_BITS) + drift * k
+        aside_at_distance(walk.delta0, k, drift)
     }
 
     /// [`LineCaster::height`] at sample `k`, at `minor` on the line or,
@@ -1211,6 +1207,16 @@ fn stopped(
     z
 }
 
+/// How far (Q16) a ray drifting `drift` (Q16 a unit of distance, within
+/// ±2^14) is aside of its line at sample `k` (in `0..2^15`) of a line whose
+/// sample 0 lies `delta0` (Q16, below 2^16) from the eye: `drift · (delta0
+/// + k·2^16) / 2^16`, rounded down. The whole samples' part is exact, so it
+/// is the sample 0 part rounded plus `drift · k`, all in words.
+#[inline(always)]
+fn aside_at_distance(delta0: i32, k: i32, drift: i32) -> i32 {
+    ((drift * delta0) >> COORD_FRAC_BITS) + drift * k
+}
+
 fn align_down(plane: &Plane, k: i64, level: u32) -> i64 {
     let mask = (1i64 << level) - 1;
     if plane.key.forward {
@@ -1231,5 +1237,46 @@ fn align_up(plane: &Plane, k: i64, level: u32) -> i64 {
     } else {
         let m = plane.major0 - k;
         plane.major0 - (m & !mask)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_aside_in_words_is_the_product_of_the_drift_and_the_distance() {
+        let distance_product = |delta0: i32, k: i32, drift: i32| {
+            ((i64::from(drift) * (i64::from(delta0) + (i64::from(k) << COORD_FRAC_BITS)))
+                >> COORD_FRAC_BITS) as i32
+        };
+        let limit = 1 << 14;
+        let drifts = [
+            -limit,
+            -limit + 1,
+            -12345,
+            -257,
+            -1,
+            0,
+            1,
+            3,
+            255,
+            9999,
+            limit - 1,
+            limit,
+        ];
+        let ks = [0, 1, 2, 7, 1000, 20_000, (1 << 15) - 1];
+        let deltas = [0, 1, 0x7FFF, 0x8000, 0xABCD, 0xFFFF];
+        for drift in drifts {
+            for k in ks {
+                for delta0 in deltas {
+                    assert_eq!(
+                        aside_at_distance(delta0, k, drift),
+                        distance_product(delta0, k, drift),
+                        "delta0 {delta0}, k {k}, drift {drift}"
+                    );
+                }
+            }
+        }
     }
 }
