@@ -27,7 +27,7 @@
 //! its twin is the roll's own, not the kernel's. Held here too: level, the
 //! kernel on its rays' own paths loses to the roll at most 0.6 dB more
 //! than one exact ray does. (Pitched 45°, one exact ray aliases where the
-//! kernel's levels filter: it scores 3 to 6 dB above the kernel and swings
+//! kernel's levels filter: it scores 3.2 to 7.5 dB above the kernel and swings
 //! with what the roll shows, so it bounds nothing there.)
 
 use terracast::{Camera, Coherence, HeightPath, RenderOptions, Resolution};
