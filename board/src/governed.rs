@@ -22,9 +22,9 @@ pub const BUDGET_INSTRUCTIONS_PER_PIXEL: u64 = 3000;
 /// instructions a pixel: the check's, then leaner ones for the price fit.
 pub const BUDGETS: [u64; 3] = [BUDGET_INSTRUCTIONS_PER_PIXEL, 2000, 1200];
 
-/// The pitches swept from the first view's eye and heading: those of
-/// `scripts/steps-table`.
-pub const PITCHES: [f32; 6] = [2.0, 5.0, 15.0, 30.0, 60.0, 90.0];
+/// The pitches swept from the first view's eye and heading: level, where
+/// a line is a column, and those of `scripts/steps-table`.
+pub const PITCHES: [f32; 7] = [0.0, 2.0, 5.0, 15.0, 30.0, 60.0, 90.0];
 
 /// The most frames of a run at one budget: every view of a scene, then
 /// the sweep.

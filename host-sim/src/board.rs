@@ -22,6 +22,10 @@ use terracast_board::{decode, rgb565, CaptureBus, SpiDisplay};
 /// Tallest image the board check handles (the display driver's column).
 pub const MAX_IMAGE_HEIGHT: usize = 1024;
 
+/// Widest map the board holds: 5 bytes a voxel, with the firmware's code,
+/// in its 4 MiB of code memory.
+pub const MAX_BOARD_SIDE: u32 = 800;
+
 /// The views the board renders, over a `side` map whose highest point is
 /// `top`: the `render` command's default view, a grazing view across the
 /// map, a steep one, one straight down, and a view at 20° pitch level and
@@ -382,66 +386,7 @@ impl BoardReport {
     /// but the one a line leaves the terrain with, so a base pass ray is a
     /// hit: its price is both.
     fn governed_price_fit(&self) -> String {
-        let step = f64::from(Prices::BOARD.per_step);
-        let rows: Vec<([f64; 7], f64)> = self
-            .governed
-            .iter()
-            .map(|g| {
-                let (base, refined, all) = (&g.cost.base_work, g.cost.refined_work(), &g.cost.work);
-                let board = self.governed_instructions(g);
-                (
-                    [
-                        all.pixels,
-                        base.lines,
-                        base.rays,
-                        base.hit_levels,
-                        refined.rays,
-                        refined.hits,
-                        refined.hit_levels,
-                    ]
-                    .map(|n| n as f64),
-                    board - step * all.steps as f64,
-                )
-            })
-            .collect();
-        let Some(fit) = non_negative_least_squares(&rows) else {
-            return String::from(
-                "prices fitted to these frames: the frames do not tell them apart\n",
-            );
-        };
-        let (low, high) = self
-            .governed
-            .iter()
-            .zip(&rows)
-            .map(|(g, (x, _))| {
-                let priced: f64 = x.iter().zip(fit).map(|(n, p)| n * p).sum::<f64>()
-                    + step * g.cost.work.steps as f64;
-                priced / self.governed_instructions(g) - 1.0
-            })
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), e| {
-                (l.min(e), h.max(e))
-            });
-        let (lines, board) = (Prices::BOARD_LINES, Prices::BOARD);
-        format!(
-            "prices fitted to these frames (non-negative least squares, a step's price held at {step:.0}): {:.0} a pixel written; base pass {:.0} a line, {:.0} a ray, {:.0} a hit level (Prices::BOARD_LINES: {}, {}, {}, {}); refinement {:.0} a ray, {:.0} a hit, {:.0} a hit level (Prices::BOARD: {}, {}, {}, {}); off the counts by {:+.1} % to {:+.1} %\n",
-            fit[0],
-            fit[1],
-            fit[2],
-            fit[3],
-            lines.per_pixel,
-            lines.per_line,
-            lines.per_ray,
-            lines.per_hit_level,
-            fit[4],
-            fit[5],
-            fit[6],
-            board.per_pixel,
-            board.per_ray,
-            board.per_hit,
-            board.per_hit_level,
-            100.0 * low,
-            100.0 * high,
-        )
+        price_fit(&[self], "these frames")
     }
 
     /// The least and the most of the check's governed frames' board
@@ -800,6 +745,72 @@ pub fn against_without(report: &BoardReport, without: &Path, what: &str) -> Resu
         all_with / all_bare.max(1.0)
     );
     Ok(out)
+}
+
+/// The prices fitted to the governed frames of `reports` together (see
+/// [`BoardReport::table`]'s fit), named `what` in its line: a run on
+/// another scene beside the check's keeps the prices from fitting one
+/// terrain alone.
+pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
+    let step = f64::from(Prices::BOARD.per_step);
+    let frames: Vec<(&GovernedCheck, f64)> = reports
+        .iter()
+        .flat_map(|r| r.governed.iter().map(|g| (g, r.governed_instructions(g))))
+        .collect();
+    let rows: Vec<([f64; 7], f64)> = frames
+        .iter()
+        .map(|&(g, board)| {
+            let (base, refined, all) = (&g.cost.base_work, g.cost.refined_work(), &g.cost.work);
+            (
+                [
+                    all.pixels,
+                    base.lines,
+                    base.rays,
+                    base.hit_levels,
+                    refined.rays,
+                    refined.hits,
+                    refined.hit_levels,
+                ]
+                .map(|n| n as f64),
+                board - step * all.steps as f64,
+            )
+        })
+        .collect();
+    let Some(fit) = non_negative_least_squares(&rows) else {
+        return format!("prices fitted to {what}: the frames do not tell them apart\n");
+    };
+    let (low, high) = frames
+        .iter()
+        .zip(&rows)
+        .map(|(&(g, board), (x, _))| {
+            let priced: f64 = x.iter().zip(fit).map(|(n, p)| n * p).sum::<f64>()
+                + step * g.cost.work.steps as f64;
+            priced / board - 1.0
+        })
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), e| {
+            (l.min(e), h.max(e))
+        });
+    let (lines, board) = (Prices::BOARD_LINES, Prices::BOARD);
+    format!(
+            "prices fitted to {what} (non-negative least squares, a step's price held at {step:.0}): {:.0} a pixel written; base pass {:.0} a line, {:.0} a ray, {:.0} a hit level (Prices::BOARD_LINES: {}, {}, {}, {}); refinement {:.0} a ray, {:.0} a hit, {:.0} a hit level (Prices::BOARD: {}, {}, {}, {}); off the counts by {:+.1} % to {:+.1} %\n",
+            fit[0],
+            fit[1],
+            fit[2],
+            fit[3],
+            lines.per_pixel,
+            lines.per_line,
+            lines.per_ray,
+            lines.per_hit_level,
+            fit[4],
+            fit[5],
+            fit[6],
+            board.per_pixel,
+            board.per_ray,
+            board.per_hit,
+            board.per_hit_level,
+            100.0 * low,
+            100.0 * high,
+        )
 }
 
 /// The display wire the host produces for a view, init included.

@@ -250,6 +250,29 @@ impl Scene {
         })
     }
 
+    /// The `side` x `side` square at the middle of this terrain (its
+    /// objects and finer photos left behind), or an error naming both
+    /// sizes where the terrain is smaller.
+    pub fn middle_square(&self, side: u32) -> Result<Self> {
+        if side > self.width || side > self.depth {
+            return Err(Error::new(format!(
+                "cannot cut {side}x{side} from a {}x{} terrain",
+                self.width, self.depth
+            )));
+        }
+        let (x0, y0) = (
+            ((self.width - side) / 2) as usize,
+            ((self.depth - side) / 2) as usize,
+        );
+        let (n, width) = (side as usize, self.width as usize);
+        let rows = |y: usize| (y0 + y) * width + x0..(y0 + y) * width + x0 + n;
+        let heights = (0..n)
+            .flat_map(|y| self.heights[rows(y)].to_vec())
+            .collect();
+        let colors = (0..n).flat_map(|y| self.colors[rows(y)].to_vec()).collect();
+        Self::new(side, side, heights, colors)
+    }
+
     /// Plants a wood and a village on the terrain by a rule seeded with
     /// `seed` ([`crate::objects::plant`]), and reports what it planted in
     /// one line.

@@ -53,14 +53,19 @@ fn scene_and_board_output_on(
     args.extend_from_slice(extra);
     let (code, out, err) = sim(&args);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("96x96 map, 6 views at 40x30"), "{out}");
+    // Turned level, the rolled view is its level twin: left out.
+    let views = if extra.contains(&"--level") { 5 } else { 6 };
+    assert!(
+        out.contains(&format!("96x96 map, {views} views at 40x30")),
+        "{out}"
+    );
     let board = dir.join("board");
     std::fs::create_dir_all(&board).unwrap();
     let (frames, governed) = SceneFile::read(&scene)
         .unwrap()
         .render(height_path)
         .unwrap();
-    assert_eq!(frames.len(), 6);
+    assert_eq!(frames.len(), views);
     let mut results = String::from("calibration instructions 4000 ticks 100\npyramid_ticks 7\n");
     for (k, frame) in frames.iter().enumerate() {
         std::fs::write(board.join(format!("frame-{k}.rgb")), &frame.rgb).unwrap();
@@ -347,4 +352,107 @@ fn a_scene_with_objects_renders_them_and_is_compared_with_the_bare_map() {
     ]);
     assert_ne!(code, 0);
     assert!(err.contains("at most 740 a side"), "{err}");
+}
+
+/// A real height map and its photo as the board's terrain: refused whole
+/// where it is larger than the board holds or not square, cut to a square
+/// from its middle with `--crop`, every view level with `--level`; the
+/// scene renders as the host renders it.
+#[test]
+fn a_real_map_becomes_a_board_scene_cut_from_its_middle() {
+    let dir = fresh_dir("real-map");
+    let (height, color) = (dir.join("h.png"), dir.join("c.png"));
+    let (width, depth) = (900u32, 70u32);
+    image::ImageBuffer::from_fn(width, depth, |x, y| {
+        image::Luma([((x * 7 + y * 13) % 251) as u8])
+    })
+    .save(&height)
+    .unwrap();
+    image::ImageBuffer::from_fn(width, depth, |x, y| {
+        image::Rgb([(x % 256) as u8, (y * 3) as u8, 90u8])
+    })
+    .save(&color)
+    .unwrap();
+    let scene = dir.join("scene.tcb");
+    let board_scene = |extra: &[&str]| {
+        let mut args = vec![
+            "board",
+            "scene",
+            "--height",
+            s(&height),
+            "--color",
+            s(&color),
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--size", "40x30", "--out", s(&scene)]);
+        sim(&args)
+    };
+    let (code, _, err) = board_scene(&[]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("is 900x70: a board map is square and at most 800 a side")
+            && err.contains("--crop N")
+            && err.lines().count() == 1,
+        "{err}"
+    );
+    let (code, _, err) = board_scene(&["--crop", "71"]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("cannot cut 71x71 from a 900x70 terrain"),
+        "{err}"
+    );
+
+    let (code, out, err) = board_scene(&["--crop", "64", "--level"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("64x64 map (the middle of h.png, 900x70), 5 views at 40x30"),
+        "{out}"
+    );
+    let file = SceneFile::read(&scene).unwrap();
+    let board = file.scene().unwrap();
+    let views = board.header.views();
+    assert_eq!(
+        views.len(),
+        5,
+        "the rolled view turned level is its twin: left out"
+    );
+    assert!(views
+        .iter()
+        .all(|v| v.pitch_deg == 0.0 && v.roll_deg == 0.0));
+    // The middle square: column 418 of the map is the crop's first, row 3
+    // its first row.
+    // (Kernel heights are in sixteenths of a voxel.)
+    let terrain = board.terrain().unwrap();
+    let expected = |x: u32, y: u32| 16 * ((x * 7 + y * 13) % 251) as u16;
+    assert_eq!(terrain.heights()[0], expected(418, 3));
+    assert_eq!(terrain.heights()[64 * 5 + 9], expected(427, 8));
+    assert_eq!(terrain.colors()[0], [(418 % 256) as u8, 9, 90]);
+    let (frames, _) = file.render(HeightPath::Line).unwrap();
+    assert_eq!(frames.len(), 5);
+}
+
+/// `--fit-with` fits the prices to two scenes' governed runs together:
+/// its line names the other run, beside this run's own fit.
+#[test]
+fn the_prices_are_fitted_to_two_runs_together() {
+    let (scene, board) = scene_and_board_output("fit-this");
+    let (other_scene, other_board) = scene_and_board_output_with("fit-other", &["--level"], 1000);
+    let (code, out, err) = sim(&[
+        "board",
+        "verify",
+        "--scene",
+        s(&scene),
+        "--from",
+        s(&board),
+        "--fit-with",
+        s(&other_scene),
+        s(&other_board),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("prices fitted to these frames ("), "{out}");
+    let joint = format!(
+        "prices fitted to these frames and {}'s (",
+        other_board.display()
+    );
+    assert!(out.contains(&joint), "{out}");
 }

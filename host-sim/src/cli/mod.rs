@@ -11,7 +11,7 @@ mod values;
 mod view;
 
 use crate::baselines::{march, voxel_space, MarchOptions, VoxelSpaceOptions};
-use crate::board::{against_without, board_views, verify, write_scene};
+use crate::board::{against_without, board_views, price_fit, verify, write_scene, MAX_BOARD_SIDE};
 use crate::error::{Error, Result};
 use crate::kernel::{render_kernel_in, PixelRays};
 use crate::objects::placing::ScenePlan;
@@ -87,8 +87,37 @@ struct BoardSceneArgs {
     /// Side of the procedural map (it must fit the board's 4 MiB of code
     /// memory: 5 bytes a voxel).
     #[arg(long, default_value_t = 512, value_name = "N",
-          value_parser = number(2u32, 800), allow_hyphen_values = true)]
+          value_parser = number(2u32, MAX_BOARD_SIDE), allow_hyphen_values = true)]
     procedural_size: u32,
+    /// A real height map instead of the procedural one (as `render
+    /// --height`): square and at most 800 a side, or a square cut from
+    /// its middle with --crop.
+    #[arg(
+        long,
+        value_name = "H.png|H.hgt|H.tif",
+        conflicts_with = "procedural_size"
+    )]
+    height: Option<PathBuf>,
+    /// Its color map, stretched over it (as `render --color`; a photo
+    /// finer than the height grid is reduced to it). Without it, the
+    /// heights are colored by height and slope.
+    #[arg(long, value_name = "C.png|C.tif", requires = "height")]
+    color: Option<PathBuf>,
+    /// World height of one height-map unit, in voxels (as `render
+    /// --height-scale`).
+    #[arg(long, value_name = "S", value_parser = positive(0.0f32, 1e6),
+          allow_hyphen_values = true, requires = "height")]
+    height_scale: Option<f32>,
+    /// Take the N x N square at the middle of the height map (Comanche's
+    /// maps are 1024 a side: more than the board holds).
+    #[arg(long, value_name = "N", value_parser = number(2u32, MAX_BOARD_SIDE),
+          allow_hyphen_values = true, requires = "height")]
+    crop: Option<u32>,
+    /// Every view turned level (pitch 0, no roll), where the kernel is
+    /// compared with Voxel Space; the rolled view, then its level twin's
+    /// double, is left out.
+    #[arg(long)]
+    level: bool,
     /// Seed of the procedural scene.
     #[arg(long, default_value_t = 1, value_name = "N", value_parser = seed, allow_hyphen_values = true)]
     seed: u64,
@@ -131,6 +160,12 @@ struct BoardVerifyArgs {
     /// TERRACAST_BOARD_HEIGHT_PATH): the host renders the same.
     #[arg(long, value_enum, default_value_t = HeightPathArg::Line)]
     height_path: HeightPathArg,
+    /// Another scene's governed run (its scene file and the folder of its
+    /// board-results.txt, already verified): the prices are fitted to its
+    /// frames and this run's together too, so that they cover both
+    /// terrains.
+    #[arg(long, num_args = 2, value_names = ["SCENE.tcb", "DIR"])]
+    fit_with: Vec<PathBuf>,
 }
 
 /// The kernel's vertical ray coherence.
@@ -509,17 +544,25 @@ fn board_scene_command(args: BoardSceneArgs) -> Result<()> {
     // 5 bytes a voxel, and 2 more for the objects' stick index, must fit
     // the board's 4 MiB of code memory beside the code.
     const MAX_SIDE_WITH_OBJECTS: u32 = 740;
-    if args.objects && args.procedural_size > MAX_SIDE_WITH_OBJECTS {
+    let (mut scene, side, source) = board_map(&args)?;
+    if args.objects && side > MAX_SIDE_WITH_OBJECTS {
         return Err(Error::new(format!(
             "with --objects a board map is at most {MAX_SIDE_WITH_OBJECTS} a side \
              (7 bytes a voxel in the board's 4 MiB of code memory)"
         )));
     }
-    let mut scene = procedural(args.procedural_size, args.seed);
     // The views stand where they do over the bare map, objects or not.
-    let mut views = board_views(args.procedural_size, scene.max_height());
+    let mut views = board_views(side, scene.max_height());
+    if args.level {
+        views = level_board_views(views);
+    }
     if let Some(view) = args.view {
-        views = vec![views[view]];
+        views = vec![*views.get(view).ok_or_else(|| {
+            Error::new(format!(
+                "--view {view}: the board scene has {} views",
+                views.len()
+            ))
+        })?];
     }
     let planted = args
         .objects
@@ -528,14 +571,67 @@ fn board_scene_command(args: BoardSceneArgs) -> Result<()> {
     write_scene(outputs.temporary(out), &scene, args.size, &views)?;
     outputs.commit()?;
     println!(
-        "board scene: {0}x{0} map, {1} views at {2}x{3} -> {4}{planted}",
-        args.procedural_size,
+        "board scene: {0}x{0} map{source}, {1} views at {2}x{3} -> {4}{planted}",
+        side,
         views.len(),
         args.size.0,
         args.size.1,
         args.out.display()
     );
     Ok(())
+}
+
+/// The board scene's map: the procedural one, or the real one `--height`
+/// names (cut to `--crop`); its side, and where it came from in a few
+/// words for the summary line (empty for the procedural map).
+fn board_map(args: &BoardSceneArgs) -> Result<(Scene, u32, String)> {
+    let Some(height) = &args.height else {
+        let side = args.procedural_size;
+        return Ok((procedural(side, args.seed), side, String::new()));
+    };
+    let scale = height_scale(height, args.height_scale)?;
+    let colors: Vec<PathBuf> = args.color.iter().cloned().collect();
+    let mut scene = load_scene_files(height, &colors, scale, args.seed)?;
+    // The board's terrain is one color a grid point: a finer photo is
+    // kept reduced to the grid (as `--photo-detail off`).
+    scene.details.clear();
+    let (width, depth) = (scene.width, scene.depth);
+    if let Some(side) = args.crop {
+        scene = scene.middle_square(side)?;
+    } else if width != depth || width > MAX_BOARD_SIDE {
+        return Err(Error::new(format!(
+            "{} is {width}x{depth}: a board map is square and at most \
+             {MAX_BOARD_SIDE} a side (5 bytes a voxel in the board's 4 MiB of code \
+             memory); cut a square from its middle with --crop N",
+            height.display()
+        )));
+    }
+    let name = height
+        .file_name()
+        .unwrap_or(height.as_os_str())
+        .to_string_lossy();
+    let source = match args.crop {
+        Some(_) => format!(" (the middle of {name}, {width}x{depth})"),
+        None => format!(" ({name})"),
+    };
+    let side = scene.width;
+    Ok((scene, side, source))
+}
+
+/// `views` turned level (pitch 0, no roll), each once.
+fn level_board_views(views: Vec<Camera>) -> Vec<Camera> {
+    let mut level: Vec<Camera> = Vec::with_capacity(views.len());
+    for camera in views {
+        let camera = Camera {
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            ..camera
+        };
+        if !level.contains(&camera) {
+            level.push(camera);
+        }
+    }
+    level
 }
 
 fn board_verify_command(args: BoardVerifyArgs) -> Result<()> {
@@ -577,6 +673,11 @@ fn board_verify_command(args: BoardVerifyArgs) -> Result<()> {
             "board and host frames differ in view(s) {}",
             differing.join(", ")
         )));
+    }
+    if let [other_scene, other_run] = args.fit_with.as_slice() {
+        let other = verify(other_scene, other_run, height_path)?;
+        let what = format!("these frames and {}'s", other_run.display());
+        print!("{}", price_fit(&[&report, &other], &what));
     }
     let most = report.governed_most_share();
     if most > 1.0 {
