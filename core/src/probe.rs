@@ -88,6 +88,9 @@ pub struct CountingProbe {
     pub bound_tests: u64,
     /// Color fetches (one per shaded grid-line sample).
     pub color_fetches: u64,
+    /// Of `color_fetches`, the squares of four texels a far hit's
+    /// footprint blends ([`Probe::color_square`]).
+    pub color_squares: u64,
     /// Rays set up.
     pub rays: u64,
     /// Secondary rays cast through texels less than opaque.
@@ -118,6 +121,11 @@ impl Probe for CountingProbe {
     #[inline(always)]
     fn color(&mut self, _level: u8, _voxel: usize) {
         self.color_fetches += 1;
+    }
+    #[inline(always)]
+    fn color_square(&mut self, _level: u8, _corner: usize) {
+        self.color_fetches += 1;
+        self.color_squares += 1;
     }
     #[inline(always)]
     fn hit(&mut self, level: u8) {

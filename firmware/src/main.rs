@@ -437,11 +437,7 @@ fn run() -> Result<(), &'static str> {
         }
         None => {
             renders.all(&pyramid, views, frame, capture, &mut results)?;
-            // TERRACAST_BOARD_GOVERNED=off: a scene whose views are
-            // checked without the governor's run (scripts/board-check's
-            // real map).
             if option_env!("TERRACAST_BOARD_DEFAULT_ONLY").is_none()
-                && !matches!(option_env!("TERRACAST_BOARD_GOVERNED"), Some("off"))
                 && matches!(HEIGHT_PATH, HeightPath::Line)
             {
                 governed_run(&pyramid, views, &options, frame, &mut results)?;

@@ -757,7 +757,7 @@ pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
         .iter()
         .flat_map(|r| r.governed.iter().map(|g| (g, r.governed_instructions(g))))
         .collect();
-    let rows: Vec<([f64; 7], f64)> = frames
+    let rows: Vec<([f64; 10], f64)> = frames
         .iter()
         .map(|&(g, board)| {
             let (base, refined, all) = (&g.cost.base_work, g.cost.refined_work(), &g.cost.work);
@@ -767,9 +767,12 @@ pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
                     base.lines,
                     base.rays,
                     base.hit_levels,
+                    base.color_squares,
                     refined.rays,
                     refined.hits,
                     refined.hit_levels,
+                    refined.color_squares,
+                    refined.lines,
                 ]
                 .map(|n| n as f64),
                 board - step * all.steps as f64,
@@ -792,22 +795,28 @@ pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
         });
     let (lines, board) = (Prices::BOARD_LINES, Prices::BOARD);
     format!(
-            "prices fitted to {what} (non-negative least squares, a step's price held at {step:.0}): {:.0} a pixel written; base pass {:.0} a line, {:.0} a ray, {:.0} a hit level (Prices::BOARD_LINES: {}, {}, {}, {}); refinement {:.0} a ray, {:.0} a hit, {:.0} a hit level (Prices::BOARD: {}, {}, {}, {}); off the counts by {:+.1} % to {:+.1} %\n",
+            "prices fitted to {what} (non-negative least squares, a step's price held at {step:.0}): {:.0} a pixel written; base pass {:.0} a line, {:.0} a ray, {:.0} a hit level, {:.0} a color square (Prices::BOARD_LINES: {}, {}, {}, {}, {}); refinement {:.0} a line, {:.0} a ray, {:.0} a hit, {:.0} a hit level, {:.0} a color square (Prices::BOARD: {}, {}, {}, {}, {}, {}); off the counts by {:+.1} % to {:+.1} %\n",
             fit[0],
             fit[1],
             fit[2],
             fit[3],
+            fit[4],
             lines.per_pixel,
             lines.per_line,
             lines.per_ray,
             lines.per_hit_level,
-            fit[4],
+            lines.per_color_square,
+            fit[9],
             fit[5],
             fit[6],
+            fit[7],
+            fit[8],
             board.per_pixel,
+            board.per_line,
             board.per_ray,
             board.per_hit,
             board.per_hit_level,
+            board.per_color_square,
             100.0 * low,
             100.0 * high,
         )

@@ -110,6 +110,7 @@ pub fn fitted_prices(frames: &[(FrameCost, f64)], image_pixels: u64) -> Result<F
             per_ray: base_ray,
             per_step: step,
             per_color: 0,
+            per_color_square: 0,
             per_hit: 0,
             per_hit_level: base_level,
         },
@@ -119,6 +120,7 @@ pub fn fitted_prices(frames: &[(FrameCost, f64)], image_pixels: u64) -> Result<F
             per_ray: ray,
             per_step: step,
             per_color: 0,
+            per_color_square: 0,
             per_hit: hit,
             per_hit_level: level,
         },
@@ -361,6 +363,7 @@ mod tests {
             rays,
             steps,
             colors: 2 * hits,
+            color_squares: 0,
             hits,
             hit_levels,
         }
@@ -390,6 +393,7 @@ mod tests {
                     rays: base.rays + refined.rays,
                     steps: base.steps + refined.steps,
                     colors: base.colors + refined.colors,
+                    color_squares: base.color_squares + refined.color_squares,
                     hits: base.hits + refined.hits,
                     hit_levels: base.hit_levels + refined.hit_levels,
                 };

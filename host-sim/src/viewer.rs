@@ -652,6 +652,7 @@ impl FrameBudget {
             per_ray: scale(board.per_ray),
             per_step: scale(board.per_step),
             per_color: scale(board.per_color),
+            per_color_square: scale(board.per_color_square),
             per_hit: scale(board.per_hit),
             per_hit_level: scale(board.per_hit_level),
         }
@@ -1139,7 +1140,9 @@ mod tests {
             (FrameBudget::SHARE_OF_PERIOD * 0.016 / seconds_a_unit).round() as u64
         };
         assert_eq!(budget.governors(1000)[0].budget(), at(8e-9));
-        assert_eq!(budget.base_prices().per_line, 2001);
+        // The board's base prices at two thirds.
+        let two_thirds = (f64::from(Prices::BOARD_LINES.per_ray) * 2.0 / 3.0).round() as u32;
+        assert_eq!(budget.base_prices().per_ray, two_thirds);
         assert_eq!(
             budget.governors(1000)[1].base_prices(),
             budget.base_prices()
@@ -1148,7 +1151,7 @@ mod tests {
         // with too little refinement to time leaves the prices alone.
         budget.adapt(0.016, &[share(1_000_000, 950_000, 0.016, 0.015)]);
         assert_eq!(budget.governors(1000)[0].budget(), at(12e-9));
-        assert_eq!(budget.base_prices().per_line, 2001);
+        assert_eq!(budget.base_prices().per_ray, two_thirds);
         // The size follows the slowest base pass against the time the
         // budget stands for: at the most it may take of it, three quarters
         // of a display frame; a share that went coarse, or a late frame,

@@ -6,7 +6,7 @@
 mod common;
 
 use common::{s, sim};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use terracast::HeightPath;
 use terracast_sim::board::SceneFile;
 
@@ -15,6 +15,14 @@ fn fresh_dir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
+}
+
+/// `board verify` of `scene` against what the board wrote in `board`, with
+/// the further arguments `extra`.
+fn board_verify(scene: &Path, board: &Path, extra: &[&str]) -> (i32, String, String) {
+    let mut args = vec!["board", "verify", "--scene", s(scene), "--from", s(board)];
+    args.extend_from_slice(extra);
+    sim(&args)
 }
 
 /// A small scene, and a folder holding what the board would have written
@@ -97,7 +105,7 @@ fn scene_and_board_output_on(
 #[test]
 fn a_governed_frame_over_its_budget_on_the_board_fails_the_check() {
     let (scene, board) = scene_and_board_output("governed");
-    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    let (code, out, err) = board_verify(&scene, &board, &[]);
     assert_eq!(code, 0, "{err}");
     assert!(
         out.contains("governed frames") && !out.contains("DIFFERENT"),
@@ -121,7 +129,7 @@ fn a_governed_frame_over_its_budget_on_the_board_fails_the_check() {
         .collect::<Vec<_>>()
         .join("\n");
     std::fs::write(board.join("board-results.txt"), over).unwrap();
-    let (code, _, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    let (code, _, err) = board_verify(&scene, &board, &[]);
     assert_ne!(code, 0);
     assert!(err.contains("a governed frame took 1.16"), "{err}");
 }
@@ -129,7 +137,7 @@ fn a_governed_frame_over_its_budget_on_the_board_fails_the_check() {
 #[test]
 fn identical_output_passes_and_reports_instructions_per_pixel_last() {
     let (scene, board) = scene_and_board_output("same");
-    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    let (code, out, err) = board_verify(&scene, &board, &[]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("all frames identical"), "{out}");
     assert!(
@@ -151,7 +159,7 @@ fn one_changed_byte_of_a_frame_or_the_wire_fails() {
     let mut bytes = std::fs::read(&frame).unwrap();
     bytes[1234] ^= 1;
     std::fs::write(&frame, &bytes).unwrap();
-    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    let (code, out, err) = board_verify(&scene, &board, &[]);
     assert_eq!(code, 1);
     assert_eq!(
         err.trim(),
@@ -169,7 +177,7 @@ fn one_changed_byte_of_a_frame_or_the_wire_fails() {
     let last = bytes.len() - 3;
     bytes[last] ^= 0x80;
     std::fs::write(&wire, &bytes).unwrap();
-    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    let (code, out, err) = board_verify(&scene, &board, &[]);
     assert_eq!(code, 1, "{out}");
     assert!(err.contains("differ in view(s) 0"), "{err}");
     assert!(
@@ -184,7 +192,7 @@ fn one_changed_byte_of_a_frame_or_the_wire_fails() {
     let mut bytes = std::fs::read(&from_eye).unwrap();
     bytes[99] ^= 4;
     std::fs::write(&from_eye, &bytes).unwrap();
-    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    let (code, out, err) = board_verify(&scene, &board, &[]);
     assert_eq!(code, 1, "{out}");
     assert!(err.contains("differ in view(s) 1"), "{err}");
 
@@ -195,7 +203,7 @@ fn one_changed_byte_of_a_frame_or_the_wire_fails() {
     let mut bytes = std::fs::read(&hazy).unwrap();
     bytes[7] ^= 1;
     std::fs::write(&hazy, &bytes).unwrap();
-    let (code, out, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    let (code, out, err) = board_verify(&scene, &board, &[]);
     assert_eq!(code, 1, "{out}");
     assert!(err.contains("differ in view(s) 3"), "{err}");
 }
@@ -203,16 +211,7 @@ fn one_changed_byte_of_a_frame_or_the_wire_fails() {
 #[test]
 fn exceeded_budget_fails_and_missing_or_bad_files_are_named() {
     let (scene, board) = scene_and_board_output("budget");
-    let (code, _, err) = sim(&[
-        "board",
-        "verify",
-        "--scene",
-        s(&scene),
-        "--from",
-        s(&board),
-        "--budget",
-        "30",
-    ]);
+    let (code, _, err) = board_verify(&scene, &board, &["--budget", "30"]);
     assert_eq!(code, 1);
     assert_eq!(
         err.trim(),
@@ -220,7 +219,7 @@ fn exceeded_budget_fails_and_missing_or_bad_files_are_named() {
     );
 
     std::fs::remove_file(board.join("wire-3.bin")).unwrap();
-    let (code, _, err) = sim(&["board", "verify", "--scene", s(&scene), "--from", s(&board)]);
+    let (code, _, err) = board_verify(&scene, &board, &[]);
     assert_eq!(code, 1);
     assert!(
         err.contains("cannot read") && err.contains("wire-3.bin"),
@@ -228,14 +227,7 @@ fn exceeded_budget_fails_and_missing_or_bad_files_are_named() {
     );
     assert_eq!(err.lines().count(), 1);
 
-    let (code, _, err) = sim(&[
-        "board",
-        "verify",
-        "--scene",
-        s(&board.join("board-results.txt")),
-        "--from",
-        s(&board),
-    ]);
+    let (code, _, err) = board_verify(&board.join("board-results.txt"), &board, &[]);
     assert_eq!(code, 1);
     assert!(err.contains("not a board scene file"), "{err}");
 
@@ -260,18 +252,11 @@ fn objects_read_on_each_rays_path_are_compared_with_the_bare_map_on_its_lines() 
     let (scene, board) =
         scene_and_board_output_on("objects-ray", &["--objects"], 1500, HeightPath::Ray);
     let verify = |height_path: &str| {
-        sim(&[
-            "board",
-            "verify",
-            "--scene",
-            s(&scene),
-            "--from",
-            s(&board),
-            "--height-path",
-            height_path,
-            "--without",
-            s(&bare_board),
-        ])
+        board_verify(
+            &scene,
+            &board,
+            &["--height-path", height_path, "--without", s(&bare_board)],
+        )
     };
     let (code, out, err) = verify("ray");
     assert_eq!(code, 0, "{err}");
@@ -290,16 +275,7 @@ fn objects_read_on_each_rays_path_are_compared_with_the_bare_map_on_its_lines() 
 fn a_scene_with_objects_renders_them_and_is_compared_with_the_bare_map() {
     let (bare_scene, bare_board) = scene_and_board_output("objects-bare");
     let (scene, board) = scene_and_board_output_with("objects", &["--objects"], 1300);
-    let (code, out, err) = sim(&[
-        "board",
-        "verify",
-        "--scene",
-        s(&scene),
-        "--from",
-        s(&board),
-        "--without",
-        s(&bare_board),
-    ]);
+    let (code, out, err) = board_verify(&scene, &board, &["--without", s(&bare_board)]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("with objects against without"), "{out}");
     assert!(out.contains("   0       33    43  1.300x"), "{out}");
@@ -336,7 +312,7 @@ fn a_scene_with_objects_renders_them_and_is_compared_with_the_bare_map() {
     let past = damaged("past.tcb", &|b| {
         b[section + 16..section + 18].copy_from_slice(&60_000u16.to_le_bytes())
     });
-    let (code, _, err) = sim(&["board", "verify", "--scene", s(&past), "--from", s(&board)]);
+    let (code, _, err) = board_verify(&past, &board, &[]);
     assert_ne!(code, 0);
     assert!(err.contains("objects refused"), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
@@ -437,17 +413,11 @@ fn a_real_map_becomes_a_board_scene_cut_from_its_middle() {
 fn the_prices_are_fitted_to_two_runs_together() {
     let (scene, board) = scene_and_board_output("fit-this");
     let (other_scene, other_board) = scene_and_board_output_with("fit-other", &["--level"], 1000);
-    let (code, out, err) = sim(&[
-        "board",
-        "verify",
-        "--scene",
-        s(&scene),
-        "--from",
-        s(&board),
-        "--fit-with",
-        s(&other_scene),
-        s(&other_board),
-    ]);
+    let (code, out, err) = board_verify(
+        &scene,
+        &board,
+        &["--fit-with", s(&other_scene), s(&other_board)],
+    );
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("prices fitted to these frames ("), "{out}");
     let joint = format!(

@@ -87,6 +87,10 @@ pub struct Prices {
     pub per_step: u32,
     /// A color fetch ([`Probe::color`]).
     pub per_color: u32,
+    /// More for a color fetch that is a square of four texels blended by
+    /// a far hit's footprint ([`Probe::color_square`]): the footprint's
+    /// level, its crossing point and the bilinear blend.
+    pub per_color_square: u32,
     /// A hit and its shading ([`Probe::hit`]).
     pub per_hit: u32,
     /// A hit's shading, more for each level above level 0 it is on.
@@ -101,6 +105,7 @@ impl Prices {
         per_ray: 0,
         per_step: 1,
         per_color: 0,
+        per_color_square: 0,
         per_hit: 0,
         per_hit_level: 0,
     };
@@ -109,22 +114,30 @@ impl Prices {
     /// every ray up in full (the per-ray path); [`Governor::on_board`]
     /// prices the base pass at [`Prices::BOARD_LINES`]. Both are the
     /// least-squares prices that `scripts/board-check` prints for its
-    /// governed frames (`prices fitted to these frames`: the board's counts
-    /// of its runs at 3000, 2000 and 1200 instructions a pixel against their
+    /// governed frames on the built-in map and on a real one together
+    /// (`prices fitted to these frames and ...'s`: the board's counts of
+    /// its runs at 3000, 2000 and 1200 instructions a pixel against their
     /// work, the two passes' apart, a step's price held at 53, as these
-    /// frames take too few steps to tell it apart), raised by 5 % so that
-    /// the board's count stays under the priced cost. The fit prices no
-    /// refined ray apart from its hit (the two move together): a hit's
-    /// price is both. A hit's price grows with its level: the coarser a
-    /// hit, the more its shading and resumption cost.
+    /// frames take too few steps to tell it apart), raised by 4 %: enough
+    /// that the board's count stays under the budget on both maps, and
+    /// little enough that the built-in map's frames spend nine tenths of
+    /// their budgets. The fit prices no refined ray apart from its hit
+    /// (the two move together): a hit's price is both. A hit's price
+    /// grows with its level; a far hit's color squares (its footprint's
+    /// levels, blended bilinearly) cost more than a near hit's grid-line
+    /// colors, and a refined line's set-up on the per-ray path has a price
+    /// of its own: without those two counts the fit is off the two maps'
+    /// counts by up to 12 % (the real map's level views hit far more
+    /// often, and refine fewer and longer lines).
     pub const BOARD: Self = Self {
-        per_pixel: 29,
-        per_line: 0,
+        per_pixel: 84,
+        per_line: 16898,
         per_ray: 0,
         per_step: 53,
         per_color: 0,
-        per_hit: 2023,
-        per_hit_level: 812,
+        per_color_square: 217,
+        per_hit: 1831,
+        per_hit_level: 302,
     };
 
     /// The board's instructions in the base pass, which takes the line
@@ -133,13 +146,14 @@ impl Prices {
     /// the one a line leaves the terrain with: a ray's price is its hit's
     /// too.
     pub const BOARD_LINES: Self = Self {
-        per_pixel: 29,
-        per_line: 3001,
-        per_ray: 864,
+        per_pixel: 84,
+        per_line: 0,
+        per_ray: 850,
         per_step: 53,
         per_color: 0,
+        per_color_square: 149,
         per_hit: 0,
-        per_hit_level: 70,
+        per_hit_level: 0,
     };
 
     /// What `work` costs at these prices.
@@ -149,6 +163,7 @@ impl Prices {
             + work.rays * u64::from(self.per_ray)
             + work.steps * u64::from(self.per_step)
             + work.colors * u64::from(self.per_color)
+            + work.color_squares * u64::from(self.per_color_square)
             + work.hits * u64::from(self.per_hit)
             + work.hit_levels * u64::from(self.per_hit_level)
     }
@@ -156,7 +171,7 @@ impl Prices {
     /// The most a ray's shading can cost on a surface whose top level is
     /// `top`: its color fetches and its hit.
     const fn shading_most(&self, top: u8) -> u64 {
-        MAX_COLOR_FETCHES_A_RAY as u64 * self.per_color as u64
+        MAX_COLOR_FETCHES_A_RAY as u64 * (self.per_color as u64 + self.per_color_square as u64)
             + self.per_hit as u64
             + top as u64 * self.per_hit_level as u64
     }
@@ -175,6 +190,9 @@ pub struct FrameWork {
     pub steps: u64,
     /// Color fetches.
     pub colors: u64,
+    /// Of `colors`, the squares of four texels a far hit's footprint
+    /// blends.
+    pub color_squares: u64,
     /// Hits.
     pub hits: u64,
     /// The hits' levels, summed.
@@ -192,6 +210,7 @@ impl FrameWork {
             rays: probe.rays,
             steps: probe.steps,
             colors: probe.color_fetches,
+            color_squares: probe.color_squares,
             hits: probe.hits_by_level.iter().sum(),
             hit_levels: (0u64..)
                 .zip(probe.hits_by_level)
@@ -240,6 +259,7 @@ impl FrameCost {
             rays: all.rays - base.rays,
             steps: all.steps - base.steps,
             colors: all.colors - base.colors,
+            color_squares: all.color_squares - base.color_squares,
             hits: all.hits - base.hits,
             hit_levels: all.hit_levels - base.hit_levels,
         }
@@ -601,6 +621,7 @@ struct Meter {
     rays: Cell<u64>,
     steps: Cell<u64>,
     colors: Cell<u64>,
+    color_squares: Cell<u64>,
     hits: Cell<u64>,
     hit_levels: Cell<u64>,
     /// The most a ray's shading costs (see [`Prices::shading_most`]).
@@ -619,6 +640,7 @@ impl Meter {
             rays: Cell::new(0),
             steps: Cell::new(0),
             colors: Cell::new(0),
+            color_squares: Cell::new(0),
             hits: Cell::new(0),
             hit_levels: Cell::new(0),
             shading_most: Cell::new(prices.shading_most(top)),
@@ -653,6 +675,7 @@ impl Meter {
             rays: self.rays.get(),
             steps: self.steps.get(),
             colors: self.colors.get(),
+            color_squares: self.color_squares.get(),
             hits: self.hits.get(),
             hit_levels: self.hit_levels.get(),
         }
@@ -724,7 +747,9 @@ impl<P: Probe> Probe for Metered<'_, P> {
     #[inline(always)]
     fn color_square(&mut self, level: u8, corner: usize) {
         let meter = self.meter;
-        meter.add(&meter.colors, 1, meter.prices.get().per_color);
+        let prices = meter.prices.get();
+        meter.add(&meter.colors, 1, prices.per_color);
+        meter.add(&meter.color_squares, 1, prices.per_color_square);
         self.inner.color_square(level, corner);
     }
     #[inline(always)]
@@ -1247,6 +1272,23 @@ mod tests {
                 assert!(runs[0] == runs[1], "pitch {pitch}");
             }
         });
+    }
+
+    #[test]
+    fn a_far_hits_color_squares_are_counted_and_priced_apart() {
+        // A square is a color fetch too: its price is on top.
+        let mut probe = crate::CountingProbe::default();
+        probe.color(0, 7);
+        probe.color_square(1, 3);
+        probe.color_square(2, 1);
+        assert_eq!((probe.color_fetches, probe.color_squares), (3, 2));
+        let work = FrameWork::counted(&probe, 0, 0);
+        let prices = Prices {
+            per_color: 3,
+            per_color_square: 10,
+            ..Prices::STEPS
+        };
+        assert_eq!(prices.of(&work), 3 * 3 + 2 * 10);
     }
 
     #[test]

@@ -368,6 +368,8 @@ impl Machine {
             per_ray: price(c.per_ray, "per_ray")?,
             per_step: price(c.per_step, "per_step")?,
             per_color: price(c.per_color, "per_color")?,
+            // The model prices every color fetch alike.
+            per_color_square: 0,
             per_hit: 0,
             per_hit_level: 0,
         })
