@@ -370,23 +370,10 @@ impl BoardReport {
             .fold((f64::INFINITY, 0.0f64), |(l, h), r| (l.min(r), h.max(r)));
         let _ = writeln!(
             out,
-            "every run: board instructions {least:.3} to {most:.3} of the priced cost (the prices must stay above the count)"
+            "every run: board instructions {least:.3} to {most:.3} of the priced cost (a frame that spends its budget stays within it only where the count is under the priced cost)"
         );
-        out.push_str(&self.governed_price_fit());
+        out.push_str(&price_fit(&[self], "these frames"));
         out
-    }
-
-    /// The prices that fit this run's governed frames best: the
-    /// non-negative least-squares fit of each frame's board instructions to
-    /// its work, the base pass's (lines, rays, hit levels) and the
-    /// refinement's (rays, hits, hit levels) apart, a written pixel's price
-    /// shared and a step's held at `Prices::BOARD`'s in both (these frames
-    /// take a few steps a pixel, too few to tell it apart); and how far the
-    /// fit is from the counts. The line caster casts no ray into the sky
-    /// but the one a line leaves the terrain with, so a base pass ray is a
-    /// hit: its price is both.
-    fn governed_price_fit(&self) -> String {
-        price_fit(&[self], "these frames")
     }
 
     /// The least and the most of the check's governed frames' board
@@ -747,9 +734,16 @@ pub fn against_without(report: &BoardReport, without: &Path, what: &str) -> Resu
     Ok(out)
 }
 
-/// The prices fitted to the governed frames of `reports` together (see
-/// [`BoardReport::table`]'s fit), named `what` in its line: a run on
-/// another scene beside the check's keeps the prices from fitting one
+/// The prices that fit the governed frames of `reports` best, as one line
+/// naming them `what`: the non-negative least-squares fit of each frame's
+/// board instructions to its work, the base pass's (lines, rays, hit
+/// levels, far hits' color squares) and the refinement's (lines, rays,
+/// hits, hit levels, color squares) apart, a written pixel's price shared
+/// and a step's held at `Prices::BOARD`'s in both (these frames take a few
+/// steps a pixel, too few to tell it apart); and how far the fit is from
+/// the counts. The line caster casts no ray into the sky but the one a
+/// line leaves the terrain with, so a base pass ray is a hit: its price is
+/// both. Runs on more than one map keep the prices from fitting one
 /// terrain alone.
 pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
     let step = f64::from(Prices::BOARD.per_step);
@@ -768,11 +762,11 @@ pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
                     base.rays,
                     base.hit_levels,
                     base.color_squares,
+                    refined.lines,
                     refined.rays,
                     refined.hits,
                     refined.hit_levels,
                     refined.color_squares,
-                    refined.lines,
                 ]
                 .map(|n| n as f64),
                 board - step * all.steps as f64,
@@ -793,33 +787,27 @@ pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), e| {
             (l.min(e), h.max(e))
         });
-    let (lines, board) = (Prices::BOARD_LINES, Prices::BOARD);
+    let [pixel, line, ray, level, square, r_line, r_ray, r_hit, r_level, r_square] = fit;
+    let (b, r) = (Prices::BOARD_LINES, Prices::BOARD);
+    let (low, high) = (100.0 * low, 100.0 * high);
     format!(
-            "prices fitted to {what} (non-negative least squares, a step's price held at {step:.0}): {:.0} a pixel written; base pass {:.0} a line, {:.0} a ray, {:.0} a hit level, {:.0} a color square (Prices::BOARD_LINES: {}, {}, {}, {}, {}); refinement {:.0} a line, {:.0} a ray, {:.0} a hit, {:.0} a hit level, {:.0} a color square (Prices::BOARD: {}, {}, {}, {}, {}, {}); off the counts by {:+.1} % to {:+.1} %\n",
-            fit[0],
-            fit[1],
-            fit[2],
-            fit[3],
-            fit[4],
-            lines.per_pixel,
-            lines.per_line,
-            lines.per_ray,
-            lines.per_hit_level,
-            lines.per_color_square,
-            fit[9],
-            fit[5],
-            fit[6],
-            fit[7],
-            fit[8],
-            board.per_pixel,
-            board.per_line,
-            board.per_ray,
-            board.per_hit,
-            board.per_hit_level,
-            board.per_color_square,
-            100.0 * low,
-            100.0 * high,
-        )
+        "prices fitted to {what} (non-negative least squares, a step's price held at {step:.0}): \
+         {pixel:.0} a pixel written; base pass {line:.0} a line, {ray:.0} a ray, {level:.0} a hit level, \
+         {square:.0} a color square (Prices::BOARD_LINES: {}, {}, {}, {}, {}); refinement {r_line:.0} a line, \
+         {r_ray:.0} a ray, {r_hit:.0} a hit, {r_level:.0} a hit level, {r_square:.0} a color square \
+         (Prices::BOARD: {}, {}, {}, {}, {}, {}); off the counts by {low:+.1} % to {high:+.1} %\n",
+        b.per_pixel,
+        b.per_line,
+        b.per_ray,
+        b.per_hit_level,
+        b.per_color_square,
+        r.per_pixel,
+        r.per_line,
+        r.per_ray,
+        r.per_hit,
+        r.per_hit_level,
+        r.per_color_square,
+    )
 }
 
 /// The display wire the host produces for a view, init included.

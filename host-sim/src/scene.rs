@@ -267,9 +267,11 @@ impl Scene {
         let (n, width) = (side as usize, self.width as usize);
         let rows = |y: usize| (y0 + y) * width + x0..(y0 + y) * width + x0 + n;
         let heights = (0..n)
-            .flat_map(|y| self.heights[rows(y)].to_vec())
+            .flat_map(|y| self.heights[rows(y)].iter().copied())
             .collect();
-        let colors = (0..n).flat_map(|y| self.colors[rows(y)].to_vec()).collect();
+        let colors = (0..n)
+            .flat_map(|y| self.colors[rows(y)].iter().copied())
+            .collect();
         Self::new(side, side, heights, colors)
     }
 

@@ -544,7 +544,8 @@ fn board_scene_command(args: BoardSceneArgs) -> Result<()> {
     // 5 bytes a voxel, and 2 more for the objects' stick index, must fit
     // the board's 4 MiB of code memory beside the code.
     const MAX_SIDE_WITH_OBJECTS: u32 = 740;
-    let (mut scene, side, source) = board_map(&args)?;
+    let (mut scene, source) = board_map(&args)?;
+    let side = scene.width;
     if args.objects && side > MAX_SIDE_WITH_OBJECTS {
         return Err(Error::new(format!(
             "with --objects a board map is at most {MAX_SIDE_WITH_OBJECTS} a side \
@@ -582,12 +583,11 @@ fn board_scene_command(args: BoardSceneArgs) -> Result<()> {
 }
 
 /// The board scene's map: the procedural one, or the real one `--height`
-/// names (cut to `--crop`); its side, and where it came from in a few
+/// names (cut to `--crop`), square; and where it came from in a few
 /// words for the summary line (empty for the procedural map).
-fn board_map(args: &BoardSceneArgs) -> Result<(Scene, u32, String)> {
+fn board_map(args: &BoardSceneArgs) -> Result<(Scene, String)> {
     let Some(height) = &args.height else {
-        let side = args.procedural_size;
-        return Ok((procedural(side, args.seed), side, String::new()));
+        return Ok((procedural(args.procedural_size, args.seed), String::new()));
     };
     let scale = height_scale(height, args.height_scale)?;
     let colors: Vec<PathBuf> = args.color.iter().cloned().collect();
@@ -614,8 +614,7 @@ fn board_map(args: &BoardSceneArgs) -> Result<(Scene, u32, String)> {
         Some(_) => format!(" (the middle of {name}, {width}x{depth})"),
         None => format!(" ({name})"),
     };
-    let side = scene.width;
-    Ok((scene, side, source))
+    Ok((scene, source))
 }
 
 /// `views` turned level (pitch 0, no roll), each once.
