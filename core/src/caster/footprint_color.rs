@@ -25,7 +25,7 @@
 //! the pixel resolves is blurred.
 
 use super::fraction_256;
-use super::walk::lerp;
+use super::walk::Lanes;
 use crate::config::{COORD_FRAC_BITS, WEIGHT_BITS};
 use crate::probe::Probe;
 use crate::surface::{Grid, Surface};
@@ -113,7 +113,8 @@ pub(super) fn levels_color<T: Surface + ?Sized, P: Probe>(
 ) -> Option<Rgb> {
     // Weight 0 or 1 reads one level only. A level that finds no color (at
     // the map's edge) leaves the other's: once a fetch is reported, the
-    // caller must not make two more (`MAX_COLOR_FETCHES_A_RAY`).
+    // caller must not make two more (`MAX_COLOR_FETCHES_A_RAY`). The
+    // blends stay in lanes until the last.
     let finer = (t < 1 << WEIGHT_BITS)
         .then(|| bilinear(surface, level - 1, point, probe))
         .flatten();
@@ -121,8 +122,8 @@ pub(super) fn levels_color<T: Surface + ?Sized, P: Probe>(
         .then(|| bilinear(surface, level, point, probe))
         .flatten();
     match (finer, coarser) {
-        (Some(finer), Some(coarser)) => Some(lerp(finer, coarser, t)),
-        (Some(color), None) | (None, Some(color)) => Some(color),
+        (Some(finer), Some(coarser)) => Some(finer.lerp(coarser, t).rgb()),
+        (Some(color), None) | (None, Some(color)) => Some(color.rgb()),
         (None, None) => None,
     }
 }
@@ -181,14 +182,15 @@ fn fraction(num: i64, den: i64) -> u32 {
 }
 
 /// The color at world point `point` (Q16) on `level`: its four grid points
-/// blended by the point's fraction of the level's spacing on each axis.
-/// Reported to `probe` as one color fetch, of a square.
+/// blended by the point's fraction of the level's spacing on each axis,
+/// in lanes. Reported to `probe` as one color fetch, of a square.
+#[inline(always)]
 fn bilinear<T: Surface + ?Sized, P: Probe>(
     surface: &T,
     level: u8,
     point: [i64; 2],
     probe: &mut P,
-) -> Option<Rgb> {
+) -> Option<Lanes> {
     let grid = surface.grid(level)?;
     let shift = COORD_FRAC_BITS + u32::from(level);
     let cell = point.map(|v| v >> shift);
@@ -199,17 +201,15 @@ fn bilinear<T: Surface + ?Sized, P: Probe>(
     // or column has none there.
     let across = isize::from(weight[0] != 0);
     let (c00, c10) = grid.color_pair(index, across)?;
-    let (c01, c11) = if weight[1] == 0 {
-        (c00, c10)
+    let row = Lanes::of(c00).lerp(Lanes::of(c10), weight[0]);
+    let square = if weight[1] == 0 {
+        row
     } else {
-        grid.color_pair(index + grid.stride(), across)?
+        let (c01, c11) = grid.color_pair(index + grid.stride(), across)?;
+        row.lerp(Lanes::of(c01).lerp(Lanes::of(c11), weight[0]), weight[1])
     };
     probe.color_square(level, index as usize);
-    Some(lerp(
-        lerp(c00, c10, weight[0]),
-        lerp(c01, c11, weight[0]),
-        weight[1],
-    ))
+    Some(square)
 }
 
 #[cfg(test)]
@@ -259,7 +259,7 @@ mod tests {
         let colors: [Rgb; 16] = core::array::from_fn(|i| [(i * 10) as u8, 0, 0]);
         let terrain = Terrain::new(4, 4, &heights, &colors).unwrap();
         let pyramid = Pyramid::flat(terrain);
-        let at = |x: i64, y: i64| bilinear(&pyramid, 0, [x, y], &mut NoProbe).map(|c| c[0]);
+        let at = |x: i64, y: i64| bilinear(&pyramid, 0, [x, y], &mut NoProbe).map(|c| c.rgb()[0]);
         // The far corner, the last column and the last row: grid points.
         assert_eq!(at(3 * ONE, 3 * ONE), Some(150));
         assert_eq!(at(3 * ONE, ONE), Some(70));

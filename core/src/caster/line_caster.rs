@@ -50,7 +50,7 @@ use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, HEIGHT_WEIGHT_BITS, MAX_W
 use crate::divide::div_ceil;
 use crate::probe::Probe;
 use crate::surface::{Extent, Grid, Surface};
-use crate::view::lines::{Line, OwnedPixels, WindowWord};
+use crate::view::lines::{Line, LinePixels, OwnedPixels};
 use crate::view::lod::LodPlan;
 use crate::view::plane::{slope_quotient, Plane, DIRECTION_WORD_SHIFT};
 use crate::view::words::saturate;
@@ -342,8 +342,10 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         }
     }
 
-    /// [`LineCaster::cast`] with the pixel window in 32-bit words where
-    /// the line's values fit.
+    /// [`LineCaster::cast`] with the line's pixels stepped the cheapest
+    /// way they allow: a row at a time where the line runs straight along
+    /// the axis (a level view's columns), else with the pixel window in
+    /// 32-bit words where the line's values fit.
     #[inline(always)]
     fn cast_in_words<
         S: Sink,
@@ -360,6 +362,14 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         allowances: &mut A,
     ) {
         let a = allowances;
+        // Within a budget every line keeps the stepped ownership: the
+        // governor's prices (`Prices::BOARD_LINES`) charge every pixel
+        // alike, and a straight line's pixels cost less.
+        if !A::LIMITED {
+            if let Some(px) = pixels.straightened() {
+                return self.cast::<_, _, _, _, NEAREST, OWN_PATH>(line, px, sink, probe, a);
+            }
+        }
         match pixels.narrowed() {
             Ok(px) => self.cast::<_, _, _, _, NEAREST, OWN_PATH>(line, px, sink, probe, a),
             Err(px) => self.cast::<_, _, _, _, NEAREST, OWN_PATH>(line, px, sink, probe, a),
@@ -371,7 +381,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// Out of line: the loop's state then has the registers to itself.
     #[inline(never)]
     fn cast<
-        W: WindowWord,
+        L: LinePixels,
         S: Sink,
         P: Probe,
         A: Allowances,
@@ -380,7 +390,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     >(
         &self,
         line: &Line,
-        mut pixels: OwnedPixels<W>,
+        mut pixels: L,
         sink: &mut S,
         probe: &mut P,
         allowances: &mut A,

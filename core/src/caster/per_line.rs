@@ -60,7 +60,7 @@ use super::{crossing_fraction, sky, RenderOptions};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BITS};
 use crate::divide::div_trunc;
-use crate::view::lines::{Line, Owned, RayWords, TableError};
+use crate::view::lines::{Line, LinePixels, Owned, RayWords, TableError};
 use crate::view::plane::{slope_quotient, Plane};
 use crate::{Sample, Sink, Terrain, View};
 use core::fmt;

@@ -296,14 +296,48 @@ pub(crate) fn along_weight<G: Grid>(
 /// Blends `a` toward `b` by `t`/256 (`WEIGHT_BITS` = 8).
 #[inline]
 pub(crate) fn lerp(a: Rgb, b: Rgb, t: u32) -> Rgb {
-    let t = t.min(256);
-    // Red and blue side by side in one word, 16 bits a lane: a lane's sum
-    // is at most 255 · 256 + 128 < 2^16, so no carry crosses lanes and
-    // each channel rounds exactly as on its own. Two products fewer.
-    let red_blue = |c: Rgb| (u32::from(c[0]) << 16) | u32::from(c[2]);
-    let mixed = ((red_blue(a) * (256 - t) + red_blue(b) * t + 0x0080_0080) >> 8) & 0x00FF_00FF;
-    let green = (u32::from(a[1]) * (256 - t) + u32::from(b[1]) * t + 128) >> 8;
-    [(mixed >> 16) as u8, green as u8, mixed as u8]
+    Lanes::of(a).lerp(Lanes::of(b), t).rgb()
+}
+
+/// A color in 16-bit lanes, red and blue side by side in one word and
+/// green in another, as [`lerp`] blends it: a chain of blends (a bilinear
+/// square, two levels' squares) stays in lanes and unpacks once.
+#[derive(Clone, Copy)]
+pub(crate) struct Lanes {
+    red_blue: u32,
+    green: u32,
+}
+
+impl Lanes {
+    #[inline(always)]
+    pub(crate) fn of(c: Rgb) -> Self {
+        Self {
+            red_blue: (u32::from(c[0]) << 16) | u32::from(c[2]),
+            green: u32::from(c[1]),
+        }
+    }
+
+    /// Blends toward `other` by `t`/256, each channel rounded as on its
+    /// own: a lane's sum is at most 255 · 256 + 128 < 2^16, so no carry
+    /// crosses lanes (two products fewer than three channels apart).
+    #[inline(always)]
+    pub(crate) fn lerp(self, other: Self, t: u32) -> Self {
+        let t = t.min(256);
+        Self {
+            red_blue: ((self.red_blue * (256 - t) + other.red_blue * t + 0x0080_0080) >> 8)
+                & 0x00FF_00FF,
+            green: (self.green * (256 - t) + other.green * t + 128) >> 8,
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn rgb(self) -> Rgb {
+        [
+            (self.red_blue >> 16) as u8,
+            self.green as u8,
+            self.red_blue as u8,
+        ]
+    }
 }
 
 /// The outcome of a walk along one ray.

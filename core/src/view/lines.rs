@@ -1250,6 +1250,40 @@ impl OwnedPixels {
         }
         pixels
     }
+
+    /// These pixels as [`StraightPixels`] where the line runs straight
+    /// along the axis (parallel lines with no lean: a level view's
+    /// columns, a view rolled ±90°'s rows) and owns a pixel on its first
+    /// row: its window neither moves nor widens, so every row's test has
+    /// the first row's outcome and the line owns pixel `t` on every row.
+    pub(crate) fn straightened(&self) -> Option<StraightPixels> {
+        let straight = self.from_step == 0
+            && self.width_step == 0
+            && self.point_step == 0
+            && self.cone.is_none()
+            && self.gap < self.width
+            && (self.t as u32) < self.cross_len as u32;
+        if !straight {
+            return None;
+        }
+        let (x, row) = if self.along_rows {
+            (self.t, 0)
+        } else {
+            (0, self.t)
+        };
+        Some(StraightPixels {
+            along_rows: self.along_rows,
+            x,
+            y: self.top_row - row,
+            s: self.s,
+            end: self.end,
+            step: self.step,
+            s_ref: self.s_ref,
+            top_row: self.top_row,
+            offset: (i64::from(self.t) << COORD_FRAC_BITS)
+                - (self.t_v_q16 + (self.point >> (32 + IMG_FRAC - COORD_FRAC_BITS))),
+        })
+    }
 }
 
 impl<W: WindowWord> OwnedPixels<W> {
@@ -1310,17 +1344,6 @@ impl<W: WindowWord> OwnedPixels<W> {
         let (x, row) = if self.along_rows { (t, s) } else { (s, t) };
         (x as u32, (self.top_row - row) as u32)
     }
-
-    /// Calls `put` with the image position (x, y from the top) of each
-    /// pixel left: what a caster needs of the pixels it fills without
-    /// rays (the sky above a line's last hit).
-    #[inline]
-    pub fn for_each_position(mut self, mut put: impl FnMut(u32, u32)) {
-        while let Some((t, s, _)) = self.advance() {
-            let (x, y) = self.image_position(t, s);
-            put(x, y);
-        }
-    }
 }
 
 impl<W: WindowWord> Iterator for OwnedPixels<W> {
@@ -1339,6 +1362,92 @@ impl<W: WindowWord> Iterator for OwnedPixels<W> {
             offset: (i64::from(t) << COORD_FRAC_BITS)
                 - (self.t_v_q16 + (point >> (32 + IMG_FRAC - COORD_FRAC_BITS))),
         })
+    }
+}
+
+/// A line's pixels, as a caster walks them: each owned pixel in the
+/// order its rays are cast ([`Iterator`]), and the positions of those left
+/// when its rays stop.
+pub(crate) trait LinePixels: Iterator<Item = Owned> {
+    /// Calls `put` with the image position (x, y from the top) of each
+    /// pixel left: what a caster needs of the pixels it fills without
+    /// rays (the sky above a line's last hit).
+    fn for_each_position(self, put: impl FnMut(u32, u32));
+}
+
+impl<W: WindowWord> LinePixels for OwnedPixels<W> {
+    #[inline]
+    fn for_each_position(mut self, mut put: impl FnMut(u32, u32)) {
+        while let Some((t, s, _)) = self.advance() {
+            let (x, y) = self.image_position(t, s);
+            put(x, y);
+        }
+    }
+}
+
+/// The pixels of a line that runs straight along the axis and owns one on
+/// every row ([`OwnedPixels::straightened`]): a row at a time, with no
+/// ownership test.
+#[derive(Debug, Clone)]
+pub(crate) struct StraightPixels {
+    along_rows: bool,
+    /// The image column (along rows) or row from the top (along columns)
+    /// the line keeps to; the other coordinate steps.
+    x: i32,
+    y: i32,
+    /// The axis position next, the one past the last, and the step.
+    s: i32,
+    end: i32,
+    step: i32,
+    s_ref: i32,
+    top_row: i32,
+    /// Every pixel's center less the line's point (Q16): the same on
+    /// every row.
+    offset: i64,
+}
+
+impl StraightPixels {
+    /// The image position (x, y from the top) of the pixel at axis
+    /// coordinate `s`.
+    #[inline(always)]
+    fn image_position(&self, s: i32) -> (u32, u32) {
+        if self.along_rows {
+            (self.x as u32, (self.top_row - s) as u32)
+        } else {
+            (s as u32, self.y as u32)
+        }
+    }
+}
+
+impl Iterator for StraightPixels {
+    type Item = Owned;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<Owned> {
+        if self.s == self.end {
+            return None;
+        }
+        let s = self.s;
+        self.s += self.step;
+        let (x, y) = self.image_position(s);
+        Some(Owned {
+            x,
+            y,
+            s,
+            along: s - self.s_ref,
+            offset: self.offset,
+        })
+    }
+}
+
+impl LinePixels for StraightPixels {
+    #[inline]
+    fn for_each_position(mut self, mut put: impl FnMut(u32, u32)) {
+        while self.s != self.end {
+            let (x, y) = self.image_position(self.s);
+            put(x, y);
+            self.s += self.step;
+        }
     }
 }
 
@@ -1404,6 +1513,50 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_straight_line_steps_the_pixels_its_ownership_test_gives() {
+        // Straight: level views' columns (upright or upside down), and
+        // their rows rolled ±90°; every other view's lines step their
+        // window.
+        let mut straight_views = 0;
+        for roll in rolls() {
+            for pitch in [-45.0, -3.0, 0.0, 2.0, 90.0] {
+                for size in [(32, 21), (40, 30), (1, 9), (9, 1)] {
+                    let view = rolled(pitch, roll, 25.0, size, 70.0);
+                    let level = pitch == 0.0 && roll % 90.0 == 0.0;
+                    straight_views += usize::from(level);
+                    for index in 0..view.lines() {
+                        let line = view.line(index).unwrap();
+                        let stepped = line.pixels(size.1);
+                        let Some(straight) = stepped.straightened() else {
+                            assert!(!level || stepped.clone().next().is_none());
+                            continue;
+                        };
+                        assert!(level, "roll {roll} pitch {pitch}: line {index} straight");
+                        // The same pixels, directions and offsets, in the
+                        // same order.
+                        assert_eq!(
+                            straight.clone().collect::<vec::Vec<_>>(),
+                            stepped.clone().collect::<vec::Vec<_>>(),
+                            "roll {roll} size {size:?} line {index}"
+                        );
+                        // And the same positions left once two rays are
+                        // cast (the sky above a line's last hit).
+                        let (mut a, mut b) = (straight, stepped.clone());
+                        a.nth(1);
+                        b.nth(1);
+                        let mut positions = (vec::Vec::new(), vec::Vec::new());
+                        a.for_each_position(|x, y| positions.0.push((x, y)));
+                        b.for_each_position(|x, y| positions.1.push((x, y)));
+                        assert_eq!(positions.0, positions.1);
+                        assert_eq!(positions.0.len(), stepped.count().saturating_sub(2));
+                    }
+                }
+            }
+        }
+        assert_eq!(straight_views, 5 * 4);
     }
 
     #[test]
