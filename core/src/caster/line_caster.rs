@@ -328,16 +328,16 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         let a = allowances;
         match (self.nearest, self.own_path) {
             (false, false) => {
-                self.cast_in_words::<_, _, _, false, false>(&line, pixels, sink, probe, a)
+                self.cast_line_pixels::<_, _, _, false, false>(&line, pixels, sink, probe, a)
             }
             (true, false) => {
-                self.cast_in_words::<_, _, _, true, false>(&line, pixels, sink, probe, a)
+                self.cast_line_pixels::<_, _, _, true, false>(&line, pixels, sink, probe, a)
             }
             (false, true) => {
-                self.cast_in_words::<_, _, _, false, true>(&line, pixels, sink, probe, a)
+                self.cast_line_pixels::<_, _, _, false, true>(&line, pixels, sink, probe, a)
             }
             (true, true) => {
-                self.cast_in_words::<_, _, _, true, true>(&line, pixels, sink, probe, a)
+                self.cast_line_pixels::<_, _, _, true, true>(&line, pixels, sink, probe, a)
             }
         }
     }
@@ -347,7 +347,7 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     /// the axis (a level view's columns), else with the pixel window in
     /// 32-bit words where the line's values fit.
     #[inline(always)]
-    fn cast_in_words<
+    fn cast_line_pixels<
         S: Sink,
         P: Probe,
         A: Allowances,
