@@ -736,15 +736,15 @@ pub fn against_without(report: &BoardReport, without: &Path, what: &str) -> Resu
 
 /// The prices that fit the governed frames of `reports` best, as one line
 /// naming them `what`: the non-negative least-squares fit of each frame's
-/// board instructions to its work, the base pass's (lines, rays, hit
-/// levels, far hits' color squares) and the refinement's (lines, rays,
-/// hits, hit levels, color squares) apart, a written pixel's price shared
-/// and a step's held at `Prices::BOARD`'s in both (these frames take a few
-/// steps a pixel, too few to tell it apart); and how far the fit is from
-/// the counts. The line caster casts no ray into the sky but the one a
-/// line leaves the terrain with, so a base pass ray is a hit: its price is
-/// both. Runs on more than one map keep the prices from fitting one
-/// terrain alone.
+/// board instructions to its work, the base pass's (pixels on straight
+/// lines, lines, rays, hit levels) and the refinement's (lines, rays,
+/// hits, hit levels) apart, any other written pixel's price and a far
+/// hit's color square's shared, and a step's held at `Prices::BOARD`'s in
+/// both (these frames take a few steps a pixel, too few to tell it
+/// apart); and how far the fit is from the counts. The line caster casts
+/// no ray into the sky but the one a line leaves the terrain with, so a
+/// base pass ray is a hit: its price is both. Runs on more than one map
+/// keep the prices from fitting one terrain alone.
 pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
     let step = f64::from(Prices::BOARD.per_step);
     let frames: Vec<(&GovernedCheck, f64)> = reports
@@ -757,16 +757,16 @@ pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
             let (base, refined, all) = (&g.cost.base_work, g.cost.refined_work(), &g.cost.work);
             (
                 [
-                    all.pixels,
+                    all.pixels - base.straight_pixels,
+                    all.color_squares,
+                    base.straight_pixels,
                     base.lines,
                     base.rays,
                     base.hit_levels,
-                    base.color_squares,
                     refined.lines,
                     refined.rays,
                     refined.hits,
                     refined.hit_levels,
-                    refined.color_squares,
                 ]
                 .map(|n| n as f64),
                 board - step * all.steps as f64,
@@ -787,26 +787,29 @@ pub fn price_fit(reports: &[&BoardReport], what: &str) -> String {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), e| {
             (l.min(e), h.max(e))
         });
-    let [pixel, line, ray, level, square, r_line, r_ray, r_hit, r_level, r_square] = fit;
+    let [pixel, square, straight, line, ray, level, r_line, r_ray, r_hit, r_level] = fit;
     let (b, r) = (Prices::BOARD_LINES, Prices::BOARD);
     let (low, high) = (100.0 * low, 100.0 * high);
     format!(
         "prices fitted to {what} (non-negative least squares, a step's price held at {step:.0}): \
-         {pixel:.0} a pixel written; base pass {line:.0} a line, {ray:.0} a ray, {level:.0} a hit level, \
-         {square:.0} a color square (Prices::BOARD_LINES: {}, {}, {}, {}, {}); refinement {r_line:.0} a line, \
-         {r_ray:.0} a ray, {r_hit:.0} a hit, {r_level:.0} a hit level, {r_square:.0} a color square \
-         (Prices::BOARD: {}, {}, {}, {}, {}, {}); off the counts by {low:+.1} % to {high:+.1} %\n",
+         {pixel:.0} a pixel written and {square:.0} a far hit's color square in both passes \
+         (Prices::BOARD_LINES: {}, {}; Prices::BOARD: {}, {}); base pass {straight:.0} a pixel on a \
+         straight line, {line:.0} a line, {ray:.0} a ray, {level:.0} a hit level \
+         (Prices::BOARD_LINES: {}, {}, {}, {}); refinement {r_line:.0} a line, {r_ray:.0} a ray, \
+         {r_hit:.0} a hit, {r_level:.0} a hit level (Prices::BOARD: {}, {}, {}, {}); \
+         off the counts by {low:+.1} % to {high:+.1} %\n",
         b.per_pixel,
+        b.per_color_square,
+        r.per_pixel,
+        r.per_color_square,
+        b.per_straight_pixel,
         b.per_line,
         b.per_ray,
         b.per_hit_level,
-        b.per_color_square,
-        r.per_pixel,
         r.per_line,
         r.per_ray,
         r.per_hit,
         r.per_hit_level,
-        r.per_color_square,
     )
 }
 

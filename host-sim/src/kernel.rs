@@ -104,8 +104,12 @@ pub fn fitted_prices(frames: &[(FrameCost, f64)], image_pixels: u64) -> Result<F
     let [first_write, line, base_ray, base_level, pixel, ray, hit, level, step] =
         fit.map(|p| p.round().clamp(0.0, f64::from(u32::MAX)) as u32);
     Ok(FittedPrices {
+        // Every pixel's first write is apart, a straight one's too: no
+        // count here tells them apart (what a level frame's pixels save
+        // goes to its other counts).
         base: Prices {
             per_pixel: 0,
+            per_straight_pixel: 0,
             per_line: line,
             per_ray: base_ray,
             per_step: step,
@@ -116,6 +120,8 @@ pub fn fitted_prices(frames: &[(FrameCost, f64)], image_pixels: u64) -> Result<F
         },
         prices: Prices {
             per_pixel: pixel,
+            // The refinement writes no straight pixel.
+            per_straight_pixel: pixel,
             per_line: 0,
             per_ray: ray,
             per_step: step,
@@ -366,6 +372,7 @@ mod tests {
             color_squares: 0,
             hits,
             hit_levels,
+            straight_pixels: 0,
         }
     }
 
@@ -396,6 +403,7 @@ mod tests {
                     color_squares: base.color_squares + refined.color_squares,
                     hits: base.hits + refined.hits,
                     hit_levels: base.hit_levels + refined.hit_levels,
+                    straight_pixels: 0,
                 };
                 let ns = 3.0 * 1000.0
                     + 2.5 * all.steps as f64

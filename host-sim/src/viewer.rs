@@ -648,6 +648,7 @@ impl FrameBudget {
         let board = Prices::BOARD_LINES;
         Prices {
             per_pixel: scale(board.per_pixel),
+            per_straight_pixel: scale(board.per_straight_pixel),
             per_line: scale(board.per_line),
             per_ray: scale(board.per_ray),
             per_step: scale(board.per_step),

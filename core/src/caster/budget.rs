@@ -79,6 +79,11 @@ use fixed::types::U8F8;
 pub struct Prices {
     /// Writing a pixel (a refined pixel is written again).
     pub per_pixel: u32,
+    /// Writing a pixel in the base pass instead, where every line of the
+    /// view runs straight along its axis ([`View::lines_are_straight`]: a
+    /// level view's columns): the line caster steps those pixels a row at
+    /// a time, without the ownership test a pixel of any other line takes.
+    pub per_straight_pixel: u32,
     /// Setting up an image line.
     pub per_line: u32,
     /// Setting up a ray.
@@ -101,6 +106,7 @@ impl Prices {
     /// Steps alone: a budget in steps.
     pub const STEPS: Self = Self {
         per_pixel: 0,
+        per_straight_pixel: 0,
         per_line: 0,
         per_ray: 0,
         per_step: 1,
@@ -124,20 +130,25 @@ impl Prices {
     /// their budgets. The fit prices no refined ray apart from its hit
     /// (the two move together): a hit's price is both. A hit's price
     /// grows with its level; a far hit's color squares (its footprint's
-    /// levels, blended bilinearly) cost more than a near hit's grid-line
-    /// colors, and a refined line's set-up on the per-ray path has a price
-    /// of its own: without those two counts the fit is off the two maps'
-    /// counts by up to 12 % (the real map's level views hit far more
-    /// often, and refine fewer and longer lines).
+    /// levels, blended bilinearly, at one price in both passes) cost more
+    /// than a near hit's grid-line colors, and a refined line's set-up on
+    /// the per-ray path has a price of its own: without those two counts
+    /// the fit is off the two maps' counts by up to 12 % (the real map's
+    /// level views hit far more often, and refine fewer and longer
+    /// lines). A level view's base
+    /// pass writes straight pixels, stepped without the ownership test:
+    /// priced apart from the others, the fit leaves them no price of
+    /// their own (what they cost goes with their rays).
     pub const BOARD: Self = Self {
-        per_pixel: 84,
-        per_line: 16898,
+        per_pixel: 107,
+        per_straight_pixel: 0,
+        per_line: 16646,
         per_ray: 0,
         per_step: 53,
         per_color: 0,
-        per_color_square: 217,
-        per_hit: 1831,
-        per_hit_level: 302,
+        per_color_square: 174,
+        per_hit: 1803,
+        per_hit_level: 276,
     };
 
     /// The board's instructions in the base pass, which takes the line
@@ -146,19 +157,21 @@ impl Prices {
     /// the one a line leaves the terrain with: a ray's price is its hit's
     /// too.
     pub const BOARD_LINES: Self = Self {
-        per_pixel: 84,
+        per_pixel: 107,
+        per_straight_pixel: 0,
         per_line: 0,
-        per_ray: 850,
+        per_ray: 830,
         per_step: 53,
         per_color: 0,
-        per_color_square: 149,
+        per_color_square: 174,
         per_hit: 0,
         per_hit_level: 0,
     };
 
     /// What `work` costs at these prices.
     pub fn of(&self, work: &FrameWork) -> u64 {
-        work.pixels * u64::from(self.per_pixel)
+        work.pixels.saturating_sub(work.straight_pixels) * u64::from(self.per_pixel)
+            + work.straight_pixels * u64::from(self.per_straight_pixel)
             + work.lines * u64::from(self.per_line)
             + work.rays * u64::from(self.per_ray)
             + work.steps * u64::from(self.per_step)
@@ -197,12 +210,16 @@ pub struct FrameWork {
     pub hits: u64,
     /// The hits' levels, summed.
     pub hit_levels: u64,
+    /// Of `pixels`, those the base pass wrote on lines that run straight
+    /// along their axis ([`View::lines_are_straight`]).
+    pub straight_pixels: u64,
 }
 
 impl FrameWork {
     /// What a frame of `pixels` pixels, each written once, and `lines`
     /// image lines did, as `probe` counted it: its rays, steps, color
-    /// fetches and hits (the probe counts each level's hits apart).
+    /// fetches and hits (the probe counts each level's hits apart), none of
+    /// its pixels counted straight.
     pub fn counted(probe: &CountingProbe, pixels: u64, lines: u64) -> Self {
         Self {
             pixels,
@@ -216,6 +233,7 @@ impl FrameWork {
                 .zip(probe.hits_by_level)
                 .map(|(level, hits)| level * hits)
                 .sum(),
+            straight_pixels: 0,
         }
     }
 }
@@ -262,6 +280,7 @@ impl FrameCost {
             color_squares: all.color_squares - base.color_squares,
             hits: all.hits - base.hits,
             hit_levels: all.hit_levels - base.hit_levels,
+            straight_pixels: all.straight_pixels - base.straight_pixels,
         }
     }
 }
@@ -379,7 +398,12 @@ impl Governor {
     pub fn least_share_cost(&self, view: &View, options: &RenderOptions, share: &LineShare) -> u64 {
         let prices = &self.base_prices;
         let pixels = share.pixels;
-        pixels * u64::from(prices.per_pixel)
+        let per_pixel = if straight_base_pass(view, options) {
+            prices.per_straight_pixel
+        } else {
+            prices.per_pixel
+        };
+        pixels * u64::from(per_pixel)
             + u64::from(share.line_count(view)) * u64::from(prices.per_line)
             + pixels * u64::from(options.vertical_samples.count()) * u64::from(prices.per_ray)
     }
@@ -424,7 +448,11 @@ impl Governor {
         let pixels = share.pixels;
         // Every pixel is written and every line set up once.
         let meter = Meter::new(self.base_prices, surface.top());
-        meter.add_pixels(pixels);
+        if straight_base_pass(view, options) {
+            meter.add_straight_pixels(pixels);
+        } else {
+            meter.add_pixels(pixels);
+        }
         meter.add_lines(u64::from(share.line_count(view)));
         let budget = self.budget;
         let mut metered = Metered {
@@ -552,6 +580,12 @@ impl LineShare {
     }
 }
 
+/// Whether the base pass steps every pixel of `view` a row at a time: the
+/// line caster takes `options` and every line runs straight.
+fn straight_base_pass(view: &View, options: &RenderOptions) -> bool {
+    line_caster::takes(options) && view.lines_are_straight()
+}
+
 /// The base pass: every line of `share` of `view` by `cast_line(line, coarse,
 /// allowances)`, at the governor's bias until, once half the rays are
 /// cast, the cost so far projects past the budget; from there on at the
@@ -624,6 +658,7 @@ struct Meter {
     color_squares: Cell<u64>,
     hits: Cell<u64>,
     hit_levels: Cell<u64>,
+    straight_pixels: Cell<u64>,
     /// The most a ray's shading costs (see [`Prices::shading_most`]).
     shading_most: Cell<u64>,
 }
@@ -643,6 +678,7 @@ impl Meter {
             color_squares: Cell::new(0),
             hits: Cell::new(0),
             hit_levels: Cell::new(0),
+            straight_pixels: Cell::new(0),
             shading_most: Cell::new(prices.shading_most(top)),
         }
     }
@@ -664,6 +700,16 @@ impl Meter {
         self.add(&self.pixels, n, self.prices.get().per_pixel);
     }
 
+    /// Counts `n` pixels that are straight ones too, at their own price.
+    fn add_straight_pixels(&self, n: u64) {
+        self.pixels.set(self.pixels.get() + n);
+        self.add(
+            &self.straight_pixels,
+            n,
+            self.prices.get().per_straight_pixel,
+        );
+    }
+
     fn add_lines(&self, n: u64) {
         self.add(&self.lines, n, self.prices.get().per_line);
     }
@@ -678,6 +724,7 @@ impl Meter {
             color_squares: self.color_squares.get(),
             hits: self.hits.get(),
             hit_levels: self.hit_levels.get(),
+            straight_pixels: self.straight_pixels.get(),
         }
     }
 
@@ -1295,9 +1342,11 @@ mod tests {
     fn a_frame_spends_its_budget_and_never_more() {
         on_hills(|pyramid| {
             let options = RenderOptions::default();
-            for pitch in [5.0, 30.0, 90.0] {
+            for pitch in [0.0, 5.0, 30.0, 90.0] {
                 let view =
                     View::new(&Camera::looking([3.0, 5.0, 80.0], 40.0, pitch), 32, 24).unwrap();
+                // A level view's base pass writes straight pixels.
+                let straight = if pitch == 0.0 { 32 * 24 } else { 0 };
                 let mut probe = crate::CountingProbe::default();
                 let mut plain = Governor::new(u64::MAX / 4, Prices::BOARD);
                 let unlimited = plain.render(pyramid, &view, &options, &mut Discard, &mut probe);
@@ -1326,6 +1375,10 @@ mod tests {
                         cost.work.pixels,
                         u64::from(view.lines()) + u64::from(cost.refined_lines),
                     );
+                    let counted = FrameWork {
+                        straight_pixels: straight,
+                        ..counted
+                    };
                     assert_eq!(counted, cost.work, "pitch {pitch} share {share}");
                     let lines = u64::from(view.lines());
                     if cost.base_cost * 2 < budget {

@@ -362,13 +362,8 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
         allowances: &mut A,
     ) {
         let a = allowances;
-        // Within a budget every line keeps the stepped ownership: the
-        // governor's prices (`Prices::BOARD_LINES`) charge every pixel
-        // alike, and a straight line's pixels cost less.
-        if !A::LIMITED {
-            if let Some(px) = pixels.straightened() {
-                return self.cast::<_, _, _, _, NEAREST, OWN_PATH>(line, px, sink, probe, a);
-            }
+        if let Some(px) = pixels.straightened() {
+            return self.cast::<_, _, _, _, NEAREST, OWN_PATH>(line, px, sink, probe, a);
         }
         match pixels.narrowed() {
             Ok(px) => self.cast::<_, _, _, _, NEAREST, OWN_PATH>(line, px, sink, probe, a),

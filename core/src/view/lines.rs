@@ -200,6 +200,16 @@ impl Lines {
         self.sectors.iter().flatten().map(|s| s.lines).sum()
     }
 
+    /// Whether every line runs straight along its axis: parallel lines
+    /// with no lean (a level view's columns, upright or upside down, and
+    /// its rows rolled ±90°), each owning the same pixel on every row.
+    pub fn straight(&self) -> bool {
+        self.sectors
+            .iter()
+            .flatten()
+            .all(|s| s.vanishing.is_none() && s.lean == 0)
+    }
+
     /// Line number `index` (`0..count()`): its sector and `K`.
     pub fn get(&self, mut index: u32) -> Option<(Sector, i32)> {
         for sector in self.sectors.iter().flatten() {
@@ -445,7 +455,7 @@ impl LineWords {
     /// The ray of the pixel at cross coordinate `t`, axis coordinate `s`.
     #[inline(always)]
     pub(crate) fn ray(&self, t: i32, s: i32) -> RayWords {
-        let (x, row) = if self.along_rows { (t, s) } else { (s, t) };
+        let (x, y) = image_position(self.along_rows, self.top_row, t, s);
         let along = s - self.s_ref;
         // Q24 lean times rows from the far edge: one long product. (From
         // the far edge, not from a vanishing point far off the image, the
@@ -456,8 +466,8 @@ impl LineWords {
         let offset = (t << COORD_FRAC_BITS).wrapping_sub(point);
         let beside = (i64::from(self.across_up) * i64::from(offset)) >> DIRECTION_WORD_SHIFT;
         RayWords {
-            x: x as u32,
-            y: (self.top_row - row) as u32,
+            x,
+            y,
             major: self.major[0].wrapping_add(self.major[1].wrapping_mul(along)),
             up: self.up[0]
                 .wrapping_add(self.up[1].wrapping_mul(along))
@@ -488,6 +498,15 @@ impl View {
     /// Lines in this frame: the units a caster or a pool hands out.
     pub fn lines(&self) -> u32 {
         self.lines.count()
+    }
+
+    /// Whether every image line runs straight along its axis (a level
+    /// view's columns, upright or upside down, and its rows rolled ±90°):
+    /// a caster steps such a line's pixels a row at a time, with no
+    /// ownership test (`OwnedPixels::straightened`), and a frame
+    /// budget prices its pixels apart ([`crate::Prices::per_straight_pixel`]).
+    pub fn lines_are_straight(&self) -> bool {
+        self.lines.straight()
     }
 
     /// The pixels (x, y; y = 0 at the top) of image line `index`, in the
@@ -1038,25 +1057,37 @@ impl Line {
     /// image whose top row is `top_row`.
     #[inline(always)]
     pub(crate) fn owned_at(&self, t: i32, s: i32, top_row: i32) -> Owned {
-        let (x, row) = if self.sector.along_rows {
-            (t, s)
-        } else {
-            (s, t)
-        };
+        let (x, y) = image_position(self.sector.along_rows, top_row, t, s);
         let (s_v, t_v) = self.anchor();
         // As `OwnedPixels` steps it: the Q32 slope times the row's Q8
         // distance from the anchor, Q40.
         let point = self.slope * ((i64::from(s) << IMG_FRAC) - s_v);
         Owned {
-            x: x as u32,
-            y: (top_row - row) as u32,
+            x,
+            y,
             s,
             along: s - self.sector.s_ref,
-            offset: (i64::from(t) << COORD_FRAC_BITS)
-                - ((t_v << (COORD_FRAC_BITS - IMG_FRAC))
-                    + (point >> (32 + IMG_FRAC - COORD_FRAC_BITS))),
+            offset: offset_from_point(t, t_v << (COORD_FRAC_BITS - IMG_FRAC), point),
         }
     }
+}
+
+/// The image position (x, y from the top) of the pixel at cross
+/// coordinate `t`, axis coordinate `s`, on a line that steps along rows
+/// (`s` the row from the bottom) or along columns, in an image whose top
+/// row is `top_row`.
+#[inline(always)]
+fn image_position(along_rows: bool, top_row: i32, t: i32, s: i32) -> (u32, u32) {
+    let (x, row) = if along_rows { (t, s) } else { (s, t) };
+    (x as u32, (top_row - row) as u32)
+}
+
+/// A pixel's center at cross coordinate `t` less its line's point on the
+/// pixel's row, Q16: `point` is that point less `t_V` (Q40), `t_v_q16` is
+/// `t_V` (Q16).
+#[inline(always)]
+fn offset_from_point(t: i32, t_v_q16: i64, point: i64) -> i64 {
+    (i64::from(t) << COORD_FRAC_BITS) - (t_v_q16 + (point >> (32 + IMG_FRAC - COORD_FRAC_BITS)))
 }
 
 /// Iterator over a line's pixels (see [`Line::pixels`]): the ownership
@@ -1266,22 +1297,15 @@ impl OwnedPixels {
         if !straight {
             return None;
         }
-        let (x, row) = if self.along_rows {
-            (self.t, 0)
-        } else {
-            (0, self.t)
-        };
         Some(StraightPixels {
             along_rows: self.along_rows,
-            x,
-            y: self.top_row - row,
+            t: self.t,
             s: self.s,
             end: self.end,
             step: self.step,
             s_ref: self.s_ref,
             top_row: self.top_row,
-            offset: (i64::from(self.t) << COORD_FRAC_BITS)
-                - (self.t_v_q16 + (self.point >> (32 + IMG_FRAC - COORD_FRAC_BITS))),
+            offset: offset_from_point(self.t, self.t_v_q16, self.point),
         })
     }
 }
@@ -1341,8 +1365,7 @@ impl<W: WindowWord> OwnedPixels<W> {
     /// coordinate `t`, axis coordinate `s`.
     #[inline(always)]
     fn image_position(&self, t: i32, s: i32) -> (u32, u32) {
-        let (x, row) = if self.along_rows { (t, s) } else { (s, t) };
-        (x as u32, (self.top_row - row) as u32)
+        image_position(self.along_rows, self.top_row, t, s)
     }
 }
 
@@ -1358,9 +1381,7 @@ impl<W: WindowWord> Iterator for OwnedPixels<W> {
             y,
             s,
             along: s - self.s_ref,
-            // The line's point, Q16: Q40 to Q16.
-            offset: (i64::from(t) << COORD_FRAC_BITS)
-                - (self.t_v_q16 + (point >> (32 + IMG_FRAC - COORD_FRAC_BITS))),
+            offset: offset_from_point(t, self.t_v_q16, point),
         })
     }
 }
@@ -1391,10 +1412,9 @@ impl<W: WindowWord> LinePixels for OwnedPixels<W> {
 #[derive(Debug, Clone)]
 pub(crate) struct StraightPixels {
     along_rows: bool,
-    /// The image column (along rows) or row from the top (along columns)
-    /// the line keeps to; the other coordinate steps.
-    x: i32,
-    y: i32,
+    /// The cross coordinate the line keeps to (the column along rows, the
+    /// row from the bottom along columns); the axis coordinate steps.
+    t: i32,
     /// The axis position next, the one past the last, and the step.
     s: i32,
     end: i32,
@@ -1411,11 +1431,7 @@ impl StraightPixels {
     /// coordinate `s`.
     #[inline(always)]
     fn image_position(&self, s: i32) -> (u32, u32) {
-        if self.along_rows {
-            (self.x as u32, (self.top_row - s) as u32)
-        } else {
-            (s as u32, self.y as u32)
-        }
+        image_position(self.along_rows, self.top_row, self.t, s)
     }
 }
 
@@ -1527,6 +1543,12 @@ mod tests {
                     let view = rolled(pitch, roll, 25.0, size, 70.0);
                     let level = pitch == 0.0 && roll % 90.0 == 0.0;
                     straight_views += usize::from(level);
+                    // What a frame budget prices the view's pixels by.
+                    assert_eq!(
+                        view.lines_are_straight(),
+                        level,
+                        "roll {roll} pitch {pitch}"
+                    );
                     for index in 0..view.lines() {
                         let line = view.line(index).unwrap();
                         let stepped = line.pixels(size.1);

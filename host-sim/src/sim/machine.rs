@@ -364,6 +364,7 @@ impl Machine {
         };
         Ok(Prices {
             per_pixel: 0,
+            per_straight_pixel: 0,
             per_line: 0,
             per_ray: price(c.per_ray, "per_ray")?,
             per_step: price(c.per_step, "per_step")?,
