@@ -1347,6 +1347,20 @@ mod tests {
                     View::new(&Camera::looking([3.0, 5.0, 80.0], 40.0, pitch), 32, 24).unwrap();
                 // A level view's base pass writes straight pixels.
                 let straight = if pitch == 0.0 { 32 * 24 } else { 0 };
+                // The least a frame costs: every pixel written (a level
+                // view's at the straight price), line and ray set up.
+                let least_work = FrameWork {
+                    pixels: 32 * 24,
+                    lines: u64::from(view.lines()),
+                    rays: 32 * 24,
+                    straight_pixels: straight,
+                    ..FrameWork::default()
+                };
+                assert_eq!(
+                    Governor::on_board(0).least_cost(&view, &options),
+                    Prices::BOARD_LINES.of(&least_work),
+                    "pitch {pitch}"
+                );
                 let mut probe = crate::CountingProbe::default();
                 let mut plain = Governor::new(u64::MAX / 4, Prices::BOARD);
                 let unlimited = plain.render(pyramid, &view, &options, &mut Discard, &mut probe);
