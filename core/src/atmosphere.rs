@@ -48,7 +48,7 @@
 //! assert_ne!(pixels[0], RenderOptions::default().sky);
 //! ```
 
-use crate::caster::walk::lerp;
+use crate::caster::walk::{lerp, Lanes};
 use crate::color::Rgb;
 use crate::config::MAX_RAY_SLOPE;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS};
@@ -68,8 +68,24 @@ const SKY_STEPS: usize = 256;
 /// are U12.4, below 4096).
 const HEIGHT_STEP_BITS: u32 = 2;
 const HEIGHT_STEPS: usize = 4096 >> HEIGHT_STEP_BITS;
-/// `2^−i/256` for `i` in 0..=256, Q16.
-const EXP2_STEPS: usize = 256;
+/// What fog leaves of a color (in 1/256, rounded) after `i/256`
+/// halvings: `256 · 2^−i/256`, from a table without a blend between its
+/// entries (neighbours differ by at most one 256th). Past 10 halvings
+/// nothing is left.
+const TRANSMITTED_HALVINGS: usize = 10;
+static TRANSMITTED: [u16; (TRANSMITTED_HALVINGS << 8) + 1] = {
+    // `2^−1/256`: each entry the one before it times that.
+    const STEP: f64 = 0.997_296_056_085_470_1;
+    let mut table = [0u16; (TRANSMITTED_HALVINGS << 8) + 1];
+    let mut left = 256.0;
+    let mut i = 0;
+    while i < table.len() {
+        table[i] = (left + 0.5) as u16;
+        left *= STEP;
+        i += 1;
+    }
+    table
+};
 /// Fixed-point formats: directions Q20, heights and lengths Q8.
 const DIR_BITS: u32 = 20;
 const Q8: u32 = 8;
@@ -357,6 +373,7 @@ impl Atmosphere {
         });
         let fog = self.fog.map(|fog| FogTable {
             fog,
+            color_lanes: Lanes::of(fog.color),
             halvings_q32: to_fixed(fog.halvings_per_voxel(), 32) as u32,
             column: core::array::from_fn(|i| {
                 to_fixed(fog.column((i << HEIGHT_STEP_BITS) as f64), Q8) as i32
@@ -365,14 +382,7 @@ impl Atmosphere {
                 to_fixed(fog.density((i << HEIGHT_STEP_BITS) as f64), 16) as u32
             }),
         });
-        Ok(PreparedAtmosphere {
-            sky,
-            sun,
-            fog,
-            exp2: core::array::from_fn(|i| {
-                to_fixed(libm::exp2(-(i as f64) / EXP2_STEPS as f64), 16) as u32
-            }),
-        })
+        Ok(PreparedAtmosphere { sky, sun, fog })
     }
 }
 
@@ -401,7 +411,6 @@ pub struct PreparedAtmosphere {
     sky: [Rgb; SKY_STEPS + 1],
     sun: Option<SunTable>,
     fog: Option<FogTable>,
-    exp2: [u32; EXP2_STEPS + 1],
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -422,6 +431,8 @@ struct SunTable {
 #[derive(Debug, Clone, PartialEq)]
 struct FogTable {
     fog: Fog,
+    /// The fog's color as a blend takes it.
+    color_lanes: Lanes,
     /// Halvings a voxel at ground density, Q32 (below 1: the visibility
     /// is at least 8 voxels).
     halvings_q32: u32,
@@ -445,11 +456,12 @@ pub struct AtmosphereFrame {
     /// [`PreparedAtmosphere`]'s gradient, and what the fog leaves of the
     /// sky there (in 1/256; for the sun's disc and glow, which go on
     /// before the fog).
-    sky: [Rgb; SKY_STEPS + 1],
+    sky: [Lanes; SKY_STEPS + 1],
     sky_weights: [u16; SKY_STEPS + 1],
-    /// The mean density (Q16) from the eye to each height of the fog's
-    /// tables.
-    mean: [u32; HEIGHT_STEPS + 1],
+    /// The fog's halvings a voxel of path (Q31) at the mean density from
+    /// the eye to each height of the fog's tables: a path's length times
+    /// it is the halvings along it.
+    rate: [u32; HEIGHT_STEPS + 1],
     grid: PixelGrid,
 }
 
@@ -629,22 +641,26 @@ impl PreparedAtmosphere {
             },
         });
         let fog_color = self.fog.as_ref().map_or([0; 3], |table| table.fog.color);
-        let sky = core::array::from_fn(|i| lerp(fog_color, self.sky[i], u32::from(sky_weights[i])));
+        let sky = core::array::from_fn(|i| {
+            Lanes::of(lerp(fog_color, self.sky[i], u32::from(sky_weights[i])))
+        });
         // The mean density from the eye to each height of the table:
         // `(F(b) − F(a)) / (b − a)`, the density midway within a voxel of
         // the eye's height.
         let eye_q8 = eye_q16 >> (COORD_FRAC_BITS - Q8);
-        let mean = core::array::from_fn(|i| match &self.fog {
+        let rate = core::array::from_fn(|i| match &self.fog {
             None => 0,
             Some(table) => {
                 let height = (i as i64) << (HEIGHT_STEP_BITS + Q8);
                 let rise = height - eye_q8;
-                if rise.abs() < 1 << Q8 {
-                    table.density_at((height + eye_q8) / 2) as u32
+                let mean_q16 = if rise.abs() < 1 << Q8 {
+                    table.density_at((height + eye_q8) / 2)
                 } else {
                     let columns = table.column_at(height) - eye_column;
-                    div_trunc(columns << 16, rise).clamp(0, 1 << 16) as u32
-                }
+                    div_trunc(columns << 16, rise).clamp(0, 1 << 16)
+                };
+                // Below 2^31: the halvings a voxel are below 1.
+                ((mean_q16 as u64 * u64::from(table.halvings_q32)) >> 17) as u32
             }
         });
         let (base, per_column, per_row) = (q20(view.base), q20(view.per_column), q20(view.per_row));
@@ -657,7 +673,7 @@ impl PreparedAtmosphere {
         AtmosphereFrame {
             sky,
             sky_weights,
-            mean,
+            rate,
             base,
             per_column,
             per_row,
@@ -719,30 +735,33 @@ impl PreparedAtmosphere {
         } else {
             sample.distance
         };
-        let distance_q8 = (u64::from(along) * u64::from(reciprocal)) >> (16 + 16 - Q8);
+        let distance_q8 = word((u64::from(along) * u64::from(reciprocal)) >> (16 + 16 - Q8));
         self.fogged(frame, table, sample, distance_q8)
     }
 
     /// `sample`'s color through `table`'s fog over the `distance_q8`
-    /// (Q8 voxels) from the eye to its hit: the distance times the mean
-    /// density from the eye to the hit's height is the density integrated
-    /// along the path (Q8 voxels at ground density).
+    /// (Q8 voxels) from the eye to its hit: the distance times the rate
+    /// at the hit's height (the mean density from the eye to there) is
+    /// the halvings along the path.
     #[inline(always)]
     fn fogged(
         &self,
         frame: &AtmosphereFrame,
         table: &FogTable,
         sample: &Sample,
-        distance_q8: u64,
+        distance_q8: u32,
     ) -> Rgb {
-        // In words: the height is below 2^20 (Q8), the mean density at
-        // most 1 (Q16), a distance past 2^32 (Q8) lies far past the fog's
-        // opaque distance.
+        // In words: the height is below 2^20 (Q8); the rate below 2^31,
+        // so the halvings (Q8, rounded) fit a word: one 32 × 32-bit
+        // product.
         let height_q8 = (sample.elevation >> (COORD_FRAC_BITS - Q8)).max(0) as u32;
-        let mean_q16 = between(&frame.mean, height_q8) as u32;
-        let distance_q8 = distance_q8.min(u64::from(u32::MAX));
-        let weight = self.transmitted(table, (distance_q8 * u64::from(mean_q16)) >> 16);
-        lerp(table.fog.color, sample.color, weight)
+        let rate = rate_at(&frame.rate, height_q8);
+        let halvings_q8 = (u64::from(distance_q8) * u64::from(rate) + (1 << 30)) >> 31;
+        let weight = left_after(halvings_q8 as u32);
+        table
+            .color_lanes
+            .lerp(Lanes::of(sample.color), weight)
+            .rgb()
     }
 
     /// The color of pixel `(x, y)` whose ray saw `sample`, as
@@ -767,17 +786,21 @@ impl PreparedAtmosphere {
         // its length is its height change.
         let vertical = slope.unsigned_abs() >= MAX_SLOPE_Q16;
         let distance_q8 = if vertical {
-            u64::from(drop(frame, sample)) >> (COORD_FRAC_BITS - Q8)
+            drop(frame, sample) >> (COORD_FRAC_BITS - Q8)
         } else {
             // The ray's length a unit of major-axis distance, Q16:
-            // `m·√(1 + u²)`, or for a steep ray `|slope|·√(1 + 1/u²)`.
-            let steepness = Steepness::of(line, slope);
-            let length = if steepness.steep {
-                (u64::from(slope.unsigned_abs()) * steepness.of_table(&STRETCH_HIGH)) >> 16
+            // `m·√(1 + u²)`, `u` the slope over `m` (Q16, below 2^30), or
+            // for a steep ray `|slope|·√(1 + 1/u²)`.
+            let u = ((u64::from(slope.unsigned_abs()) * u64::from(line.inverse_m)) >> 20) as u32;
+            let length = if u < 1 << 16 {
+                let at = ((u + (1 << 5)) >> 6) as usize;
+                let stretch = STRETCH_FINE.get(at).map_or(0, |&s| u32::from(s)) + (1 << 16);
+                (u64::from(line.m) * u64::from(stretch)) >> 16
             } else {
-                (u64::from(line.m) * steepness.of_table(&STRETCH_LOW)) >> 16
+                (u64::from(slope.unsigned_abs()) * Steepness::steep(u).of_table(&STRETCH_HIGH))
+                    >> 16
             };
-            (u64::from(sample.distance) * length) >> (16 + 16 - Q8)
+            word((u64::from(sample.distance) * length) >> (16 + 16 - Q8))
         };
         self.fogged(frame, table, sample, distance_q8)
     }
@@ -810,23 +833,47 @@ impl PreparedAtmosphere {
 
     /// What fog leaves of a color over `column_q8` voxels at ground
     /// density, in 1/256.
+    #[inline(always)]
     fn transmitted(&self, table: &FogTable, column_q8: u64) -> u32 {
-        // Both below 2^32: one 32 × 32-bit product.
+        // Both below 2^32: one 32 × 32-bit product, the halvings Q8
+        // rounded.
         let column = u64::from(column_q8.min(u64::from(u32::MAX)) as u32);
-        let halvings_q16 = (column * u64::from(table.halvings_q32)) >> (32 + Q8 - 16);
-        (self.exp2_negative(halvings_q16) + 128) >> 8
+        left_after(word(
+            (column * u64::from(table.halvings_q32) + (1 << 31)) >> 32,
+        ))
     }
+}
 
-    /// `2^−x` for `x` in Q16, Q16.
-    fn exp2_negative(&self, x_q16: u64) -> u32 {
-        let whole = x_q16 >> 16;
-        if whole >= 17 {
-            return 0;
+/// What fog leaves of a color (in 1/256) after `halvings_q8` halvings
+/// (Q8).
+#[inline(always)]
+fn left_after(halvings_q8: u32) -> u32 {
+    match TRANSMITTED.get(halvings_q8 as usize) {
+        Some(&left) => u32::from(left),
+        None => 0,
+    }
+}
+
+/// `v` within a word, held at the largest.
+#[inline(always)]
+fn word(v: u64) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
+
+/// A frame's rate table (see [`AtmosphereFrame`]) at height `h` (Q8),
+/// linear between entries, held past the last: entries below 2^31, so
+/// a step between two fits a word, and one 32 × 32-bit product.
+#[inline(always)]
+fn rate_at(table: &[u32; HEIGHT_STEPS + 1], h: u32) -> u32 {
+    let step_q8 = HEIGHT_STEP_BITS + Q8;
+    let at = (h >> step_q8) as usize;
+    match (table.get(at), table.get(at + 1)) {
+        (Some(&low), Some(&high)) => {
+            let step = high.wrapping_sub(low) as i32;
+            let fraction = (h & ((1 << step_q8) - 1)) as i32;
+            low.wrapping_add(((i64::from(step) * i64::from(fraction)) >> step_q8) as u32)
         }
-        let fraction = (x_q16 & 0xFFFF) as u32;
-        let (at, within) = ((fraction >> 8) as usize, fraction & 0xFF);
-        let (low, high) = (self.exp2[at], self.exp2[(at + 1).min(EXP2_STEPS)]);
-        (low - (((low - high) * within) >> 8)) >> whole
+        _ => table[HEIGHT_STEPS],
     }
 }
 
@@ -885,7 +932,11 @@ fn sky_between(table: &[Rgb; SKY_STEPS + 1], at: usize, fraction: u32) -> Rgb {
 #[inline(always)]
 fn fogged_sky(frame: &AtmosphereFrame, up: i64) -> Rgb {
     let (at, fraction) = sky_entry(up.clamp(0, 1 << DIR_BITS));
-    sky_between(&frame.sky, at, fraction)
+    let (low, high) = (
+        frame.sky[at.min(SKY_STEPS)],
+        frame.sky[(at + 1).min(SKY_STEPS)],
+    );
+    low.lerp(high, fraction).rgb()
 }
 
 /// How far below (or above) the eye `sample`'s hit is, Q16, within a
@@ -929,40 +980,43 @@ const STRETCH_HIGH: [u32; 257] = {
     table
 };
 
-/// Where a ray whose slope over its line's `m` is `u` lies in the tables
-/// by `u`: [`STRETCH_LOW`] below 1, else [`STRETCH_HIGH`].
+/// `√(1 + u²) − 1` (Q16) for `u = i/1024`, `i` in 0..=1024: a ray's
+/// length over its horizontal length, as [`STRETCH_LOW`], at the entry
+/// nearest its `u`, without a blend (neighbours differ by under 2^−10 of
+/// the length).
+const STRETCH_FINE: [u16; 1025] = {
+    let mut table = [0u16; 1025];
+    let mut i = 0;
+    while i < 1025 {
+        let root = ((1u64 << 52) + (((i * i) as u64) << 32)).isqrt();
+        table[i] = ((root - (1 << 26) + (1 << 9)) >> 10) as u16;
+        i += 1;
+    }
+    table
+};
+
+/// Where a `u` lies in a table by `u` ([`STRETCH_LOW`] below 1,
+/// [`STRETCH_HIGH`] from 1): the entry below it and the fraction (in
+/// 1/256) to the next.
 #[derive(Clone, Copy)]
 struct Steepness {
-    steep: bool,
     at: usize,
     fraction: i32,
 }
 
 impl Steepness {
-    /// The entry of a ray of `slope` (Q16, within `MAX_RAY_SLOPE`) in
-    /// `line`'s plane.
+    /// The entry of `u` (Q16, 1 or more) in [`STRETCH_HIGH`].
     #[inline(always)]
-    fn of(line: &LineShade, slope: i32) -> Self {
-        // Q16, below 2^30.
-        let u = ((u64::from(slope.unsigned_abs()) * u64::from(line.inverse_m)) >> 20) as u32;
-        if u < 1 << 16 {
-            return Self {
-                steep: false,
-                at: (u >> 8) as usize,
-                fraction: (u & 0xFF) as i32,
-            };
-        }
+    fn steep(u: u32) -> Self {
         let top = 31 - u.leading_zeros();
         if top >= 16 + 8 {
             // 256 or more: the last entry.
             return Self {
-                steep: true,
                 at: 256,
                 fraction: 0,
             };
         }
         Self {
-            steep: true,
             at: ((top - 16) * 32 + ((u >> (top - 5)) & 31)) as usize,
             fraction: ((u >> (top - 13)) & 0xFF) as i32,
         }
@@ -1181,7 +1235,6 @@ impl LineShade {
         // instructions a pixel on the board's steep views.
         let u = plane.dminor.unsigned_abs().min(1 << 16);
         let steepness = Steepness {
-            steep: false,
             at: (u >> 8) as usize,
             fraction: (u & 0xFF) as i32,
         };

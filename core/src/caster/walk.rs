@@ -302,7 +302,7 @@ pub(crate) fn lerp(a: Rgb, b: Rgb, t: u32) -> Rgb {
 /// A color in 16-bit lanes, red and blue side by side in one word and
 /// green in another, as [`lerp`] blends it: a chain of blends (a bilinear
 /// square, two levels' squares) stays in lanes and unpacks once.
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Lanes {
     red_blue: u32,
     green: u32,
