@@ -591,11 +591,67 @@ impl PixelGrid {
     #[inline(always)]
     fn blend(&self, table: &[[i32; GRID_CORNERS]; GRID_CORNERS], at: &Corner) -> i32 {
         let (low, high) = (&table[at.j], &table[at.j + 1]);
-        let across = |row: &[i32; GRID_CORNERS]| {
-            row[at.i] + (((row[at.i + 1] - row[at.i]) * at.x) >> self.bits)
-        };
-        let (bottom, top) = (across(low), across(high));
-        bottom + (((top - bottom) * at.y) >> self.bits)
+        let corners = [low[at.i], low[at.i + 1], high[at.i], high[at.i + 1]];
+        self.blend_corners(&corners, at.x, at.y)
+    }
+
+    /// A value at pixel `(x, y)` of a cell (from its lower left corner)
+    /// blended between the values at its `corners` (lower left, lower
+    /// right, upper left, upper right).
+    #[inline(always)]
+    fn blend_corners(&self, corners: &[i32; 4], x: i32, y: i32) -> i32 {
+        let [low_left, low_right, high_left, high_right] = *corners;
+        let bottom = low_left + (((low_right - low_left) * x) >> self.bits);
+        let top = high_left + (((high_right - high_left) * x) >> self.bits);
+        bottom + (((top - bottom) * y) >> self.bits)
+    }
+
+    /// What a sky pixel of cell `(i, j)` needs ([`SkyCell`]).
+    fn sky_cell(&self, i: i32, j: i32) -> SkyCell {
+        let (column, row) = (i as usize, j as usize);
+        let flags = self.cells.get(row).and_then(|cells| cells.get(column));
+        match flags {
+            Some(&flags) if flags & CELL_SUN == 0 => {
+                let (low, high) = (&self.sine[row], &self.sine[row + 1]);
+                SkyCell {
+                    i,
+                    j,
+                    own_direction: false,
+                    sine: [low[column], low[column + 1], high[column], high[column + 1]],
+                }
+            }
+            // Near the sun, or (no pixel of the image is) outside the grid.
+            _ => SkyCell {
+                i,
+                j,
+                own_direction: true,
+                sine: [0; 4],
+            },
+        }
+    }
+}
+
+/// What a sink keeps from one sky pixel to the next
+/// ([`PreparedAtmosphere::sky_pixel`]): the last one's cell of the frame's
+/// grid and the sines at its corners.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SkyCell {
+    i: i32,
+    j: i32,
+    /// Its pixels take their own direction: it may reach the sun's glow.
+    own_direction: bool,
+    sine: [i32; 4],
+}
+
+impl Default for SkyCell {
+    /// No cell yet.
+    fn default() -> Self {
+        Self {
+            i: -1,
+            j: -1,
+            own_direction: true,
+            sine: [0; 4],
+        }
     }
 }
 
@@ -635,7 +691,7 @@ impl PreparedAtmosphere {
                 Some(column) if i > 0 => {
                     // Once a frame: a plain division.
                     let over_sine = div_trunc(column << DIR_BITS, (i as i64) << 12);
-                    self.transmitted(table, over_sine as u64) as u16
+                    table.transmitted(over_sine as u64) as u16
                 }
                 _ => 0,
             },
@@ -690,8 +746,35 @@ impl PreparedAtmosphere {
             air: self,
             frame: self.frame(view),
             line: LineShade::default(),
+            sky: SkyCell::default(),
             sink,
         }
+    }
+
+    /// [`PreparedAtmosphere::color`] of pixel `(x, y)` of `frame` whose
+    /// ray saw sky, `cell` kept from the sky pixel before it: the sky
+    /// above a line's last hit comes pixel after pixel along the line,
+    /// mostly within one cell of the frame's grid, whose corners are read
+    /// once. The same color as [`PreparedAtmosphere::color`]'s.
+    #[inline(always)]
+    pub fn sky_pixel(&self, frame: &AtmosphereFrame, cell: &mut SkyCell, x: u32, y: u32) -> Rgb {
+        let grid = &frame.grid;
+        let (column, row) = (x as i32, frame.top_row - y as i32);
+        let (i, j) = (column >> grid.bits, row >> grid.bits);
+        if (i, j) != (cell.i, cell.j) {
+            *cell = grid.sky_cell(i, j);
+        }
+        if cell.own_direction {
+            let sky = Sample {
+                color: [0; 3],
+                distance: Sample::SKY,
+                elevation: 0,
+            };
+            return self.color(frame, x, y, &sky);
+        }
+        let mask = (1 << grid.bits) - 1;
+        let sine = grid.blend_corners(&cell.sine, column & mask, row & mask);
+        fogged_sky(frame, i64::from(sine))
     }
 
     /// The color of pixel `(x, y)` (y = 0 at the top) of `frame` whose ray
@@ -829,18 +912,6 @@ impl PreparedAtmosphere {
         let high = u32::from(weights[(at + 1).min(SKY_STEPS)]);
         let weight = low + (((high - low.min(high)) * fraction) >> 8);
         lerp(table.fog.color, color, weight)
-    }
-
-    /// What fog leaves of a color over `column_q8` voxels at ground
-    /// density, in 1/256.
-    #[inline(always)]
-    fn transmitted(&self, table: &FogTable, column_q8: u64) -> u32 {
-        // Both below 2^32: one 32 × 32-bit product, the halvings Q8
-        // rounded.
-        let column = u64::from(column_q8.min(u64::from(u32::MAX)) as u32);
-        left_after(word(
-            (column * u64::from(table.halvings_q32) + (1 << 31)) >> 32,
-        ))
     }
 }
 
@@ -1148,6 +1219,17 @@ impl SunTable {
 }
 
 impl FogTable {
+    /// What the fog leaves of a color over `column_q8` voxels at ground
+    /// density, in 1/256.
+    fn transmitted(&self, column_q8: u64) -> u32 {
+        // Both below 2^32: one 32 × 32-bit product, the halvings Q8
+        // rounded.
+        let column = u64::from(word(column_q8));
+        left_after(word(
+            (column * u64::from(self.halvings_q32) + (1 << 31)) >> 32,
+        ))
+    }
+
     /// `F` at height `h` (both Q8 voxels), linear between the table's
     /// entries; below 0 the ground layer's density goes on (`F(h) = h`).
     fn column_at(&self, h: i64) -> i64 {
@@ -1192,13 +1274,18 @@ pub struct AtmosphereSink<'a, S> {
     air: &'a PreparedAtmosphere,
     frame: AtmosphereFrame,
     line: LineShade,
+    sky: SkyCell,
     sink: S,
 }
 
 impl<S: Sink> Sink for AtmosphereSink<'_, S> {
     #[inline]
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
-        let color = self.air.color(&self.frame, x, y, &sample);
+        let color = if sample.is_sky() {
+            self.air.sky_pixel(&self.frame, &mut self.sky, x, y)
+        } else {
+            self.air.color(&self.frame, x, y, &sample)
+        };
         self.sink.put(x, y, Sample { color, ..sample });
     }
 
@@ -1294,6 +1381,49 @@ mod tests {
             )
         });
         air.exact(d, eye, hit, sample.color.map(f64::from))
+    }
+
+    #[test]
+    fn a_sky_pixel_from_its_cached_cell_is_the_pixels_own_color() {
+        // Down the columns and back up, as a line caster's sky comes, and
+        // along the rows, each sky pixel's color from the cell kept from
+        // the pixel before is `color`'s, with the sun's glow in view (its
+        // cells take their own direction) and without it.
+        let view = view();
+        let sky = Sample {
+            color: [200, 60, 20],
+            distance: Sample::SKY,
+            elevation: 0,
+        };
+        let toward_the_sun = Atmosphere {
+            sun: Atmosphere::FLIGHT.sun.map(|sun| Sun {
+                azimuth_deg: 34.0,
+                elevation_deg: 3.0,
+                ..sun
+            }),
+            ..Atmosphere::FLIGHT
+        };
+        for air in [Atmosphere::FLIGHT, toward_the_sun] {
+            let prepared = air.prepare().unwrap();
+            let frame = prepared.frame(&view);
+            let mut own = 0;
+            let columns = (0..96)
+                .flat_map(|x| (0..64).map(move |y| (x, if x % 2 == 0 { y } else { 63 - y })));
+            let rows = (0..64).flat_map(|y| (0..96).map(move |x| (x, y)));
+            for order in [columns.collect::<std::vec::Vec<_>>(), rows.collect()] {
+                let mut cell = SkyCell::default();
+                for (x, y) in order {
+                    let cached = prepared.sky_pixel(&frame, &mut cell, x, y);
+                    assert_eq!(cached, prepared.color(&frame, x, y, &sky), "({x}, {y})");
+                    own += usize::from(cell.own_direction);
+                }
+            }
+            assert_eq!(
+                own > 0,
+                air.sun.unwrap().azimuth_deg == 34.0,
+                "cells near the sun"
+            );
+        }
     }
 
     #[test]
@@ -1536,7 +1666,7 @@ mod tests {
         let mut seen = 0;
         for step in 0..(4 * 2500 * 16) {
             let column_q8 = step * 16;
-            let weight = air.transmitted(table, column_q8);
+            let weight = table.transmitted(column_q8);
             assert!(weight <= before, "rises at {step}");
             assert!(
                 before - weight <= 1,
@@ -1547,7 +1677,7 @@ mod tests {
         }
         assert_eq!(seen, 0xFF, "runs the whole range");
         // At the visibility distance 2 % is left: 5 of 256.
-        let at_visibility = air.transmitted(table, 2500 << 8);
+        let at_visibility = table.transmitted(2500 << 8);
         assert!((4..=6).contains(&at_visibility), "{at_visibility}");
     }
 

@@ -64,7 +64,7 @@ mod warp;
 
 pub use atmosphere::{
     Atmosphere, AtmosphereError, AtmosphereFrame, AtmosphereSink, Fog, LineShade,
-    PreparedAtmosphere, Sun, VISIBILITY_CONTRAST,
+    PreparedAtmosphere, SkyCell, Sun, VISIBILITY_CONTRAST,
 };
 pub use color::Rgb;
 pub use detail::{detail_points, Detail, DetailArea, DetailError, WithDetail};

@@ -24,8 +24,8 @@ use terracast::config::{MAX_EYE_HEIGHT, PITCH_RANGE_DEG};
 use terracast::{
     render_line, render_line_by_footprint, AtmosphereFrame, Camera, Coherence, CountingProbe,
     FrameCost, Governor, Grid, HeightPath, LinePlane, LinePool, LineShade, LineShare,
-    PreparedAtmosphere, Prices, Probe, RenderOptions, Resolution, Sample, Shading, Sink, Surface,
-    View, Wait, U8F8,
+    PreparedAtmosphere, Prices, Probe, RenderOptions, Resolution, Sample, Shading, Sink, SkyCell,
+    Surface, View, Wait, U8F8,
 };
 
 /// How far above the ground the eye stays, voxels.
@@ -383,6 +383,7 @@ struct PixelSink<'a>(
     &'a Pixels,
     Option<(&'a PreparedAtmosphere, AtmosphereFrame)>,
     LineShade,
+    SkyCell,
 );
 
 impl PixelSink<'_> {
@@ -403,6 +404,7 @@ impl Sink for PixelSink<'_> {
     #[inline]
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
         let color = match &self.1 {
+            Some((air, frame)) if sample.is_sky() => air.sky_pixel(frame, &mut self.3, x, y),
             Some((air, frame)) => air.color(frame, x, y, &sample),
             None => sample.color,
         };
@@ -445,6 +447,7 @@ pub fn render_pool<T: Surface + Sync + ?Sized>(
             pixels,
             atmosphere.map(|air| (air, air.frame(view))),
             LineShade::default(),
+            SkyCell::default(),
         );
         loop {
             match pool.take() {
@@ -487,6 +490,7 @@ pub fn render_governed<T: Surface + Sync + ?Sized>(
             pixels,
             atmosphere.map(|air| (air, air.frame(view))),
             LineShade::default(),
+            SkyCell::default(),
         );
         let share = LineShare::new(view, index, count)?;
         let mut probe = ShareProbe {
