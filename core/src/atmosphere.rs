@@ -633,7 +633,8 @@ impl PixelGrid {
 
 /// What a sink keeps from one sky pixel to the next
 /// ([`PreparedAtmosphere::sky_pixel`]): the last one's cell of the frame's
-/// grid and the sines at its corners.
+/// grid and the sines at its corners. It belongs to one
+/// [`AtmosphereFrame`]: start each frame from `SkyCell::default()`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SkyCell {
     i: i32,
