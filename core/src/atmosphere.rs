@@ -376,7 +376,7 @@ impl Atmosphere {
             color_lanes: Lanes::of(fog.color),
             halvings_q32: to_fixed(fog.halvings_per_voxel(), 32) as u32,
             column: core::array::from_fn(|i| {
-                to_fixed(fog.column((i << HEIGHT_STEP_BITS) as f64), Q8) as i32
+                to_fixed(fog.column((i << HEIGHT_STEP_BITS) as f64), Q8) as u32
             }),
             density: core::array::from_fn(|i| {
                 to_fixed(fog.density((i << HEIGHT_STEP_BITS) as f64), 16) as u32
@@ -437,7 +437,7 @@ struct FogTable {
     /// is at least 8 voxels).
     halvings_q32: u32,
     /// `F` (Q8 voxels) and the density (Q16) every 4 voxels of height.
-    column: [i32; HEIGHT_STEPS + 1],
+    column: [u32; HEIGHT_STEPS + 1],
     density: [u32; HEIGHT_STEPS + 1],
 }
 
@@ -632,7 +632,7 @@ impl PixelGrid {
 }
 
 /// What a sink keeps from one sky pixel to the next
-/// ([`PreparedAtmosphere::sky_pixel`]): the last one's cell of the frame's
+/// ([`PreparedAtmosphere::pixel_color`]): the last one's cell of the frame's
 /// grid and the sines at its corners. It belongs to one
 /// [`AtmosphereFrame`]: start each frame from `SkyCell::default()`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -753,12 +753,31 @@ impl PreparedAtmosphere {
     }
 
     /// [`PreparedAtmosphere::color`] of pixel `(x, y)` of `frame` whose
-    /// ray saw sky, `cell` kept from the sky pixel before it: the sky
-    /// above a line's last hit comes pixel after pixel along the line,
-    /// mostly within one cell of the frame's grid, whose corners are read
-    /// once. The same color as [`PreparedAtmosphere::color`]'s.
+    /// ray saw `sample`, for a sink that keeps `sky` from one pixel to the
+    /// next: a sky pixel from the cell kept from the sky pixel before it
+    /// ([`SkyCell`]). The same color as [`PreparedAtmosphere::color`]'s.
     #[inline(always)]
-    pub fn sky_pixel(&self, frame: &AtmosphereFrame, cell: &mut SkyCell, x: u32, y: u32) -> Rgb {
+    pub fn pixel_color(
+        &self,
+        frame: &AtmosphereFrame,
+        sky: &mut SkyCell,
+        x: u32,
+        y: u32,
+        sample: &Sample,
+    ) -> Rgb {
+        if sample.is_sky() {
+            self.sky_pixel(frame, sky, x, y)
+        } else {
+            self.color(frame, x, y, sample)
+        }
+    }
+
+    /// The sky's color at pixel `(x, y)` of `frame`, `cell` kept from the
+    /// sky pixel before it: the sky above a line's last hit comes pixel
+    /// after pixel along the line, mostly within one cell of the frame's
+    /// grid, whose corners are read once.
+    #[inline(always)]
+    fn sky_pixel(&self, frame: &AtmosphereFrame, cell: &mut SkyCell, x: u32, y: u32) -> Rgb {
         let grid = &frame.grid;
         let (column, row) = (x as i32, frame.top_row - y as i32);
         let (i, j) = (column >> grid.bits, row >> grid.bits);
@@ -839,7 +858,7 @@ impl PreparedAtmosphere {
         // so the halvings (Q8, rounded) fit a word: one 32 × 32-bit
         // product.
         let height_q8 = (sample.elevation >> (COORD_FRAC_BITS - Q8)).max(0) as u32;
-        let rate = rate_at(&frame.rate, height_q8);
+        let rate = between(&frame.rate, height_q8);
         let halvings_q8 = (u64::from(distance_q8) * u64::from(rate) + (1 << 30)) >> 31;
         let weight = left_after(halvings_q8 as u32);
         table
@@ -881,7 +900,7 @@ impl PreparedAtmosphere {
                 let stretch = STRETCH_FINE.get(at).map_or(0, |&s| u32::from(s)) + (1 << 16);
                 (u64::from(line.m) * u64::from(stretch)) >> 16
             } else {
-                (u64::from(slope.unsigned_abs()) * Steepness::steep(u).of_table(&STRETCH_HIGH))
+                (u64::from(slope.unsigned_abs()) * StretchEntry::steep(u).of_table(&STRETCH_HIGH))
                     >> 16
             };
             word((u64::from(sample.distance) * length) >> (16 + 16 - Q8))
@@ -932,11 +951,12 @@ fn word(v: u64) -> u32 {
     u32::try_from(v).unwrap_or(u32::MAX)
 }
 
-/// A frame's rate table (see [`AtmosphereFrame`]) at height `h` (Q8),
-/// linear between entries, held past the last: entries below 2^31, so
-/// a step between two fits a word, and one 32 × 32-bit product.
+/// `table` (an entry every 4 voxels of height, each below 2^31, so a
+/// step between two fits a word) at height `h` (Q8), linear between
+/// entries, held past the last: one 32 × 32-bit product. The fog's
+/// tables by height and the frame's rate table.
 #[inline(always)]
-fn rate_at(table: &[u32; HEIGHT_STEPS + 1], h: u32) -> u32 {
+fn between(table: &[u32; HEIGHT_STEPS + 1], h: u32) -> u32 {
     let step_q8 = HEIGHT_STEP_BITS + Q8;
     let at = (h >> step_q8) as usize;
     match (table.get(at), table.get(at + 1)) {
@@ -1071,12 +1091,12 @@ const STRETCH_FINE: [u16; 1025] = {
 /// [`STRETCH_HIGH`] from 1): the entry below it and the fraction (in
 /// 1/256) to the next.
 #[derive(Clone, Copy)]
-struct Steepness {
+struct StretchEntry {
     at: usize,
     fraction: i32,
 }
 
-impl Steepness {
+impl StretchEntry {
     /// The entry of `u` (Q16, 1 or more) in [`STRETCH_HIGH`].
     #[inline(always)]
     fn steep(u: u32) -> Self {
@@ -1250,24 +1270,6 @@ impl FogTable {
     }
 }
 
-/// `table` (an entry every 4 voxels of height, each in [0, 2^21): a
-/// step between two times the fraction fits a word) at height `h` (Q8),
-/// linear between entries, held past the last: in 32-bit words.
-#[inline(always)]
-fn between<T: Copy + Into<i64>>(table: &[T; HEIGHT_STEPS + 1], h: u32) -> i32 {
-    let step_q8 = HEIGHT_STEP_BITS + Q8;
-    let at = (h >> step_q8) as usize;
-    let entry = |i: usize| -> i32 {
-        let v: i64 = table[i].into();
-        v as i32
-    };
-    if at >= HEIGHT_STEPS {
-        return entry(HEIGHT_STEPS);
-    }
-    let (low, high) = (entry(at), entry(at + 1));
-    low + (((high - low) * (h & ((1 << step_q8) - 1)) as i32) >> step_q8)
-}
-
 /// A [`Sink`] that gives each pixel its atmosphere (see
 /// [`PreparedAtmosphere::color`]) and passes it on.
 #[derive(Debug)]
@@ -1282,11 +1284,9 @@ pub struct AtmosphereSink<'a, S> {
 impl<S: Sink> Sink for AtmosphereSink<'_, S> {
     #[inline]
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
-        let color = if sample.is_sky() {
-            self.air.sky_pixel(&self.frame, &mut self.sky, x, y)
-        } else {
-            self.air.color(&self.frame, x, y, &sample)
-        };
+        let color = self
+            .air
+            .pixel_color(&self.frame, &mut self.sky, x, y, &sample);
         self.sink.put(x, y, Sample { color, ..sample });
     }
 
@@ -1322,11 +1322,11 @@ impl LineShade {
         // division a line are library calls on a 32-bit core, about 19
         // instructions a pixel on the board's steep views.
         let u = plane.dminor.unsigned_abs().min(1 << 16);
-        let steepness = Steepness {
+        let entry = StretchEntry {
             at: (u >> 8) as usize,
             fraction: (u & 0xFF) as i32,
         };
-        let m = steepness.of_table(&STRETCH_LOW) as u32;
+        let m = entry.of_table(&STRETCH_LOW) as u32;
         Self {
             m,
             inverse_m: inverse_q20(m),
@@ -1414,7 +1414,7 @@ mod tests {
             for order in [columns.collect::<std::vec::Vec<_>>(), rows.collect()] {
                 let mut cell = SkyCell::default();
                 for (x, y) in order {
-                    let cached = prepared.sky_pixel(&frame, &mut cell, x, y);
+                    let cached = prepared.pixel_color(&frame, &mut cell, x, y, &sky);
                     assert_eq!(cached, prepared.color(&frame, x, y, &sky), "({x}, {y})");
                     own += usize::from(cell.own_direction);
                 }

@@ -404,8 +404,7 @@ impl Sink for PixelSink<'_> {
     #[inline]
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
         let color = match &self.1 {
-            Some((air, frame)) if sample.is_sky() => air.sky_pixel(frame, &mut self.3, x, y),
-            Some((air, frame)) => air.color(frame, x, y, &sample),
+            Some((air, frame)) => air.pixel_color(frame, &mut self.3, x, y, &sample),
             None => sample.color,
         };
         self.store(x, y, color);
