@@ -775,7 +775,9 @@ impl PreparedAtmosphere {
     /// The sky's color at pixel `(x, y)` of `frame`, `cell` kept from the
     /// sky pixel before it: the sky above a line's last hit comes pixel
     /// after pixel along the line, mostly within one cell of the frame's
-    /// grid, whose corners are read once.
+    /// grid, whose corners are read once. Near the sun (and outside the
+    /// grid) from the pixel's own direction. The one way a sky pixel is
+    /// colored: [`PreparedAtmosphere::color`] calls it with a new cell.
     #[inline(always)]
     fn sky_pixel(&self, frame: &AtmosphereFrame, cell: &mut SkyCell, x: u32, y: u32) -> Rgb {
         let grid = &frame.grid;
@@ -785,12 +787,8 @@ impl PreparedAtmosphere {
             *cell = grid.sky_cell(i, j);
         }
         if cell.own_direction {
-            let sky = Sample {
-                color: [0; 3],
-                distance: Sample::SKY,
-                elevation: 0,
-            };
-            return self.color(frame, x, y, &sky);
+            let d = direction(&frame.base, &frame.per_column, &frame.per_row, column, row);
+            return self.sky_color(frame, d, &Unit::new(d));
         }
         let mask = (1 << grid.bits) - 1;
         let sine = grid.blend_corners(&cell.sine, column & mask, row & mask);
@@ -813,11 +811,7 @@ impl PreparedAtmosphere {
         let grid = &frame.grid;
         let (cell, at) = grid.cell(column, row);
         let Some(table) = fog.filter(|_| !sample.is_sky()) else {
-            if cell & CELL_SUN != 0 {
-                let (d, unit) = pixel_direction();
-                return self.sky_color(frame, d, &unit);
-            }
-            return fogged_sky(frame, i64::from(grid.blend(&grid.sine, &at)));
+            return self.sky_pixel(frame, &mut SkyCell::default(), x, y);
         };
         // The hit's distance from the eye: its major-axis distance or its
         // height below the eye, whichever the direction conditions better,

@@ -379,21 +379,33 @@ impl Pixels {
 /// A worker's sink into [`Pixels`], with the atmosphere over each pixel
 /// where there is one, as [`terracast::AtmosphereSink`] gives it (a line
 /// caster's hits by their ray's slope in the line's plane).
-struct PixelSink<'a>(
-    &'a Pixels,
-    Option<(&'a PreparedAtmosphere, AtmosphereFrame)>,
-    LineShade,
-    SkyCell,
-);
+struct PixelSink<'a> {
+    pixels: &'a Pixels,
+    atmosphere: Option<(&'a PreparedAtmosphere, AtmosphereFrame)>,
+    /// The shade of the line being cast ([`Sink::line`]).
+    line: LineShade,
+    /// The last sky pixel's cell of the frame's grid.
+    sky: SkyCell,
+}
 
-impl PixelSink<'_> {
+impl<'a> PixelSink<'a> {
+    /// A sink into `pixels` for one frame of `view`, under `atmosphere`.
+    fn new(pixels: &'a Pixels, atmosphere: Option<&'a PreparedAtmosphere>, view: &View) -> Self {
+        Self {
+            pixels,
+            atmosphere: atmosphere.map(|air| (air, air.frame(view))),
+            line: LineShade::default(),
+            sky: SkyCell::default(),
+        }
+    }
+
     #[inline]
     fn store(&self, x: u32, y: u32, color: terracast::Rgb) {
         let [r, g, b] = color.map(u32::from);
         if let Some(word) = self
-            .0
+            .pixels
             .words
-            .get(y as usize * self.0.width as usize + x as usize)
+            .get(y as usize * self.pixels.width as usize + x as usize)
         {
             word.store(r << 16 | g << 8 | b, Ordering::Relaxed);
         }
@@ -403,8 +415,8 @@ impl PixelSink<'_> {
 impl Sink for PixelSink<'_> {
     #[inline]
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
-        let color = match &self.1 {
-            Some((air, frame)) => air.pixel_color(frame, &mut self.3, x, y, &sample),
+        let color = match &self.atmosphere {
+            Some((air, frame)) => air.pixel_color(frame, &mut self.sky, x, y, &sample),
             None => sample.color,
         };
         self.store(x, y, color);
@@ -412,13 +424,13 @@ impl Sink for PixelSink<'_> {
 
     #[inline]
     fn line(&mut self, plane: &LinePlane) {
-        self.2 = LineShade::new(plane);
+        self.line = LineShade::new(plane);
     }
 
     #[inline]
     fn put_ray(&mut self, x: u32, y: u32, sample: Sample, slope: i32) {
-        let color = match &self.1 {
-            Some((air, frame)) => air.ray_color(frame, &self.2, (x, y), &sample, slope),
+        let color = match &self.atmosphere {
+            Some((air, frame)) => air.ray_color(frame, &self.line, (x, y), &sample, slope),
             None => sample.color,
         };
         self.store(x, y, color);
@@ -442,12 +454,7 @@ pub fn render_pool<T: Surface + Sync + ?Sized>(
     pool.publish(0);
     let worker = || {
         let mut probe = CountingProbe::default();
-        let mut sink = PixelSink(
-            pixels,
-            atmosphere.map(|air| (air, air.frame(view))),
-            LineShade::default(),
-            SkyCell::default(),
-        );
+        let mut sink = PixelSink::new(pixels, atmosphere, view);
         loop {
             match pool.take() {
                 Ok(task) => render_one(
@@ -485,12 +492,7 @@ pub fn render_governed<T: Surface + Sync + ?Sized>(
     let count = governors.len() as u32;
     let worker = |(index, governor): (u32, &mut Governor)| {
         let began = Instant::now();
-        let mut sink = PixelSink(
-            pixels,
-            atmosphere.map(|air| (air, air.frame(view))),
-            LineShade::default(),
-            SkyCell::default(),
-        );
+        let mut sink = PixelSink::new(pixels, atmosphere, view);
         let share = LineShare::new(view, index, count)?;
         let mut probe = ShareProbe {
             steps: 0,
