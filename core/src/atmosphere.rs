@@ -64,6 +64,14 @@ pub const VISIBILITY_CONTRAST: f64 = 0.02;
 const GLOW_STRENGTH_Q8: u32 = 128;
 /// Sky colors by the sine of the elevation: entry `i` at sine `i/256`.
 const SKY_STEPS: usize = 256;
+/// A frame's fogged sky by the sine of the elevation, for a sky pixel to
+/// read without a blend: entry `i` at sine `i/1024`, its nearest (four
+/// entries to a step of [`SKY_STEPS`], blended between its two ends).
+const SKY_FINE_BITS: u32 = 10;
+const SKY_FINE_STEPS: usize = 1 << SKY_FINE_BITS;
+/// The sky drawn first goes to the sink in runs of up to this many pixels
+/// of a row ([`Sink::put_sky_run`]).
+const SKY_RUN: usize = 64;
 /// Fog tables by height: an entry every 4 voxels from 0 to 4096 (heights
 /// are U12.4, below 4096).
 const HEIGHT_STEP_BITS: u32 = 2;
@@ -452,11 +460,11 @@ pub struct AtmosphereFrame {
     top_row: i32,
     /// The eye's height, Q16.
     eye_q16: i64,
-    /// The sky as this eye sees it through the fog, by sine as
-    /// [`PreparedAtmosphere`]'s gradient, and what the fog leaves of the
-    /// sky there (in 1/256; for the sun's disc and glow, which go on
-    /// before the fog).
-    sky: [Lanes; SKY_STEPS + 1],
+    /// The sky as this eye sees it through the fog, by sine: entry `i`
+    /// at sine `i/1024` (see [`SKY_FINE_STEPS`]); and what the fog leaves
+    /// of the sky at each entry of [`PreparedAtmosphere`]'s gradient (in
+    /// 1/256; for the sun's disc and glow, which go on before the fog).
+    sky: [Rgb; SKY_FINE_STEPS + 1],
     sky_weights: [u16; SKY_STEPS + 1],
     /// The fog's halvings a voxel of path (Q31) at the mean density from
     /// the eye to each height of the fog's tables: a path's length times
@@ -600,10 +608,37 @@ impl PixelGrid {
     /// right, upper left, upper right).
     #[inline(always)]
     fn blend_corners(&self, corners: &[i32; 4], x: i32, y: i32) -> i32 {
+        let (left, right) = self.edges_at(corners, y);
+        left + (((right - left) * x) >> self.bits)
+    }
+
+    /// The values on a cell's left and right edges at row `y` of it
+    /// (from its bottom), blended between its `corners` (as
+    /// [`PixelGrid::blend_corners`]): along a row of the cell, a pixel's
+    /// value is the blend of these two, so a row of pixels steps it by
+    /// one add a pixel ([`PreparedAtmosphere::sink_over_sky`]).
+    #[inline(always)]
+    fn edges_at(&self, corners: &[i32; 4], y: i32) -> (i32, i32) {
         let [low_left, low_right, high_left, high_right] = *corners;
-        let bottom = low_left + (((low_right - low_left) * x) >> self.bits);
-        let top = high_left + (((high_right - high_left) * x) >> self.bits);
-        bottom + (((top - bottom) * y) >> self.bits)
+        (
+            low_left + (((high_left - low_left) * y) >> self.bits),
+            low_right + (((high_right - low_right) * y) >> self.bits),
+        )
+    }
+
+    /// Whether a third or more of the corners that cover a `width` ×
+    /// `height` image look above the horizon: where drawing the sky
+    /// first ([`PreparedAtmosphere::sink_over_sky`]) saves more on the
+    /// sky's pixels than it costs on the terrain's it is drawn under.
+    fn third_above_horizon(&self, width: u32, height: u32) -> bool {
+        let corners = |side: u32| ((side - 1) >> self.bits) as usize + 2;
+        let (columns, rows) = (corners(width), corners(height));
+        let above = self.sine[..rows]
+            .iter()
+            .flat_map(|row| &row[..columns])
+            .filter(|&&sine| sine > 0)
+            .count();
+        3 * above >= columns * rows
     }
 
     /// What a sky pixel of cell `(i, j)` needs ([`SkyCell`]).
@@ -698,8 +733,16 @@ impl PreparedAtmosphere {
             },
         });
         let fog_color = self.fog.as_ref().map_or([0; 3], |table| table.fog.color);
-        let sky = core::array::from_fn(|i| {
+        let fogged: [Lanes; SKY_STEPS + 1] = core::array::from_fn(|i| {
             Lanes::of(lerp(fog_color, self.sky[i], u32::from(sky_weights[i])))
+        });
+        let fine_per_step = SKY_FINE_STEPS / SKY_STEPS;
+        let sky = core::array::from_fn(|i| {
+            let (at, part) = (i / fine_per_step, i % fine_per_step);
+            let next = fogged[(at + 1).min(SKY_STEPS)];
+            fogged[at]
+                .lerp(next, (part * 256 / fine_per_step) as u32)
+                .rgb()
         });
         // The mean density from the eye to each height of the table:
         // `(F(b) − F(a)) / (b − a)`, the density midway within a voxel of
@@ -741,15 +784,38 @@ impl PreparedAtmosphere {
     }
 
     /// A sink that gives each pixel of `view` this atmosphere and passes
-    /// it on to `sink`.
+    /// it on to `sink`, each pixel once, as the renderer puts it.
     pub fn sink<'a, S: Sink>(&'a self, view: &View, sink: S) -> AtmosphereSink<'a, S> {
         AtmosphereSink {
             air: self,
             frame: self.frame(view),
             line: LineShade::default(),
             sky: SkyCell::default(),
+            sky_drawn: false,
             sink,
         }
+    }
+
+    /// [`PreparedAtmosphere::sink`] for a `sink` that stores its pixels (a
+    /// frame buffer), with the sky drawn into it first where a third of
+    /// the image or more looks above the horizon: the same frame, cheaper
+    /// where much of it is sky. A sky pixel's color depends on
+    /// the pixel alone, so the sky is put row by row along each cell of
+    /// the frame's grid, its sine stepped by one add a pixel; the
+    /// renderer's sky pixels are then not put again, and the line caster
+    /// does not walk the pixels above a line's last hit at all
+    /// ([`Sink::sky_is_drawn`]). So `sink` receives the terrain's pixels
+    /// twice, the sky first: only for a sink that keeps the last color
+    /// put (not one that streams its pixels out), and only for a render
+    /// that puts each pixel once ([`crate::render`]: a governor's refined
+    /// line may put sky where its base pass put terrain).
+    pub fn sink_over_sky<'a, S: Sink>(&'a self, view: &View, sink: S) -> AtmosphereSink<'a, S> {
+        let mut hazy = self.sink(view, sink);
+        let (width, height) = (view.width(), view.height());
+        if hazy.frame.grid.third_above_horizon(width, height) {
+            hazy.draw_sky(width, height);
+        }
+        hazy
     }
 
     /// [`PreparedAtmosphere::color`] of pixel `(x, y)` of `frame` whose
@@ -792,7 +858,7 @@ impl PreparedAtmosphere {
         }
         let mask = (1 << grid.bits) - 1;
         let sine = grid.blend_corners(&cell.sine, column & mask, row & mask);
-        fogged_sky(frame, i64::from(sine))
+        fogged_sky(&frame.sky, i64::from(sine))
     }
 
     /// The color of pixel `(x, y)` (y = 0 at the top) of `frame` whose ray
@@ -909,11 +975,11 @@ impl PreparedAtmosphere {
     fn sky_color(&self, frame: &AtmosphereFrame, d: [i32; 3], unit: &Unit) -> Rgb {
         let up = unit.of(d[2]);
         let Some(sun) = &self.sun else {
-            return fogged_sky(frame, up);
+            return fogged_sky(&frame.sky, up);
         };
         let e = [unit.of(d[0]), unit.of(d[1]), up];
         if !sun.near(e) {
-            return fogged_sky(frame, up);
+            return fogged_sky(&frame.sky, up);
         }
         let sine = up.clamp(0, 1 << DIR_BITS);
         let (at, fraction) = sky_entry(sine);
@@ -1014,15 +1080,12 @@ fn sky_between(table: &[Rgb; SKY_STEPS + 1], at: usize, fraction: u32) -> Rgb {
 }
 
 /// The frame's fogged sky gradient at elevation sine `up` (Q20; below
-/// the horizon, the horizon's).
+/// the horizon, the horizon's): its entry nearest `up`.
 #[inline(always)]
-fn fogged_sky(frame: &AtmosphereFrame, up: i64) -> Rgb {
-    let (at, fraction) = sky_entry(up.clamp(0, 1 << DIR_BITS));
-    let (low, high) = (
-        frame.sky[at.min(SKY_STEPS)],
-        frame.sky[(at + 1).min(SKY_STEPS)],
-    );
-    low.lerp(high, fraction).rgb()
+fn fogged_sky(sky: &[Rgb; SKY_FINE_STEPS + 1], up: i64) -> Rgb {
+    let half = 1 << (DIR_BITS - SKY_FINE_BITS - 1);
+    let at = ((up.clamp(0, 1 << DIR_BITS) + half) >> (DIR_BITS - SKY_FINE_BITS)) as usize;
+    sky[at.min(SKY_FINE_STEPS)]
 }
 
 /// How far below (or above) the eye `sample`'s hit is, Q16, within a
@@ -1272,12 +1335,72 @@ pub struct AtmosphereSink<'a, S> {
     frame: AtmosphereFrame,
     line: LineShade,
     sky: SkyCell,
+    /// Every pixel's sky is in `sink` already
+    /// ([`PreparedAtmosphere::sink_over_sky`]).
+    sky_drawn: bool,
     sink: S,
 }
 
+impl<S: Sink> AtmosphereSink<'_, S> {
+    /// Puts the sky into every pixel, a row at a time in runs of up to
+    /// [`SKY_RUN`] pixels, the sine stepped along each cell of the frame's
+    /// grid; near the sun each pixel from its own direction.
+    fn draw_sky(&mut self, width: u32, height: u32) {
+        let bits = self.frame.grid.bits;
+        let side = 1u32 << bits;
+        let mut run = [[0u8; 3]; SKY_RUN];
+        for image_y in 0..height {
+            let row = self.frame.top_row - image_y as i32;
+            let (j, y) = (row >> bits, row & ((1 << bits) - 1));
+            // The run's first pixel, and how much of it is filled.
+            let (mut run_x, mut filled) = (0, 0);
+            for i in 0..width.div_ceil(side) {
+                let column0 = i << bits;
+                let mut cell = self.frame.grid.sky_cell(i as i32, j);
+                // Along the cell's row the sine is the blend of its edges
+                // there: one add a pixel.
+                let (left, right) = self.frame.grid.edges_at(&cell.sine, y);
+                let (mut along, step) = (0, right - left);
+                let (mut done, pixels) = (0, side.min(width - column0) as usize);
+                while done < pixels {
+                    let take = (pixels - done).min(SKY_RUN - filled);
+                    let slots = &mut run[filled..filled + take];
+                    if cell.own_direction {
+                        for (column, slot) in (column0 + done as u32..).zip(slots) {
+                            *slot = self.air.sky_pixel(&self.frame, &mut cell, column, image_y);
+                        }
+                    } else {
+                        for slot in slots {
+                            *slot = fogged_sky(&self.frame.sky, i64::from(left + (along >> bits)));
+                            along += step;
+                        }
+                    }
+                    (done, filled) = (done + take, filled + take);
+                    if filled == SKY_RUN {
+                        self.sink.put_sky_run(run_x, image_y, &run);
+                        (run_x, filled) = (run_x + SKY_RUN as u32, 0);
+                    }
+                }
+            }
+            self.sink.put_sky_run(run_x, image_y, &run[..filled]);
+        }
+        self.sky_drawn = true;
+    }
+}
+
 impl<S: Sink> Sink for AtmosphereSink<'_, S> {
-    #[inline]
+    #[inline(always)]
+    fn sky_is_drawn(&self) -> bool {
+        self.sky_drawn
+    }
+
+    // Inlined: the sky above a line's last hit comes through it pixel
+    // after pixel, and a call a pixel costs more than its color.
+    #[inline(always)]
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
+        if self.sky_drawn && sample.is_sky() {
+            return;
+        }
         let color = self
             .air
             .pixel_color(&self.frame, &mut self.sky, x, y, &sample);
@@ -1501,7 +1624,7 @@ mod tests {
             ..sun
         });
         let clear = Atmosphere { fog: None, ..air };
-        let (mut suns, mut skies) = (0, 0);
+        let (mut suns, mut skies, mut drawn) = (0, 0, 0);
         let cameras = [
             Camera::looking([10.0, 10.0, 40.0], 45.0, 0.0),
             Camera::looking([10.0, 10.0, 40.0], 45.0, 12.0),
@@ -1528,6 +1651,28 @@ mod tests {
                 &mut prepared.sink(&view, &mut frame),
                 &mut NoProbe,
             );
+            // The sky drawn first gives the same frame, at this size (cells
+            // of 2 pixels) and at sizes with cells of 8 and a part cell at
+            // the image's right and top edges.
+            for (width, height) in [(80, 60), (320, 240), (331, 187)] {
+                let view = View::new(&camera, width, height).unwrap();
+                let frames = [false, true].map(|first| {
+                    let mut pixels = std::vec![[0u8; 3]; (width * height) as usize];
+                    let mut frame = Framebuffer::new(&mut pixels, width, height).unwrap();
+                    let mut sink = if first {
+                        prepared.sink_over_sky(&view, &mut frame)
+                    } else {
+                        prepared.sink(&view, &mut frame)
+                    };
+                    drawn += usize::from(sink.sky_is_drawn());
+                    render(&pyramid, &view, &options, &mut sink, &mut NoProbe);
+                    pixels
+                });
+                assert!(
+                    frames[0] == frames[1],
+                    "{camera:?} at {width} x {height}: the sky drawn first changes the frame"
+                );
+            }
             // The elevations, from a capture of the samples.
             let mut samples = std::vec![None; 80 * 60];
             struct Capture<'a>(&'a mut [Option<Sample>]);
@@ -1562,6 +1707,12 @@ mod tests {
         assert!(
             suns > 0 && skies > 80 * 60,
             "the sky and the sun's disc are in view"
+        );
+        // The cameras that look up draw the sky first; those that look
+        // down do not.
+        assert!(
+            drawn > 0 && drawn < 2 * 3 * cameras.len(),
+            "{drawn} frames drew the sky first"
         );
     }
 

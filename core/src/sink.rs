@@ -23,6 +23,16 @@ impl Sample {
     /// The distance of a ray that saw sky.
     pub const SKY: u32 = u32::MAX;
 
+    /// A ray that saw sky in `color`.
+    #[inline(always)]
+    pub const fn sky(color: Rgb) -> Self {
+        Self {
+            color,
+            distance: Self::SKY,
+            elevation: 0,
+        }
+    }
+
     /// Whether the ray saw sky.
     pub fn is_sky(&self) -> bool {
         self.distance == Self::SKY
@@ -61,6 +71,27 @@ pub trait Sink {
         let _ = slope;
         self.put(x, y, sample);
     }
+
+    /// Pixels `x` to `x + colors.len() − 1` of row `y` saw sky, in
+    /// `colors`: a run along a row, as a sink that draws the sky first
+    /// puts it ([`PreparedAtmosphere::sink_over_sky`](crate::PreparedAtmosphere::sink_over_sky)).
+    /// Each as [`Sink::put`] of a sky sample (elevation 0) unless the sink
+    /// stores a run faster.
+    #[inline]
+    fn put_sky_run(&mut self, x: u32, y: u32, colors: &[Rgb]) {
+        for (column, &color) in (x..).zip(colors) {
+            self.put(column, y, Sample::sky(color));
+        }
+    }
+
+    /// Whether this sink holds every pixel's sky already, so that a
+    /// renderer need not put the sky (it may: a sky pixel put is then
+    /// dropped). The line caster then leaves the pixels above a line's
+    /// last hit unwalked.
+    #[inline(always)]
+    fn sky_is_drawn(&self) -> bool {
+        false
+    }
 }
 
 impl<S: Sink + ?Sized> Sink for &mut S {
@@ -78,6 +109,16 @@ impl<S: Sink + ?Sized> Sink for &mut S {
     fn put_ray(&mut self, x: u32, y: u32, sample: Sample, slope: i32) {
         (**self).put_ray(x, y, sample, slope);
     }
+
+    #[inline(always)]
+    fn sky_is_drawn(&self) -> bool {
+        (**self).sky_is_drawn()
+    }
+
+    #[inline]
+    fn put_sky_run(&mut self, x: u32, y: u32, colors: &[Rgb]) {
+        (**self).put_sky_run(x, y, colors);
+    }
 }
 
 /// The vertical plane a line's rays share (see [`Sink::line`]), as far
@@ -88,6 +129,25 @@ impl<S: Sink + ?Sized> Sink for &mut S {
 pub struct LinePlane {
     /// Minor-axis change a unit of major-axis distance, Q16 (within ±1).
     pub dminor: i32,
+}
+
+/// Where a run of `pixels` pixels from `(x, y)` along a row lies in a
+/// row-major `width` × `height` buffer: its indices, cut at the row's end;
+/// `None` where `(x, y)` is outside. For a sink's
+/// [`Sink::put_sky_run`].
+#[inline]
+pub fn row_run(
+    width: u32,
+    height: u32,
+    x: u32,
+    y: u32,
+    pixels: usize,
+) -> Option<core::ops::Range<usize>> {
+    if x >= width || y >= height {
+        return None;
+    }
+    let start = y as usize * width as usize + x as usize;
+    Some(start..start + pixels.min((width - x) as usize))
 }
 
 /// A caller-provided framebuffer: a color per pixel, optionally a distance
@@ -147,6 +207,20 @@ impl<'a> Framebuffer<'a> {
 
 impl Sink for Framebuffer<'_> {
     #[inline]
+    fn put_sky_run(&mut self, x: u32, y: u32, colors: &[Rgb]) {
+        let Some(run) = row_run(self.width, self.height, x, y, colors.len()) else {
+            return;
+        };
+        let length = run.len();
+        if let Some(pixels) = self.colors.get_mut(run.clone()) {
+            pixels.copy_from_slice(&colors[..length]);
+        }
+        if let Some(distances) = self.distances.as_deref_mut().and_then(|d| d.get_mut(run)) {
+            distances.fill(Sample::SKY);
+        }
+    }
+
+    #[inline]
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
         if x >= self.width || y >= self.height {
             return;
@@ -164,6 +238,20 @@ impl Sink for Framebuffer<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_sky_run_is_cut_at_its_rows_end_and_dropped_outside() {
+        assert_eq!(row_run(4, 3, 1, 2, 2), Some(9..11));
+        assert_eq!(row_run(4, 3, 2, 1, 9), Some(6..8));
+        assert_eq!(row_run(4, 3, 4, 0, 1), None);
+        assert_eq!(row_run(4, 3, 0, 3, 1), None);
+        // A frame buffer takes the run's colors and the sky's distance.
+        let (mut colors, mut distances) = ([[0u8; 3]; 12], [0u32; 12]);
+        let mut frame = Framebuffer::with_distances(&mut colors, &mut distances, 4, 3).unwrap();
+        frame.put_sky_run(2, 1, &[[1, 2, 3], [4, 5, 6], [7, 8, 9]]);
+        assert_eq!(colors[5..9], [[0; 3], [1, 2, 3], [4, 5, 6], [0; 3]]);
+        assert_eq!(distances[5..9], [0, Sample::SKY, Sample::SKY, 0]);
+    }
 
     #[test]
     fn out_of_range_pixels_are_discarded() {

@@ -520,7 +520,7 @@ impl Renders {
             // scripts/board-profile with ATMOSPHERE=1 profiles the render
             // under the flight's atmosphere in its place.
             if option_env!("TERRACAST_BOARD_ATMOSPHERE").is_some() {
-                let mut hazy = air.sink(&view, &mut framebuffer);
+                let mut hazy = air.sink_over_sky(&view, &mut framebuffer);
                 render(surface, &view, options, &mut hazy, &mut NoProbe);
             } else {
                 render(surface, &view, options, &mut framebuffer, &mut NoProbe);
@@ -586,7 +586,7 @@ impl Renders {
                 surface,
                 &view,
                 options,
-                &mut air.sink(&view, &mut framebuffer),
+                &mut air.sink_over_sky(&view, &mut framebuffer),
                 &mut NoProbe,
             );
             let atmosphere_ticks = ticks() - start;

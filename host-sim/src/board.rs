@@ -532,7 +532,7 @@ impl SceneFile {
                         surface,
                         &view,
                         options,
-                        &mut air.sink(&view, &mut framebuffer),
+                        &mut air.sink_over_sky(&view, &mut framebuffer),
                         &mut probe,
                     ),
                     None => render(surface, &view, options, &mut framebuffer, &mut probe),

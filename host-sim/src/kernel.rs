@@ -7,7 +7,7 @@ use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
     render, render_by_footprint, Camera, Coherence, CountingProbe, FrameCost, Governor,
-    PreparedAtmosphere, Prices, Probe, RenderOptions, Sample, Sink, Surface, View, WithDetail,
+    PreparedAtmosphere, Prices, Probe, RenderOptions, Rgb, Sample, Sink, Surface, View, WithDetail,
     WithSticks,
 };
 
@@ -195,6 +195,16 @@ impl Sink for SampleBuffer {
     fn put(&mut self, x: u32, y: u32, sample: Sample) {
         if x < self.width && y < self.height {
             self.samples[y as usize * self.width as usize + x as usize] = sample;
+        }
+    }
+
+    #[inline]
+    fn put_sky_run(&mut self, x: u32, y: u32, colors: &[Rgb]) {
+        let Some(run) = terracast::row_run(self.width, self.height, x, y, colors.len()) else {
+            return;
+        };
+        for (sample, &color) in self.samples[run].iter_mut().zip(colors) {
+            *sample = Sample::sky(color);
         }
     }
 }
@@ -462,5 +472,38 @@ mod tests {
             error.contains("do not tell") && !error.contains('\n'),
             "{error}"
         );
+    }
+
+    #[test]
+    fn the_sky_drawn_first_gives_the_same_samples() {
+        // The host's sample buffer takes the sky drawn first as runs of a
+        // row (`Sink::put_sky_run`): every sample, color, distance and
+        // elevation, as the atmosphere put pixel by pixel gives it, looking
+        // up (the sky drawn first) and down (not).
+        let scene = crate::scene::procedural(256, 3).to_kernel().unwrap();
+        let pyramid = scene.pyramid_for(&RenderOptions::default()).unwrap();
+        let air = terracast::Atmosphere::FLIGHT.prepare().unwrap();
+        for pitch in [-5.0, 2.0, 30.0] {
+            let camera = Camera::looking([20.0, 30.0, 90.0], 50.0, pitch);
+            let view = View::new(&camera, 203, 117).unwrap();
+            let [pixel_by_pixel, drawn_first] = [false, true].map(|first| {
+                let mut buffer = SampleBuffer::new(203, 117);
+                let mut sink = if first {
+                    air.sink_over_sky(&view, &mut buffer)
+                } else {
+                    air.sink(&view, &mut buffer)
+                };
+                assert_eq!(sink.sky_is_drawn(), first && pitch < 10.0, "pitch {pitch}");
+                render(
+                    &pyramid,
+                    &view,
+                    &RenderOptions::default(),
+                    &mut sink,
+                    &mut terracast::NoProbe,
+                );
+                buffer.samples
+            });
+            assert!(pixel_by_pixel == drawn_first, "pitch {pitch}");
+        }
     }
 }

@@ -548,8 +548,11 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
                 }
             }
         }
-        // The sky above the line's last hit: no rays.
-        pixels.for_each_position(|x, y| sink.put(x, y, self.sky));
+        // The sky above the line's last hit: no rays (and no pixels to
+        // put where the sink has the sky already).
+        if !sink.sky_is_drawn() {
+            pixels.for_each_position(|x, y| sink.put(x, y, self.sky));
+        }
     }
 
     /// Where a walk from the eye starts for a ray whose height at sample 0
