@@ -84,7 +84,7 @@ pub use pyramid::{
     HeightFilter, Pyramid, PyramidError, MAX_LEVELS,
 };
 pub use relief::{shade_relief, Relief, ReliefError};
-pub use sink::{row_run, Framebuffer, FramebufferError, LinePlane, Sample, Sink};
+pub use sink::{row_run, Framebuffer, FramebufferError, LinePlane, Sample, Sink, SkyFirst};
 pub use sticks::{Stick, StickError, StickGrid, StickLayer, StickTable, WithSticks};
 pub use surface::{Extent, Grid, Surface};
 pub use terrain::{Terrain, TerrainError};

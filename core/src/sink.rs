@@ -131,6 +131,59 @@ pub struct LinePlane {
     pub dminor: i32,
 }
 
+/// A sink that stores its pixels (a frame buffer), with every pixel's sky
+/// put into it first ([`SkyFirst::new`]): a renderer's sky pixels are then
+/// dropped, and the line caster leaves the pixels above each line's last
+/// hit unwalked ([`Sink::sky_is_drawn`]). The same frame as the sink's
+/// own, for a render that puts each pixel once ([`crate::render`]; a
+/// governor's refined line may put sky where its base pass put terrain).
+/// [`PreparedAtmosphere::sink_over_sky`](crate::PreparedAtmosphere::sink_over_sky)
+/// does the same under the atmosphere's sky.
+#[derive(Debug)]
+pub struct SkyFirst<S> {
+    sink: S,
+}
+
+impl<S: Sink> SkyFirst<S> {
+    /// `sink`, a `width` × `height` frame, with every pixel put as sky of
+    /// color `sky` (the render's `RenderOptions::sky`), a row at a time
+    /// in runs ([`Sink::put_sky_run`]).
+    pub fn new(mut sink: S, width: u32, height: u32, sky: Rgb) -> Self {
+        const RUN: u32 = 64;
+        let run = [sky; RUN as usize];
+        for y in 0..height {
+            for x in (0..width).step_by(RUN as usize) {
+                sink.put_sky_run(x, y, &run[..(width - x).min(RUN) as usize]);
+            }
+        }
+        Self { sink }
+    }
+}
+
+impl<S: Sink> Sink for SkyFirst<S> {
+    #[inline(always)]
+    fn put(&mut self, x: u32, y: u32, sample: Sample) {
+        if !sample.is_sky() {
+            self.sink.put(x, y, sample);
+        }
+    }
+
+    #[inline]
+    fn line(&mut self, plane: &LinePlane) {
+        self.sink.line(plane);
+    }
+
+    #[inline(always)]
+    fn put_ray(&mut self, x: u32, y: u32, sample: Sample, slope: i32) {
+        self.sink.put_ray(x, y, sample, slope);
+    }
+
+    #[inline(always)]
+    fn sky_is_drawn(&self) -> bool {
+        true
+    }
+}
+
 /// Where a run of `pixels` pixels from `(x, y)` along a row lies in a
 /// row-major `width` × `height` buffer: its indices, cut at the row's end;
 /// `None` where `(x, y)` is outside. For a sink's
@@ -238,6 +291,50 @@ impl Sink for Framebuffer<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_sky_put_first_gives_the_same_frame() {
+        // Colors and distances, looking up, level, down, rolled and
+        // straight down, at a size with runs cut at the row's end.
+        use crate::{render, Camera, NoProbe, Pyramid, RenderOptions, Terrain, View};
+        const SIDE: usize = 64;
+        let heights: std::vec::Vec<u16> = (0..SIDE * SIDE)
+            .map(|i| ((20 + (i * 7919 % 13)) * 16) as u16)
+            .collect();
+        let colors: std::vec::Vec<Rgb> = (0..SIDE * SIDE).map(|i| [i as u8, 90, 30]).collect();
+        let terrain = Terrain::new(SIDE as u32, SIDE as u32, &heights, &colors).unwrap();
+        let pyramid = Pyramid::flat(terrain);
+        let options = RenderOptions::default();
+        let (width, height) = (131, 77);
+        let pixels = (width * height) as usize;
+        for camera in [
+            Camera::looking([5.0, 5.0, 40.0], 45.0, -10.0),
+            Camera::looking([5.0, 5.0, 40.0], 45.0, 0.0),
+            Camera::looking([5.0, 5.0, 40.0], 45.0, 20.0),
+            Camera {
+                roll_deg: 40.0,
+                ..Camera::looking([5.0, 60.0, 35.0], -30.0, 5.0)
+            },
+            Camera::looking([32.0, 32.0, 90.0], 0.0, 90.0),
+        ] {
+            let view = View::new(&camera, width, height).unwrap();
+            let frames = [false, true].map(|first| {
+                let (mut colors, mut distances) = (std::vec![[0; 3]; pixels], std::vec![0; pixels]);
+                let mut frame =
+                    Framebuffer::with_distances(&mut colors, &mut distances, width, height)
+                        .unwrap();
+                if first {
+                    let mut sky_first = SkyFirst::new(&mut frame, width, height, options.sky);
+                    render(&pyramid, &view, &options, &mut sky_first, &mut NoProbe);
+                } else {
+                    render(&pyramid, &view, &options, &mut frame, &mut NoProbe);
+                }
+                (colors, distances)
+            });
+            let sky = frames[0].1.iter().filter(|&&d| d == Sample::SKY).count();
+            assert!(frames[0] == frames[1], "{camera:?}: {sky} sky pixels");
+        }
+    }
 
     #[test]
     fn a_sky_run_is_cut_at_its_rows_end_and_dropped_outside() {

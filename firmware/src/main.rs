@@ -4,7 +4,8 @@
 //! At boot it builds the pyramid of the baked-in scene into static RAM, then
 //! for each of the scene's views:
 //!
-//! 1. renders it into a framebuffer, which is written to the host as
+//! 1. renders it into a framebuffer with the sky put first (`SkyFirst`),
+//!    which is written to the host as
 //!    `frame-K.rgb` (RGB888, row-major) — the frame the host kernel must
 //!    match byte for byte;
 //! 2. sends the framebuffer through the SPI display driver, whose wire
@@ -46,8 +47,8 @@ use terracast::{
     max_lines, pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines,
     render_pixel_path, render_pixel_path_lean, render_pixel_path_tabled, tabulate_pixel_ownership,
     Atmosphere, Camera, Coherence, Framebuffer, HeightFilter, HeightPath, NoProbe,
-    PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, Shading, Stick, Surface, View,
-    WithSticks, U8F8,
+    PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, Shading, SkyFirst, Stick, Surface,
+    View, WithSticks, U8F8,
 };
 use terracast_board::governed;
 use terracast_board::scene::{BoardScene, MAX_STICKS};
@@ -523,7 +524,11 @@ impl Renders {
                 let mut hazy = air.sink_over_sky(&view, &mut framebuffer);
                 render(surface, &view, options, &mut hazy, &mut NoProbe);
             } else {
-                render(surface, &view, options, &mut framebuffer, &mut NoProbe);
+                // The sky put first, a row at a time: the line caster then
+                // leaves the pixels above each line's last hit unwalked.
+                let mut sky_first =
+                    SkyFirst::new(&mut framebuffer, IMAGE_WIDTH, IMAGE_HEIGHT, options.sky);
+                render(surface, &view, options, &mut sky_first, &mut NoProbe);
             }
             let kernel_ticks = ticks() - start;
 
@@ -572,7 +577,11 @@ impl Renders {
             let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
                 .map_err(|_| "framebuffer too small")?;
             let start = ticks();
-            render(surface, &view, from_eye, &mut framebuffer, &mut NoProbe);
+            // With the sky put first as the default's is: one sink type for
+            // both, so the casters are compiled once for it.
+            let mut sky_first =
+                SkyFirst::new(&mut framebuffer, IMAGE_WIDTH, IMAGE_HEIGHT, from_eye.sky);
+            render(surface, &view, from_eye, &mut sky_first, &mut NoProbe);
             let from_eye_ticks = ticks() - start;
             name.clear();
             let _ = write!(name, "frame-{index}-from-eye.rgb\0");
@@ -639,6 +648,14 @@ fn level_bound(
         let view = View::new(&level, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
         let posed =
             View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+        /// The kernel renders as the board's default does, the sky put
+        /// first.
+        fn sky_first<'a, 'b>(
+            frame: &'a mut Framebuffer<'b>,
+            sky: Rgb,
+        ) -> SkyFirst<&'a mut Framebuffer<'b>> {
+            SkyFirst::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT, sky)
+        }
         let mut ticks_of = |how: &dyn Fn(&mut Framebuffer) -> Result<(), &'static str>| {
             let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
                 .map_err(|_| "framebuffer too small")?;
@@ -647,11 +664,23 @@ fn level_bound(
             Ok::<u64, &'static str>(ticks() - start)
         };
         let kernel = ticks_of(&|f| {
-            render(pyramid, &view, &default, f, &mut NoProbe);
+            render(
+                pyramid,
+                &view,
+                &default,
+                &mut sky_first(f, default.sky),
+                &mut NoProbe,
+            );
             Ok(())
         })?;
         let kernel_single = ticks_of(&|f| {
-            render(pyramid, &view, &single, f, &mut NoProbe);
+            render(
+                pyramid,
+                &view,
+                &single,
+                &mut sky_first(f, single.sky),
+                &mut NoProbe,
+            );
             Ok(())
         })?;
         let columns = ticks_of(&|f| {
@@ -665,11 +694,23 @@ fn level_bound(
             columns
         );
         let kernel = ticks_of(&|f| {
-            render(pyramid, &posed, &default, f, &mut NoProbe);
+            render(
+                pyramid,
+                &posed,
+                &default,
+                &mut sky_first(f, default.sky),
+                &mut NoProbe,
+            );
             Ok(())
         })?;
         let kernel_single = ticks_of(&|f| {
-            render(pyramid, &posed, &single, f, &mut NoProbe);
+            render(
+                pyramid,
+                &posed,
+                &single,
+                &mut sky_first(f, single.sky),
+                &mut NoProbe,
+            );
             Ok(())
         })?;
         let lines = ticks_of(&|f| {
