@@ -1508,11 +1508,7 @@ mod tests {
         // the pixel before is `color`'s, with the sun's glow in view (its
         // cells take their own direction) and without it.
         let view = view();
-        let sky = Sample {
-            color: [200, 60, 20],
-            distance: Sample::SKY,
-            elevation: 0,
-        };
+        let sky = Sample::sky([200, 60, 20]);
         let toward_the_sun = Atmosphere {
             sun: Atmosphere::FLIGHT.sun.map(|sun| Sun {
                 azimuth_deg: 34.0,
@@ -1563,11 +1559,7 @@ mod tests {
             for y in 0..64 {
                 for x in 0..96 {
                     let samples = [
-                        Sample {
-                            color: [200, 60, 20],
-                            distance: Sample::SKY,
-                            elevation: 0,
-                        },
+                        Sample::sky([200, 60, 20]),
                         Sample {
                             color: [200, 60, 20],
                             distance: (x * 97 + y * 13 + 1) << 14,
@@ -1858,11 +1850,7 @@ mod tests {
     #[test]
     fn uniform_fog_hides_the_sky_and_layered_fog_does_not() {
         let view = view();
-        let sky = Sample {
-            color: [0; 3],
-            distance: Sample::SKY,
-            elevation: 0,
-        };
+        let sky = Sample::sky([0; 3]);
         let fog = Atmosphere::FLIGHT.fog.unwrap();
         let uniform = Atmosphere {
             fog: Some(Fog {

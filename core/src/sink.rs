@@ -51,6 +51,12 @@ impl Sample {
 /// atmosphere's fog) takes it from there instead of working it out from
 /// the pixel's position. Sky, and other renderers' pixels, come through
 /// [`Sink::put`].
+///
+/// A sink that holds the sky before the render ([`SkyFirst`],
+/// [`PreparedAtmosphere::sink_over_sky`](crate::PreparedAtmosphere::sink_over_sky))
+/// says so ([`Sink::sky_is_drawn`]); the line caster then leaves the sky
+/// above each line's last hit out, so such a sink receives only some of
+/// its sky pixels from the renderer.
 pub trait Sink {
     /// Pixel `(x, y)` (y = 0 at the top) is finished. Out-of-range pixels are
     /// the sink's to discard; they must never panic.
@@ -74,7 +80,8 @@ pub trait Sink {
 
     /// Pixels `x` to `x + colors.len() − 1` of row `y` saw sky, in
     /// `colors`: a run along a row, as a sink that draws the sky first
-    /// puts it ([`PreparedAtmosphere::sink_over_sky`](crate::PreparedAtmosphere::sink_over_sky)).
+    /// puts it ([`SkyFirst`],
+    /// [`PreparedAtmosphere::sink_over_sky`](crate::PreparedAtmosphere::sink_over_sky)).
     /// Each as [`Sink::put`] of a sky sample (elevation 0) unless the sink
     /// stores a run faster.
     #[inline]

@@ -527,12 +527,15 @@ impl SceneFile {
                 let mut framebuffer = Framebuffer::new(&mut colors, width, height)
                     .map_err(|e| Error::new(e.to_string()))?;
                 let mut probe = CountingProbe::default();
+                // Pixel by pixel, where the firmware puts the sky first
+                // (`SkyFirst`, `sink_over_sky`): the check then holds the
+                // two ways to one frame.
                 match air {
                     Some(air) => render(
                         surface,
                         &view,
                         options,
-                        &mut air.sink_over_sky(&view, &mut framebuffer),
+                        &mut air.sink(&view, &mut framebuffer),
                         &mut probe,
                     ),
                     None => render(surface, &view, options, &mut framebuffer, &mut probe),

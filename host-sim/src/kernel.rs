@@ -177,11 +177,7 @@ pub struct SampleBuffer {
 impl SampleBuffer {
     /// A buffer of sky samples.
     pub fn new(width: u32, height: u32) -> Self {
-        let sky = Sample {
-            color: [0; 3],
-            distance: Sample::SKY,
-            elevation: 0,
-        };
+        let sky = Sample::sky([0; 3]);
         Self {
             width,
             height,

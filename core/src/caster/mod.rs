@@ -178,11 +178,7 @@ pub fn render_line<T: Surface + ?Sized, S: Sink, P: Probe>(
 }
 
 fn sky(options: &RenderOptions) -> Sample {
-    Sample {
-        color: options.sky,
-        distance: Sample::SKY,
-        elevation: 0,
-    }
+    Sample::sky(options.sky)
 }
 
 /// Where between a sample above the surface (clearance `above` > 0) and the
