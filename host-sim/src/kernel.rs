@@ -475,31 +475,30 @@ mod tests {
         // The host's sample buffer takes the sky drawn first as runs of a
         // row (`Sink::put_sky_run`): every sample, color, distance and
         // elevation, as the atmosphere put pixel by pixel gives it, looking
-        // up (the sky drawn first) and down (not).
+        // up and down, and down past the map's edge (where rows below the
+        // horizon, drawn as its one color, show sky).
         let scene = crate::scene::procedural(256, 3).to_kernel().unwrap();
         let pyramid = scene.pyramid_for(&RenderOptions::default()).unwrap();
         let air = terracast::Atmosphere::FLIGHT.prepare().unwrap();
-        for pitch in [-5.0, 2.0, 30.0] {
-            let camera = Camera::looking([20.0, 30.0, 90.0], 50.0, pitch);
+        for (yaw, pitch) in [(50.0, -5.0), (50.0, 2.0), (50.0, 30.0), (230.0, 25.0)] {
+            let camera = Camera::looking([20.0, 30.0, 200.0], yaw, pitch);
             let view = View::new(&camera, 203, 117).unwrap();
-            let [pixel_by_pixel, drawn_first] = [false, true].map(|first| {
-                let mut buffer = SampleBuffer::new(203, 117);
-                let mut sink = if first {
-                    air.sink_over_sky(&view, &mut buffer)
-                } else {
-                    air.sink(&view, &mut buffer)
-                };
-                assert_eq!(sink.sky_is_drawn(), first && pitch < 10.0, "pitch {pitch}");
+            let options = RenderOptions::default();
+            let samples = |mut sink: &mut dyn Sink| {
                 render(
                     &pyramid,
                     &view,
-                    &RenderOptions::default(),
+                    &options,
                     &mut sink,
                     &mut terracast::NoProbe,
                 );
-                buffer.samples
-            });
-            assert!(pixel_by_pixel == drawn_first, "pitch {pitch}");
+            };
+            let mut pixel_by_pixel = SampleBuffer::new(203, 117);
+            samples(&mut air.sink(&view, &mut pixel_by_pixel));
+            let mut drawn_first = SampleBuffer::new(203, 117);
+            samples(&mut air.sink_over_sky(&view, &mut drawn_first));
+            let (pixel_by_pixel, drawn_first) = (pixel_by_pixel.samples, drawn_first.samples);
+            assert!(pixel_by_pixel == drawn_first, "yaw {yaw}, pitch {pitch}");
         }
     }
 }
