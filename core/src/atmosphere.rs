@@ -799,10 +799,10 @@ impl PreparedAtmosphere {
     /// then not put again, and the line caster does not walk the pixels
     /// above a line's last hit at all ([`Sink::sky_is_drawn`]). So `sink`
     /// receives the terrain's pixels twice, the sky first: only for a
-    /// sink that keeps the last color
-    /// put (not one that streams its pixels out), and only for a render
-    /// that puts each pixel once ([`crate::render`]: a governor's refined
-    /// line may put sky where its base pass put terrain).
+    /// sink that keeps the last color put (not one that streams its
+    /// pixels out), and only for a render that puts each pixel once
+    /// ([`crate::render`]: a governor's refined line may put sky where its
+    /// base pass put terrain).
     pub fn sink_over_sky<'a, S: Sink>(
         &'a self,
         view: &View,
