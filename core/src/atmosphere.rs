@@ -53,7 +53,7 @@ use crate::color::Rgb;
 use crate::config::MAX_RAY_SLOPE;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS};
 use crate::divide::div_trunc;
-use crate::sink::{LinePlane, Sample, Sink};
+use crate::sink::{put_sky_row, LinePlane, Sample, Sink, SKY_RUN};
 use crate::view::View;
 use core::fmt;
 
@@ -69,9 +69,6 @@ const SKY_STEPS: usize = 256;
 /// entries to a step of [`SKY_STEPS`], blended between its two ends).
 const SKY_FINE_BITS: u32 = 10;
 const SKY_FINE_STEPS: usize = 1 << SKY_FINE_BITS;
-/// The sky drawn first goes to the sink in runs of up to this many pixels
-/// of a row ([`Sink::put_sky_run`]).
-const SKY_RUN: usize = 64;
 /// Fog tables by height: an entry every 4 voxels from 0 to 4096 (heights
 /// are U12.4, below 4096).
 const HEIGHT_STEP_BITS: u32 = 2;
@@ -665,12 +662,12 @@ pub struct SkyCell {
 }
 
 impl SkyCell {
-    /// Whether every pixel of the cell looks at or below the horizon:
-    /// their sines, blended between the corners', are then at most 0 (a
-    /// blend's rounding stays within its ends), and their sky is the
-    /// horizon's color.
+    /// Whether every pixel of the cell looks at or below the horizon, away
+    /// from the sun: their sines, blended between the corners', are then
+    /// at most 0 (a blend's rounding stays within its ends), and their sky
+    /// is the horizon's color.
     fn below_horizon(&self) -> bool {
-        self.sine.iter().all(|&sine| sine <= 0)
+        !self.own_direction && self.sine.iter().all(|&sine| sine <= 0)
     }
 }
 
@@ -781,6 +778,15 @@ impl PreparedAtmosphere {
     /// A sink that gives each pixel of `view` this atmosphere and passes
     /// it on to `sink`, each pixel once, as the renderer puts it.
     pub fn sink<'a, S: Sink>(&'a self, view: &View, sink: S) -> AtmosphereSink<'a, S> {
+        self.sink_of(view, sink)
+    }
+
+    /// An [`AtmosphereSink`] of `view` into `sink`, nothing put yet.
+    fn sink_of<'a, S: Sink, const SKY_DRAWN: bool>(
+        &'a self,
+        view: &View,
+        sink: S,
+    ) -> AtmosphereSink<'a, S, SKY_DRAWN> {
         AtmosphereSink {
             air: self,
             frame: self.frame(view),
@@ -808,13 +814,7 @@ impl PreparedAtmosphere {
         view: &View,
         sink: S,
     ) -> AtmosphereSink<'a, S, true> {
-        let mut hazy = AtmosphereSink {
-            air: self,
-            frame: self.frame(view),
-            line: LineShade::default(),
-            sky: SkyCell::default(),
-            sink,
-        };
+        let mut hazy = self.sink_of(view, sink);
         hazy.draw_sky(view.width(), view.height());
         hazy
     }
@@ -1360,18 +1360,13 @@ impl<S: Sink, const SKY_DRAWN: bool> AtmosphereSink<'_, S, SKY_DRAWN> {
             let row = self.frame.top_row - image_y as i32;
             let (j, y) = (row >> bits, row & ((1 << bits) - 1));
             if row_of_cells.0 != j {
-                let below = (0..cells).all(|i| {
-                    let cell = self.frame.grid.sky_cell(i as i32, j);
-                    !cell.own_direction && cell.below_horizon()
-                });
+                let below =
+                    (0..cells).all(|i| self.frame.grid.sky_cell(i as i32, j).below_horizon());
                 row_of_cells = (j, below);
             }
             if row_of_cells.1 {
                 // A row that is the horizon's color: runs of it.
-                for x in (0..width).step_by(SKY_RUN) {
-                    let pixels = (width - x).min(SKY_RUN as u32) as usize;
-                    self.sink.put_sky_run(x, image_y, &horizon[..pixels]);
-                }
+                put_sky_row(&mut self.sink, width, image_y, &horizon);
                 continue;
             }
             // The run's first pixel, and how much of it is filled.
@@ -1387,13 +1382,12 @@ impl<S: Sink, const SKY_DRAWN: bool> AtmosphereSink<'_, S, SKY_DRAWN> {
                 while done < pixels {
                     let take = (pixels - done).min(SKY_RUN - filled);
                     let slots = &mut run[filled..filled + take];
-                    if cell.own_direction {
+                    if cell.below_horizon() {
+                        slots.fill(self.frame.sky[0]);
+                    } else if cell.own_direction {
                         for (column, slot) in (column0 + done as u32..).zip(slots) {
                             *slot = self.air.sky_pixel(&self.frame, &mut cell, column, image_y);
                         }
-                    } else if cell.below_horizon() {
-                        // Every pixel's sine at or below 0: the horizon's.
-                        slots.fill(self.frame.sky[0]);
                     } else {
                         for slot in slots {
                             *slot = fogged_sky(&self.frame.sky, i64::from(left + (along >> bits)));
@@ -1675,15 +1669,19 @@ mod tests {
                 let frames = [false, true].map(|first| {
                     let mut pixels = std::vec![[0u8; 3]; (width * height) as usize];
                     let mut frame = Framebuffer::new(&mut pixels, width, height).unwrap();
-                    if first {
-                        let mut sink = prepared.sink_over_sky(&view, &mut frame);
-                        assert!(sink.sky_is_drawn());
-                        render(&pyramid, &view, &options, &mut sink, &mut NoProbe);
+                    let mut plain;
+                    let mut over_sky;
+                    let mut sink: &mut dyn Sink = if first {
+                        over_sky = prepared.sink_over_sky(&view, &mut frame);
+                        &mut over_sky
                     } else {
-                        let mut sink = prepared.sink(&view, &mut frame);
-                        assert!(!sink.sky_is_drawn());
-                        render(&pyramid, &view, &options, &mut sink, &mut NoProbe);
-                    }
+                        plain = prepared.sink(&view, &mut frame);
+                        &mut plain
+                    };
+                    // Only the sink that drew the sky says so: a streaming
+                    // sink's frame must get every sky pixel from the render.
+                    assert_eq!(sink.sky_is_drawn(), first);
+                    render(&pyramid, &view, &options, &mut sink, &mut NoProbe);
                     pixels
                 });
                 assert!(

@@ -156,12 +156,9 @@ impl<S: Sink> SkyFirst<S> {
     /// color `sky` (the render's `RenderOptions::sky`), a row at a time
     /// in runs ([`Sink::put_sky_run`]).
     pub fn new(mut sink: S, width: u32, height: u32, sky: Rgb) -> Self {
-        const RUN: u32 = 64;
-        let run = [sky; RUN as usize];
+        let run = [sky; SKY_RUN];
         for y in 0..height {
-            for x in (0..width).step_by(RUN as usize) {
-                sink.put_sky_run(x, y, &run[..(width - x).min(RUN) as usize]);
-            }
+            put_sky_row(&mut sink, width, y, &run);
         }
         Self { sink }
     }
@@ -188,6 +185,23 @@ impl<S: Sink> Sink for SkyFirst<S> {
     #[inline(always)]
     fn sky_is_drawn(&self) -> bool {
         true
+    }
+}
+
+/// The most pixels of a row a sink that draws the sky first puts at once
+/// ([`Sink::put_sky_run`]).
+pub(crate) const SKY_RUN: usize = 64;
+
+/// Puts row `y` of a `width`-pixel frame as sky, every pixel of it
+/// colored as `run`'s, in runs of [`SKY_RUN`].
+pub(crate) fn put_sky_row<S: Sink + ?Sized>(
+    sink: &mut S,
+    width: u32,
+    y: u32,
+    run: &[Rgb; SKY_RUN],
+) {
+    for x in (0..width).step_by(SKY_RUN) {
+        sink.put_sky_run(x, y, &run[..(width - x).min(SKY_RUN as u32) as usize]);
     }
 }
 
