@@ -261,7 +261,7 @@ impl PreparedAtmosphere {
     /// at the hit's height (the mean density from the eye to there) is
     /// the halvings along the path.
     #[inline(always)]
-    pub(super) fn fogged(
+    fn fogged(
         &self,
         frame: &AtmosphereFrame,
         table: &FogTable,
@@ -353,7 +353,7 @@ impl SunTable {
     /// Whether unit direction `e` (Q20) is within the glow's reach: one
     /// dot product, so that most of the sky skips the rest. The glow is
     /// at most 90° wide, so that is in the sun's half of the sky too.
-    pub(super) fn near(&self, e: [i64; 3]) -> bool {
+    fn near(&self, e: [i64; 3]) -> bool {
         self.cosine(e) > self.glow_cosine.max(0)
     }
 
@@ -366,7 +366,7 @@ impl SunTable {
 
     /// The sky `color` along unit direction `e` (Q20, [`SunTable::near`]
     /// the sun) with the sun's disc and glow over it.
-    pub(super) fn over(&self, color: Rgb, e: [i64; 3]) -> Rgb {
+    fn over(&self, color: Rgb, e: [i64; 3]) -> Rgb {
         let s = self.direction;
         let cross = [
             (e[1] * s[2] - e[2] * s[1]) >> DIR_BITS,
