@@ -484,7 +484,7 @@ mod tests {
             let camera = Camera::looking([20.0, 30.0, 200.0], yaw, pitch);
             let view = View::new(&camera, 203, 117).unwrap();
             let options = RenderOptions::default();
-            let samples = |mut sink: &mut dyn Sink| {
+            let render_into = |mut sink: &mut dyn Sink| {
                 render(
                     &pyramid,
                     &view,
@@ -494,9 +494,9 @@ mod tests {
                 );
             };
             let mut pixel_by_pixel = SampleBuffer::new(203, 117);
-            samples(&mut air.sink(&view, &mut pixel_by_pixel));
+            render_into(&mut air.sink(&view, &mut pixel_by_pixel));
             let mut drawn_first = SampleBuffer::new(203, 117);
-            samples(&mut air.sink_over_sky(&view, &mut drawn_first));
+            render_into(&mut air.sink_over_sky(&view, &mut drawn_first));
             let (pixel_by_pixel, drawn_first) = (pixel_by_pixel.samples, drawn_first.samples);
             assert!(pixel_by_pixel == drawn_first, "yaw {yaw}, pitch {pitch}");
         }
