@@ -70,11 +70,11 @@ pub use color::Rgb;
 pub use detail::{detail_points, Detail, DetailArea, DetailError, WithDetail};
 
 pub use caster::{
-    render, render_by_footprint, render_level_columns, render_line, render_line_by_footprint,
-    render_pixel_lines, render_pixel_path, render_pixel_path_lean, render_pixel_path_tabled,
-    tabulate_pixel_ownership, Coherence, ColumnsError, FrameCost, FrameWork, Governor, HeightPath,
-    LineShare, Prices, RenderOptions, Resolution, Shading, VerticalSamples, MAX_SEE_THROUGH,
-    SEE_THROUGH_REACH,
+    render, render_by_footprint, render_level_columns, render_level_columns_lean, render_line,
+    render_line_by_footprint, render_pixel_lines, render_pixel_path, render_pixel_path_lean,
+    render_pixel_path_tabled, tabulate_pixel_ownership, Coherence, ColumnsError, FrameCost,
+    FrameWork, Governor, HeightPath, LineShare, Prices, RenderOptions, Resolution, Shading,
+    VerticalSamples, MAX_SEE_THROUGH, SEE_THROUGH_REACH,
 };
 pub use fixed::types::U8F8;
 pub use pool::{LinePool, Task, Wait};

@@ -44,11 +44,11 @@ use embedded_hal::delay::DelayNs;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use panic_semihosting as _;
 use terracast::{
-    max_lines, pyramid_cells, pyramid_points, render, render_level_columns, render_pixel_lines,
-    render_pixel_path, render_pixel_path_lean, render_pixel_path_tabled, tabulate_pixel_ownership,
-    Atmosphere, Camera, Coherence, Framebuffer, HeightFilter, HeightPath, NoProbe,
-    PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb, Shading, SkyFirst, Stick, Surface,
-    View, WithSticks, U8F8,
+    max_lines, pyramid_cells, pyramid_points, render, render_level_columns,
+    render_level_columns_lean, render_pixel_lines, render_pixel_path, render_pixel_path_lean,
+    render_pixel_path_tabled, tabulate_pixel_ownership, Atmosphere, Camera, Coherence, Framebuffer,
+    HeightFilter, HeightPath, NoProbe, PreparedAtmosphere, Pyramid, RenderOptions, Resolution, Rgb,
+    Shading, SkyFirst, Stick, Surface, View, WithSticks, U8F8,
 };
 use terracast_board::governed;
 use terracast_board::scene::{BoardScene, MAX_STICKS};
@@ -362,8 +362,30 @@ fn run() -> Result<(), &'static str> {
         pyramid_ticks
     );
     // scripts/board-profile BOUND=path (or lean): the per-pixel path
-    // alone (or at its leanest), each view once, and nothing else.
+    // alone (or at its leanest), each view once, and nothing else;
+    // BOUND=columns: the column caster written lean, each view turned
+    // level.
     let bound = option_env!("TERRACAST_BOARD_BOUND");
+    if bound == Some("columns") {
+        let single = RenderOptions {
+            resolution: Resolution::Single,
+            ..RenderOptions::default()
+        };
+        for camera in scene.header.views() {
+            let level = Camera {
+                pitch_deg: 0.0,
+                roll_deg: 0.0,
+                ..*camera
+            };
+            let view =
+                View::new(&level, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+            render_level_columns_lean(pyramid.base(), &view, &single, frame)
+                .map_err(|_| "not a level view")?;
+            // The frame is read after: its colors are worked out.
+            core::hint::black_box(&mut *frame);
+        }
+        return Ok(());
+    }
     if bound == Some("path") || bound == Some("lean") {
         for camera in scene.header.views() {
             let view =
@@ -620,7 +642,8 @@ impl Renders {
 /// Each view turned level (pitch 0, no roll), rendered by the kernel's
 /// default, by the kernel at single resolution, and by the per-line design
 /// at its smallest (`render_level_columns`: level 0, one set-up a column,
-/// subvoxel shading); then each view as it is, by the kernel's default, at
+/// subvoxel shading) and that caster written lean in words
+/// (`render_level_columns_lean`); then each view as it is, by the kernel's default, at
 /// single resolution, by the same design under pitch and roll
 /// (`render_pixel_lines`), and by its per-pixel path alone
 /// (`render_pixel_path`: no step), stepped line by line and from a table
@@ -648,6 +671,11 @@ fn level_bound(
         let view = View::new(&level, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
         let posed =
             View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+        // The column caster written lean, straight into the frame.
+        let start = ticks();
+        render_level_columns_lean(pyramid.base(), &view, &single, frame)
+            .map_err(|_| "not a level view")?;
+        let columns_lean = ticks() - start;
         /// The kernel renders as the board's default does, the sky put
         /// first.
         fn sky_first<'a, 'b>(
@@ -687,11 +715,12 @@ fn level_bound(
             render_level_columns(pyramid.base(), &view, &single, f).map_err(|_| "not a level view")
         })?;
         hprintln!(
-            "level view {} kernel {} single {} columns {}",
+            "level view {} kernel {} single {} columns {} lean {}",
             index,
             kernel,
             kernel_single,
-            columns
+            columns,
+            columns_lean
         );
         let kernel = ticks_of(&|f| {
             render(

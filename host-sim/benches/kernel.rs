@@ -60,9 +60,9 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use std::path::{Path, PathBuf};
 use terracast::{
-    render, render_level_columns, Atmosphere, Camera, Coherence, CountingProbe, Governor,
-    HeightPath, NoProbe, PreparedAtmosphere, RenderOptions, Resolution, Sample, Sink, SkyFirst,
-    View,
+    render, render_level_columns, render_level_columns_lean, Atmosphere, Camera, Coherence,
+    CountingProbe, Governor, HeightPath, NoProbe, PreparedAtmosphere, RenderOptions, Resolution,
+    Sample, Sink, SkyFirst, View,
 };
 use terracast_board::governed;
 use terracast_sim::baselines::{voxel_space, VoxelSpaceOptions};
@@ -333,6 +333,9 @@ fn main() {
                     terracast::Framebuffer::new(&mut rgb, SIZE.0, SIZE.1).expect("frame");
                 render_level_columns(&terrain, &level_view, &single, &mut frame)
             })
+        });
+        group.bench_function(BenchmarkId::from_parameter("columns-lean"), |b| {
+            b.iter(|| render_level_columns_lean(&terrain, &level_view, &single, &mut rgb))
         });
         group.bench_function(BenchmarkId::from_parameter("voxelspace"), |b| {
             b.iter(|| voxel_space(&scene, &level, SIZE.0, SIZE.1, &voxel_options))
@@ -942,6 +945,8 @@ fn per_line_bound_table(
     let mut columns = SampleBuffer::new(SIZE.0, SIZE.1);
     let terrain = kernel.terrain().expect("terrain");
     render_level_columns(&terrain, &view, &single, &mut columns).expect("a level view");
+    let mut lean = vec![[0u8; 3]; pixels as usize];
+    render_level_columns_lean(&terrain, &view, &single, &mut lean).expect("a level view");
     let voxel = voxel_space(
         scene,
         level,
@@ -967,6 +972,7 @@ fn per_line_bound_table(
         ("columns", colors(&columns)),
         // The same image into an RGB framebuffer: what the sink costs.
         ("columns-rgb", colors(&columns)),
+        ("columns-lean", lean),
         ("voxelspace", voxel),
     ];
     let mean_ns =

@@ -6,8 +6,8 @@
 //! bit for bit (`Coherence::Exact` is the full set-up).
 
 use terracast::{
-    render_level_columns, render_pixel_lines, Camera, Coherence, ColumnsError, RenderOptions,
-    Resolution, Rgb, Terrain, View,
+    render_level_columns, render_level_columns_lean, render_pixel_lines, Camera, Coherence,
+    ColumnsError, RenderOptions, Resolution, Rgb, Terrain, View,
 };
 use terracast_sim::kernel::{render_kernel_with, PixelRays, SampleBuffer};
 use terracast_sim::metrics::psnr;
@@ -123,6 +123,77 @@ fn level_views_match_the_kernel_at_single_resolution() {
             "{camera:?}"
         );
     }
+}
+
+#[test]
+fn the_lean_column_caster_draws_the_column_casters_frame() {
+    // The level views above, and views whose rays start high above the
+    // terrain (from above it and from outside the map), where the lean
+    // caster skips the samples a ray cannot hit at; odd and even sizes.
+    let scene = procedural(256, 3);
+    let kernel_scene = scene.to_kernel().unwrap();
+    let terrain = kernel_scene.terrain().unwrap();
+    let top = scene.max_height();
+    let cameras = [
+        Camera::looking([128.0, 5.0, top * 0.7], 90.0, 0.0),
+        Camera::looking([5.0, 128.0, top + 20.0], 0.0, 0.0),
+        Camera::looking([250.0, 128.0, top * 0.6], 180.0, 0.0),
+        Camera::looking([128.0, 250.0, top + 5.0], 270.0, 0.0),
+        Camera::looking([-40.0, -40.0, top * 0.8], 45.0, 0.0),
+        Camera::looking([200.0, 30.0, top * 0.5], 135.0, 0.0),
+        Camera::looking([-100.0, 128.0, top + 10.0], 0.0, 0.0),
+    ];
+    for camera in cameras {
+        for (width, height) in [SIZE, (97, 61)] {
+            let view = View::new(&camera, width, height).unwrap();
+            let mut columns = SampleBuffer::new(width, height);
+            render_level_columns(&terrain, &view, &single(), &mut columns).unwrap();
+            let mut lean = vec![[1, 2, 3]; (width * height) as usize];
+            render_level_columns_lean(&terrain, &view, &single(), &mut lean).unwrap();
+            let expected = colors(&columns);
+            assert!(
+                expected.iter().any(|&c| c != single().sky) && expected.contains(&single().sky),
+                "{camera:?}: the frame shows terrain and sky"
+            );
+            assert!(lean == expected, "{camera:?} at {width} x {height}");
+        }
+    }
+    // A wall as high as the map's highest point across a flat map, seen
+    // from just above its top: the rays that graze it skip to just before
+    // it, and one sample too far would pass it.
+    let (side, wall) = (64usize, 40u16 << 4);
+    let heights: Vec<u16> = (0..side * side)
+        .map(|i| {
+            if (30..33).contains(&(i / side)) {
+                wall
+            } else {
+                0
+            }
+        })
+        .collect();
+    let checker: Vec<Rgb> = (0..side * side)
+        .map(|i| [(i * 37 % 256) as u8, (i * 11 % 256) as u8, 90])
+        .collect();
+    let walled = Terrain::new(side as u32, side as u32, &heights, &checker).unwrap();
+    for eye_z in [40.2, 41.5, 47.0] {
+        let camera = Camera::looking([32.0, 2.0, eye_z], 90.0, 0.0);
+        let view = View::new(&camera, 64, 48).unwrap();
+        let mut columns = SampleBuffer::new(64, 48);
+        render_level_columns(&walled, &view, &single(), &mut columns).unwrap();
+        let mut lean = vec![[1, 2, 3]; 64 * 48];
+        render_level_columns_lean(&walled, &view, &single(), &mut lean).unwrap();
+        assert!(lean == colors(&columns), "the wall from {eye_z}");
+    }
+    let view = View::new(&cameras[0], 16, 12).unwrap();
+    assert_eq!(
+        render_level_columns_lean(&terrain, &view, &single(), &mut [[0; 3]; 191]),
+        Err(ColumnsError::FrameTooSmall)
+    );
+    let pitched = View::new(&Camera::looking([32.0, 2.0, 80.0], 90.0, 10.0), 16, 12).unwrap();
+    assert_eq!(
+        render_level_columns_lean(&terrain, &pitched, &single(), &mut [[0; 3]; 192]),
+        Err(ColumnsError::NotLevel)
+    );
 }
 
 #[test]

@@ -34,8 +34,8 @@ pub(crate) mod walk;
 pub use budget::{FrameCost, FrameWork, Governor, LineShare, Prices};
 pub use options::{Coherence, HeightPath, RenderOptions, Resolution, Shading, VerticalSamples};
 pub use per_line::{
-    render_level_columns, render_pixel_lines, render_pixel_path, render_pixel_path_lean,
-    render_pixel_path_tabled, tabulate_pixel_ownership, ColumnsError,
+    render_level_columns, render_level_columns_lean, render_pixel_lines, render_pixel_path,
+    render_pixel_path_lean, render_pixel_path_tabled, tabulate_pixel_ownership, ColumnsError,
 };
 
 use crate::probe::Probe;

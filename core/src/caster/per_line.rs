@@ -24,6 +24,13 @@
 //! costs what the algorithm costs. Under pitch a ray's slope is a ratio,
 //! one division a ray: the line caster's.
 //!
+//! [`render_level_columns_lean`] is the column caster written lean: a
+//! column's walk in single words (a ray's height from where it resumes
+//! one long product, then an add a step), a ray above the highest terrain
+//! skipping the samples it cannot hit at, its colors written straight
+//! into the frame. The same frame, and what a level pixel of this design
+//! costs on a 32-bit core.
+//!
 //! [`render_pixel_lines`] is the same design under any pitch and roll:
 //! the kernel's image lines (through the vertical's vanishing point), a
 //! ray's slope one division (`slope_quotient`, from its pixel center's
@@ -71,11 +78,16 @@ pub enum ColumnsError {
     /// The view is pitched or rolled: its image columns are not the
     /// images of vertical planes.
     NotLevel,
+    /// The frame holds fewer pixels than the view has.
+    FrameTooSmall,
 }
 
 impl fmt::Display for ColumnsError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("the column caster renders level views (pitch 0, roll 0) only")
+        f.write_str(match self {
+            Self::NotLevel => "the column caster renders level views (pitch 0, roll 0) only",
+            Self::FrameTooSmall => "the frame holds fewer pixels than the view",
+        })
     }
 }
 
@@ -98,6 +110,37 @@ pub fn render_level_columns<S: Sink>(
     let columns = FrameCaster::new(terrain, view, options);
     for column in 0..view.width() {
         columns.column(column, sink);
+    }
+    Ok(())
+}
+
+/// Renders a level `view` of `terrain` as [`render_level_columns`] does,
+/// in words throughout, its colors written straight into `frame`
+/// (row-major, y = 0 at the top; at least a pixel each): the column
+/// caster written lean. A ray's height is a word from where it resumes
+/// (one long product a ray, then an add a step), a step's heights and
+/// its compare are words, and its hit is shaded with no depth or
+/// elevation made. A ray above the terrain's highest point skips the
+/// samples it cannot hit at (one division). Its frame is
+/// [`render_level_columns`]'s bit for bit (tested). A measurement, not
+/// the kernel: never inlined, so that its count does not hang on its
+/// caller's code.
+#[inline(never)]
+pub fn render_level_columns_lean(
+    terrain: &Terrain<'_>,
+    view: &View,
+    options: &RenderOptions,
+    frame: &mut [Rgb],
+) -> Result<(), ColumnsError> {
+    if view.per_row[0].to_bits() != 0 || view.per_row[1].to_bits() != 0 {
+        return Err(ColumnsError::NotLevel);
+    }
+    let frame = frame
+        .get_mut(..view.width() as usize * view.height() as usize)
+        .ok_or(ColumnsError::FrameTooSmall)?;
+    let columns = FrameCaster::new(terrain, view, options);
+    for column in 0..view.width() {
+        columns.lean_column(column, frame);
     }
     Ok(())
 }
@@ -376,6 +419,18 @@ struct At {
     before: i64,
 }
 
+/// A column's walk as [`FrameCaster::lean_column`] keeps it, in words:
+/// the current sample, its grid line's start, its minor coordinate (Q16)
+/// and its blended height (Q16), and the height of the sample before
+/// (none where the walk started or skipped to this sample).
+struct LeanColumnAt {
+    k: i32,
+    index: isize,
+    minor: i32,
+    height: i32,
+    before: Option<i32>,
+}
+
 /// The line's first sample as the lean path shades every ray there
 /// ([`FrameCaster::lean_color`]), in words: where its two grid lines'
 /// colors are, how far it is, the heights either side of the crossing.
@@ -543,6 +598,156 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
                 return;
             };
             put(sink, row, self.hit(&at, z, dz, 0, &walk, &plane));
+        }
+    }
+
+    /// Renders `column` of a level view as [`FrameCaster::column`] does,
+    /// in words, into `frame` (see [`render_level_columns_lean`]).
+    #[inline(always)]
+    fn lean_column(&self, column: u32, frame: &mut [Rgb]) {
+        let view = self.view;
+        let (height_px, c) = (view.height(), i64::from(column));
+        let width = view.width() as usize;
+        let d = [0, 1, 2].map(|a| view.base[a].to_bits() + c * view.per_column[a].to_bits());
+        let plane = Plane::new(view, &self.extent, &d);
+        let run = if plane.key.x_major { d[0] } else { d[1] }.abs();
+        let walk = Walk::new(&plane, self.width);
+        // The column's pixels, bottom row first: `rows` of them from
+        // `pixel` up, a row `width` before the one under it.
+        let (mut pixel, mut rows) = (
+            (height_px as usize).saturating_sub(1) * width + column as usize,
+            height_px,
+        );
+        let sky = self.sky.color;
+        let mut put = |pixel: usize, color: Rgb| {
+            if let Some(slot) = frame.get_mut(pixel) {
+                *slot = color;
+            }
+        };
+        if walk.first > walk.last || run == 0 {
+            for row in 0..height_px as usize {
+                put(pixel.wrapping_sub(row * width), sky);
+            }
+            return;
+        }
+        // The slopes as `column` steps them (Q32), so that every ray's
+        // slope and height are its.
+        let max_slope = i64::from(MAX_RAY_SLOPE) << COORD_FRAC_BITS;
+        let mut slope = div_trunc(d[2] << 24, run) << 8;
+        let per_row = div_trunc(view.per_row[2].to_bits() << 32, run);
+        let eye_z = view.eye[2].to_bits();
+        // At most 2^28 (4096 voxels in Q16): a ray at or under it,
+        // stepping by a slope of at most 2^29, keeps its height in a word.
+        let top = self.top as i32;
+        let (dminor, step, across) = (plane.dminor as i32, walk.step, walk.across);
+        let last = walk.last as i32;
+        let start = self.start(&plane, &walk);
+        let mut at = LeanColumnAt {
+            k: start.k as i32,
+            index: start.index,
+            minor: start.minor as i32,
+            height: start.height as i32,
+            before: None,
+        };
+        while rows > 0 {
+            let dz_wide = (slope >> 16).clamp(-max_slope, max_slope);
+            slope += per_row;
+            let dz = dz_wide as i32;
+            let mut z_wide =
+                eye_z + ((plane.delta0 * dz_wide) >> COORD_FRAC_BITS) + i64::from(at.k) * dz_wide;
+            if z_wide > i64::from(top) {
+                if dz >= 0 {
+                    // It rises above the highest terrain: so do all the
+                    // rays above it.
+                    break;
+                }
+                // It cannot hit while above the highest terrain: on to the
+                // last sample where it still is (the walk from there reads
+                // what a walk over these samples would have).
+                let skip = ((z_wide - i64::from(top) - 1) / -dz_wide).min(i64::from(last - at.k));
+                if skip > 0 {
+                    let skip = skip as i32;
+                    at.k += skip;
+                    at.index += skip as isize * step;
+                    at.minor += skip * dminor;
+                    at.height = self.lean_height(at.index, across, at.minor);
+                    at.before = None;
+                    z_wide += i64::from(skip) * dz_wide;
+                }
+            }
+            // At or under the highest terrain, or under the surface here
+            // (wrapping as the wide sum's low word, which is all the
+            // shading reads).
+            let mut z = z_wide as i32;
+            if z_wide > i64::from(at.height) {
+                loop {
+                    if at.k == last || (dz >= 0 && z > top) {
+                        break;
+                    }
+                    at.before = Some(at.height);
+                    at.k += 1;
+                    at.index += step;
+                    at.minor += dminor;
+                    at.height = self.lean_height(at.index, across, at.minor);
+                    z += dz;
+                    if z <= at.height {
+                        break;
+                    }
+                }
+                if z > at.height {
+                    break;
+                }
+            }
+            let on_hit = self.lean_color_at(at.index, across, at.minor);
+            put(
+                pixel,
+                match at.before {
+                    None => on_hit,
+                    Some(before) => {
+                        let above = z.wrapping_sub(dz).wrapping_sub(before);
+                        let below = z.wrapping_sub(at.height);
+                        let behind = self.lean_color_at(at.index - step, across, at.minor - dminor);
+                        lerp(behind, on_hit, crossing_fraction(above, below))
+                    }
+                },
+            );
+            pixel = pixel.wrapping_sub(width);
+            rows -= 1;
+        }
+        // The sky above the column's last hit.
+        for row in 0..rows as usize {
+            put(pixel.wrapping_sub(row * width), sky);
+        }
+    }
+
+    /// [`FrameCaster::height`] in a word.
+    #[inline(always)]
+    fn lean_height(&self, index: isize, across: isize, minor: i32) -> i32 {
+        let i =
+            index.wrapping_add(across.wrapping_mul((minor >> COORD_FRAC_BITS) as isize)) as usize;
+        let (h0, h1) = match (
+            self.heights.get(i),
+            self.heights.get(i.wrapping_add(across as usize)),
+        ) {
+            (Some(&h0), Some(&h1)) => (i32::from(h0), i32::from(h1)),
+            _ => (0, 0),
+        };
+        let weight = (minor & 0xFFFF) >> HEIGHT_FRAC_BITS;
+        (h0 << HEIGHT_TO_Q16) + (h1 - h0) * weight
+    }
+
+    /// [`FrameCaster::color`] with the minor coordinate in a word.
+    #[inline(always)]
+    fn lean_color_at(&self, index: isize, across: isize, minor: i32) -> Rgb {
+        let i =
+            index.wrapping_add(across.wrapping_mul((minor >> COORD_FRAC_BITS) as isize)) as usize;
+        let weight = (minor >> (COORD_FRAC_BITS - WEIGHT_BITS)) as u32 & 0xFF;
+        match (
+            self.colors.get(i),
+            self.colors.get(i.wrapping_add(across as usize)),
+        ) {
+            (Some(&a), Some(&b)) => lerp(a, b, weight),
+            _ => self.sky.color,
         }
     }
 
