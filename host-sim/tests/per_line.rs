@@ -97,26 +97,27 @@ fn compare_each(
         .collect()
 }
 
+/// Level views of `scene`: along each axis both ways, diagonals, from
+/// outside the map, near the ground and above its highest point.
+fn level_cameras(scene: &Scene) -> Vec<Camera> {
+    let top = scene.max_height();
+    vec![
+        Camera::looking([128.0, 5.0, top * 0.7], 90.0, 0.0),
+        Camera::looking([5.0, 128.0, top + 20.0], 0.0, 0.0),
+        Camera::looking([250.0, 128.0, top * 0.6], 180.0, 0.0),
+        Camera::looking([128.0, 250.0, top + 5.0], 270.0, 0.0),
+        Camera::looking([-40.0, -40.0, top * 0.8], 45.0, 0.0),
+        Camera::looking([200.0, 30.0, top * 0.5], 135.0, 0.0),
+    ]
+}
+
 #[test]
 fn level_views_match_the_kernel_at_single_resolution() {
-    // Along each axis both ways, diagonals, from outside the map, near the
-    // ground and high above it.
-    let cameras = |scene: &Scene| {
-        let top = scene.max_height();
-        vec![
-            Camera::looking([128.0, 5.0, top * 0.7], 90.0, 0.0),
-            Camera::looking([5.0, 128.0, top + 20.0], 0.0, 0.0),
-            Camera::looking([250.0, 128.0, top * 0.6], 180.0, 0.0),
-            Camera::looking([128.0, 250.0, top + 5.0], 270.0, 0.0),
-            Camera::looking([-40.0, -40.0, top * 0.8], 45.0, 0.0),
-            Camera::looking([200.0, 30.0, top * 0.5], 135.0, 0.0),
-        ]
-    };
     let columns =
         |terrain: &Terrain<'_>, view: &View, options: &RenderOptions, image: &mut SampleBuffer| {
             render_level_columns(terrain, view, options, image).unwrap()
         };
-    for (camera, compared) in compare_each(cameras, columns) {
+    for (camera, compared) in compare_each(level_cameras, columns) {
         assert!(compared.against_kernel_db > 38.0, "{camera:?}");
         assert!(
             compared.against_reference_db >= compared.kernel_against_reference_db - 0.3,
@@ -127,23 +128,19 @@ fn level_views_match_the_kernel_at_single_resolution() {
 
 #[test]
 fn the_lean_column_caster_draws_the_column_casters_frame() {
-    // The level views above, and views whose rays start high above the
-    // terrain (from above it and from outside the map), where the lean
-    // caster skips the samples a ray cannot hit at; odd and even sizes.
+    // The level views, and one more from outside the map above its
+    // highest point: rays that start above it, which the lean caster
+    // skips along; odd and even sizes.
     let scene = procedural(256, 3);
     let kernel_scene = scene.to_kernel().unwrap();
     let terrain = kernel_scene.terrain().unwrap();
-    let top = scene.max_height();
-    let cameras = [
-        Camera::looking([128.0, 5.0, top * 0.7], 90.0, 0.0),
-        Camera::looking([5.0, 128.0, top + 20.0], 0.0, 0.0),
-        Camera::looking([250.0, 128.0, top * 0.6], 180.0, 0.0),
-        Camera::looking([128.0, 250.0, top + 5.0], 270.0, 0.0),
-        Camera::looking([-40.0, -40.0, top * 0.8], 45.0, 0.0),
-        Camera::looking([200.0, 30.0, top * 0.5], 135.0, 0.0),
-        Camera::looking([-100.0, 128.0, top + 10.0], 0.0, 0.0),
-    ];
-    for camera in cameras {
+    let mut cameras = level_cameras(&scene);
+    cameras.push(Camera::looking(
+        [-100.0, 128.0, scene.max_height() + 10.0],
+        0.0,
+        0.0,
+    ));
+    for &camera in &cameras {
         for (width, height) in [SIZE, (97, 61)] {
             let view = View::new(&camera, width, height).unwrap();
             let mut columns = SampleBuffer::new(width, height);
