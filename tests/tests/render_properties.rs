@@ -19,7 +19,9 @@
 //! terrains (800 by default) for a longer or shorter run. Each terrain is
 //! rendered from [`CAMERAS_A_CASE`] cameras with every setting on the
 //! pyramid and on level 0 alone, with rays by footprint and with the
-//! governor: the default run renders about 1.34 million views (it prints
+//! governor, and turned level by the two column casters (the per-line
+//! design's bound renderers; the lean one's frame is the other's, bit for
+//! bit): the default run renders about 1.43 million views (it prints
 //! the count and the time).
 
 use proptest::prelude::*;
@@ -28,9 +30,10 @@ use terracast::config::{
     HFOV_RANGE_DEG, MAX_EYE_COORD, MAX_EYE_HEIGHT, PITCH_RANGE_DEG, ROLL_RANGE_DEG,
 };
 use terracast::{
-    level_count, pyramid_cells, pyramid_points, render, render_by_footprint, Camera, Coherence,
-    CountingProbe, Governor, HeightFilter, HeightPath, NoProbe, Pyramid, RenderOptions, Resolution,
-    Rgb, Sample, Shading, Sink, Terrain, VerticalSamples, View, ViewError, U8F8,
+    level_count, pyramid_cells, pyramid_points, render, render_by_footprint, render_level_columns,
+    render_level_columns_lean, Camera, Coherence, CountingProbe, Framebuffer, Governor,
+    HeightFilter, HeightPath, NoProbe, Pyramid, RenderOptions, Resolution, Rgb, Sample, Shading,
+    Sink, Terrain, VerticalSamples, View, ViewError, U8F8,
 };
 
 /// Terrains a default run draws: about a million views, a minute or two
@@ -360,6 +363,37 @@ fn check_terrain(
             ));
         }
         *rendered += 2;
+        // The column casters, on the camera turned level: every pixel
+        // once, and the lean one's frame the plain one's.
+        let level = Camera {
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            ..camera
+        };
+        if let Ok(view) = View::new(&level, w, h) {
+            let single = RenderOptions {
+                resolution: Resolution::Single,
+                ..RenderOptions::default()
+            };
+            let mut sink = Checked::new(w, h, (highest, camera.eye[2]), true);
+            render_level_columns(&terrain, &view, &single, &mut sink)
+                .map_err(|e| context("columns", e.to_string()))?;
+            sink.verdict().map_err(|why| context("columns", why))?;
+            let mut colors = vec![[0u8; 3]; (w * h) as usize];
+            let mut frame = Framebuffer::new(&mut colors, w, h).map_err(|e| e.to_string())?;
+            render_level_columns(&terrain, &view, &single, &mut frame)
+                .map_err(|e| context("columns", e.to_string()))?;
+            let mut lean = vec![[1u8, 2, 3]; (w * h) as usize];
+            render_level_columns_lean(&terrain, &view, &single, &mut lean)
+                .map_err(|e| context("lean columns", e.to_string()))?;
+            if lean != colors {
+                return Err(context(
+                    "lean columns",
+                    "a frame unlike the columns'".into(),
+                ));
+            }
+            *rendered += 3;
+        }
     }
     Ok(())
 }

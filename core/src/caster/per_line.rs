@@ -69,6 +69,7 @@ use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BIT
 use crate::divide::div_trunc;
 use crate::view::lines::{Line, LinePixels, Owned, RayWords, TableError};
 use crate::view::plane::{slope_quotient, Plane};
+use crate::view::words::saturate;
 use crate::{Sample, Sink, Terrain, View};
 use core::fmt;
 
@@ -951,7 +952,7 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
             return Sample {
                 color: on_hit_line,
                 distance: distance.clamp(0, i64::from(Sample::SKY - 1)) as u32,
-                elevation: z as i32,
+                elevation: saturate(z),
             };
         }
         let above = (z - dz - at.before) as i32;
@@ -967,7 +968,9 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         Sample {
             color: lerp(before, on_hit_line, t),
             distance: (distance - (back << 8)).clamp(0, i64::from(Sample::SKY - 1)) as u32,
-            elevation: (z - ((back * dz) >> 8)) as i32,
+            // Saturated: an eye far under the surface starts its rays
+            // below a word's reach.
+            elevation: saturate(z - ((back * dz) >> 8)),
         }
     }
 }
