@@ -640,11 +640,11 @@ impl Renders {
 }
 
 /// Each view turned level (pitch 0, no roll), rendered by the kernel's
-/// default, by the kernel at single resolution, and by the per-line design
-/// at its smallest (`render_level_columns`: level 0, one set-up a column,
-/// subvoxel shading) and that caster written lean in words
-/// (`render_level_columns_lean`); then each view as it is, by the kernel's default, at
-/// single resolution, by the same design under pitch and roll
+/// default, by the kernel at single resolution, by the per-line design at
+/// its smallest (`render_level_columns`: level 0, one set-up a column,
+/// subvoxel shading) and by that caster written lean in words
+/// (`render_level_columns_lean`); then each view as it is, by the kernel's
+/// default, at single resolution, by the same design under pitch and roll
 /// (`render_pixel_lines`), and by its per-pixel path alone
 /// (`render_pixel_path`: no step), stepped line by line and from a table
 /// of the frame's pixel ownership (`render_pixel_path_tabled`, into
