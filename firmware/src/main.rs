@@ -372,13 +372,8 @@ fn run() -> Result<(), &'static str> {
             ..RenderOptions::default()
         };
         for camera in scene.header.views() {
-            let level = Camera {
-                pitch_deg: 0.0,
-                roll_deg: 0.0,
-                ..*camera
-            };
-            let view =
-                View::new(&level, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+            let view = View::new(&camera.turned_level(), IMAGE_WIDTH, IMAGE_HEIGHT)
+                .map_err(|_| "a view is refused")?;
             render_level_columns_lean(pyramid.base(), &view, &single, frame)
                 .map_err(|_| "not a level view")?;
             // The frame is read after: its colors are worked out.
@@ -663,12 +658,8 @@ fn level_bound(
         ..default
     };
     for (index, camera) in cameras.iter().enumerate() {
-        let level = Camera {
-            pitch_deg: 0.0,
-            roll_deg: 0.0,
-            ..*camera
-        };
-        let view = View::new(&level, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
+        let view = View::new(&camera.turned_level(), IMAGE_WIDTH, IMAGE_HEIGHT)
+            .map_err(|_| "a view is refused")?;
         let posed =
             View::new(camera, IMAGE_WIDTH, IMAGE_HEIGHT).map_err(|_| "a view is refused")?;
         // The column caster written lean, straight into the frame.

@@ -365,12 +365,7 @@ fn check_terrain(
         *rendered += 2;
         // The column casters, on the camera turned level: every pixel
         // once, and the lean one's frame the plain one's.
-        let level = Camera {
-            pitch_deg: 0.0,
-            roll_deg: 0.0,
-            ..camera
-        };
-        if let Ok(view) = View::new(&level, w, h) {
+        if let Ok(view) = View::new(&camera.turned_level(), w, h) {
             let single = RenderOptions {
                 resolution: Resolution::Single,
                 ..RenderOptions::default()

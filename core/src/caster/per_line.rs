@@ -619,105 +619,106 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
             (height_px as usize).saturating_sub(1) * width + column as usize,
             height_px,
         );
-        let sky = self.sky.color;
         let mut put = |pixel: usize, color: Rgb| {
             if let Some(slot) = frame.get_mut(pixel) {
                 *slot = color;
             }
         };
-        if walk.first > walk.last || run == 0 {
-            for row in 0..height_px as usize {
-                put(pixel.wrapping_sub(row * width), sky);
-            }
-            return;
-        }
-        // The slopes as `column` steps them (Q32), so that every ray's
-        // slope and height are its.
-        let max_slope = i64::from(MAX_RAY_SLOPE) << COORD_FRAC_BITS;
-        let mut slope = div_trunc(d[2] << 24, run) << 8;
-        let per_row = div_trunc(view.per_row[2].to_bits() << 32, run);
-        let eye_z = view.eye[2].to_bits();
-        // At most 2^28 (4096 voxels in Q16): a ray at or under it,
-        // stepping by a slope of at most 2^29, keeps its height in a word.
-        let top = self.top as i32;
-        let (dminor, step, across) = (plane.dminor as i32, walk.step, walk.across);
-        let last = walk.last as i32;
-        let start = self.start(&plane, &walk);
-        let mut at = LeanColumnAt {
-            k: start.k as i32,
-            index: start.index,
-            minor: start.minor as i32,
-            height: start.height as i32,
-            before: None,
-        };
-        while rows > 0 {
-            let dz_wide = (slope >> 16).clamp(-max_slope, max_slope);
-            slope += per_row;
-            let dz = dz_wide as i32;
-            let mut z_wide =
-                eye_z + ((plane.delta0 * dz_wide) >> COORD_FRAC_BITS) + i64::from(at.k) * dz_wide;
-            if z_wide > i64::from(top) {
-                if dz >= 0 {
-                    // It rises above the highest terrain: so do all the
-                    // rays above it.
-                    break;
-                }
-                // It cannot hit while above the highest terrain: on to the
-                // last sample where it still is (the walk from there reads
-                // what a walk over these samples would have).
-                let skip = ((z_wide - i64::from(top) - 1) / -dz_wide).min(i64::from(last - at.k));
-                if skip > 0 {
-                    let skip = skip as i32;
-                    at.k += skip;
-                    at.index += skip as isize * step;
-                    at.minor += skip * dminor;
-                    at.height = self.lean_height(at.index, across, at.minor);
-                    at.before = None;
-                    z_wide += i64::from(skip) * dz_wide;
-                }
-            }
-            // At or under the highest terrain, or under the surface here
-            // (wrapping as the wide sum's low word, which is all the
-            // shading reads).
-            let mut z = z_wide as i32;
-            if z_wide > i64::from(at.height) {
-                loop {
-                    if at.k == last || (dz >= 0 && z > top) {
+        if walk.first <= walk.last && run != 0 {
+            // The slopes as `column` steps them (Q32), so that every ray's
+            // slope and height are its.
+            let max_slope = i64::from(MAX_RAY_SLOPE) << COORD_FRAC_BITS;
+            let mut slope = div_trunc(d[2] << 24, run) << 8;
+            let per_row = div_trunc(view.per_row[2].to_bits() << 32, run);
+            let eye_z = view.eye[2].to_bits();
+            // At most 2^28 (4096 voxels in Q16): a ray at or under it,
+            // stepping by a slope of at most 2^29, keeps its height in a word.
+            let top = self.top as i32;
+            let (dminor, step, across) = (plane.dminor as i32, walk.step, walk.across);
+            let last = walk.last as i32;
+            let start = self.start(&plane, &walk);
+            let mut at = LeanColumnAt {
+                k: start.k as i32,
+                index: start.index,
+                minor: start.minor as i32,
+                height: start.height as i32,
+                before: None,
+            };
+            while rows > 0 {
+                let dz_wide = (slope >> 16).clamp(-max_slope, max_slope);
+                slope += per_row;
+                let dz = dz_wide as i32;
+                let mut z_wide = eye_z
+                    + ((plane.delta0 * dz_wide) >> COORD_FRAC_BITS)
+                    + i64::from(at.k) * dz_wide;
+                if z_wide > i64::from(top) {
+                    if dz >= 0 {
+                        // It rises above the highest terrain: so do all the
+                        // rays above it.
                         break;
                     }
-                    at.before = Some(at.height);
-                    at.k += 1;
-                    at.index += step;
-                    at.minor += dminor;
-                    at.height = self.lean_height(at.index, across, at.minor);
-                    z += dz;
-                    if z <= at.height {
+                    // It cannot hit while above the highest terrain: on to the
+                    // last sample where it still is (the walk from there reads
+                    // what a walk over these samples would have).
+                    let skip =
+                        ((z_wide - i64::from(top) - 1) / -dz_wide).min(i64::from(last - at.k));
+                    if skip > 0 {
+                        let skip = skip as i32;
+                        at.k += skip;
+                        at.index += skip as isize * step;
+                        at.minor += skip * dminor;
+                        at.height = self.lean_height(at.index, across, at.minor);
+                        at.before = None;
+                        z_wide += i64::from(skip) * dz_wide;
+                    }
+                }
+                // At or under the highest terrain, or under the surface here.
+                // The first compare is the wide sum's (a ray out of a word's
+                // reach below is under the surface, whatever its low word);
+                // the climb and the shading take the low word, as the wide
+                // sums' low words are all they read.
+                let mut z = z_wide as i32;
+                if z_wide > i64::from(at.height) {
+                    let hit = loop {
+                        if at.k == last || (dz >= 0 && z > top) {
+                            break false;
+                        }
+                        at.before = Some(at.height);
+                        at.k += 1;
+                        at.index += step;
+                        at.minor += dminor;
+                        at.height = self.lean_height(at.index, across, at.minor);
+                        z += dz;
+                        if z <= at.height {
+                            break true;
+                        }
+                    };
+                    if !hit {
                         break;
                     }
                 }
-                if z > at.height {
-                    break;
-                }
+                let on_hit = self.lean_color_at(at.index, across, at.minor);
+                put(
+                    pixel,
+                    match at.before {
+                        None => on_hit,
+                        Some(before) => {
+                            let above = z.wrapping_sub(dz).wrapping_sub(before);
+                            let below = z.wrapping_sub(at.height);
+                            let behind =
+                                self.lean_color_at(at.index - step, across, at.minor - dminor);
+                            lerp(behind, on_hit, crossing_fraction(above, below))
+                        }
+                    },
+                );
+                pixel = pixel.wrapping_sub(width);
+                rows -= 1;
             }
-            let on_hit = self.lean_color_at(at.index, across, at.minor);
-            put(
-                pixel,
-                match at.before {
-                    None => on_hit,
-                    Some(before) => {
-                        let above = z.wrapping_sub(dz).wrapping_sub(before);
-                        let below = z.wrapping_sub(at.height);
-                        let behind = self.lean_color_at(at.index - step, across, at.minor - dminor);
-                        lerp(behind, on_hit, crossing_fraction(above, below))
-                    }
-                },
-            );
-            pixel = pixel.wrapping_sub(width);
-            rows -= 1;
         }
-        // The sky above the column's last hit.
+        // The sky above the column's last hit (the whole column where it
+        // never enters the map).
         for row in 0..rows as usize {
-            put(pixel.wrapping_sub(row * width), sky);
+            put(pixel.wrapping_sub(row * width), self.sky.color);
         }
     }
 
@@ -737,7 +738,8 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         (h0 << HEIGHT_TO_Q16) + (h1 - h0) * weight
     }
 
-    /// [`FrameCaster::color`] with the minor coordinate in a word.
+    /// [`FrameCaster::color`] with the minor coordinate in a word, and off
+    /// the map (wrapping indices included) the sky's color.
     #[inline(always)]
     fn lean_color_at(&self, index: isize, across: isize, minor: i32) -> Rgb {
         let i =
@@ -885,17 +887,9 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         } else {
             at.minor_max
         };
-        // Wrapping: the sample before the first may lie off the map (an
-        // index below 0, as a huge one), which `get` then refuses.
-        let i = index.wrapping_add(at.across.wrapping_mul((minor >> COORD_FRAC_BITS) as usize));
-        let weight = (minor >> (COORD_FRAC_BITS - WEIGHT_BITS)) as u32 & 0xFF;
-        match (
-            self.colors.get(i),
-            self.colors.get(i.wrapping_add(at.across)),
-        ) {
-            (Some(&a), Some(&b)) => lerp(a, b, weight),
-            _ => self.sky.color,
-        }
+        // The sample before the first may lie off the map (an index below
+        // 0, as a huge one), which the lookup's `get` then refuses.
+        self.lean_color_at(index as isize, at.across as isize, minor)
     }
 
     /// The walk's first sample inside the map, with nothing known before it.

@@ -74,6 +74,22 @@ impl Camera {
             hfov_deg: crate::config::DEFAULT_HFOV_DEG,
         }
     }
+
+    /// The same camera turned level: pitch 0 and no roll, where the image
+    /// columns are the images of vertical planes.
+    ///
+    /// ```
+    /// use terracast::Camera;
+    /// let camera = Camera { roll_deg: 30.0, ..Camera::looking([5.0, 6.0, 70.0], 45.0, 20.0) };
+    /// assert_eq!(camera.turned_level(), Camera::looking([5.0, 6.0, 70.0], 45.0, 0.0));
+    /// ```
+    pub const fn turned_level(self) -> Self {
+        Self {
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            ..self
+        }
+    }
 }
 
 impl Default for Camera {

@@ -621,11 +621,7 @@ fn board_map(args: &BoardSceneArgs) -> Result<(Scene, String)> {
 fn level_board_views(views: Vec<Camera>) -> Vec<Camera> {
     let mut level: Vec<Camera> = Vec::with_capacity(views.len());
     for camera in views {
-        let camera = Camera {
-            pitch_deg: 0.0,
-            roll_deg: 0.0,
-            ..camera
-        };
+        let camera = camera.turned_level();
         if !level.contains(&camera) {
             level.push(camera);
         }
