@@ -6,7 +6,7 @@ use crate::frame::{Frame, LevelStats, RenderStats};
 use crate::scene::KernelScene;
 use std::time::Instant;
 use terracast::{
-    render, render_by_footprint, Camera, Coherence, CountingProbe, FrameCost, Governor,
+    render, render_by_footprint, Camera, Coherence, CountingProbe, FrameCost, Governor, NoProbe,
     PreparedAtmosphere, Prices, Probe, RenderOptions, Rgb, Sample, Sink, Surface, View, WithDetail,
     WithSticks,
 };
@@ -266,6 +266,48 @@ pub fn render_kernel_in(
     Ok((frame, stats))
 }
 
+/// The time (ns) of one render of `scene` as a user's render runs: with
+/// no probe, into the host's sample buffer (which the depth comes from),
+/// the surface set up outside the time as [`render_kernel_in`] sets it up.
+/// [`render_kernel_in`] counts the kernel's work with a probe, which costs
+/// the host time a user's render does not spend: a speed compared with
+/// another method's takes this time instead.
+pub fn time_kernel(
+    scene: &KernelScene,
+    camera: &Camera,
+    (width, height): (u32, u32),
+    options: &RenderOptions,
+    rays: PixelRays,
+) -> Result<u64> {
+    let view =
+        View::new(camera, width, height).map_err(|e| Error::new(format!("bad view: {e}")))?;
+    let pyramid = scene.pyramid_for(options)?;
+    let details = scene.details()?;
+    let mut buffer = SampleBuffer::new(width, height);
+    let mut timed = |surface: &dyn Fn(&mut SampleBuffer)| {
+        let started = Instant::now();
+        surface(&mut buffer);
+        started.elapsed().as_nanos() as u64
+    };
+    Ok(match scene.sticks()? {
+        Some(sticks) => {
+            let surface = WithSticks::new(&pyramid, sticks);
+            timed(&|buffer| {
+                rays.render(&surface, &view, options, buffer, &mut NoProbe);
+            })
+        }
+        None if !details.is_empty() => {
+            let surface = WithDetail::new(&pyramid, &details);
+            timed(&|buffer| {
+                rays.render(&surface, &view, options, buffer, &mut NoProbe);
+            })
+        }
+        None => timed(&|buffer| {
+            rays.render(&pyramid, &view, options, buffer, &mut NoProbe);
+        }),
+    })
+}
+
 /// Renders `surface` with the kernel (the camera in the surface's
 /// coordinates). The stats' resident bytes are left 0 for the caller.
 pub fn render_surface<T: Surface + ?Sized>(
@@ -468,6 +510,31 @@ mod tests {
             error.contains("do not tell") && !error.contains('\n'),
             "{error}"
         );
+    }
+
+    #[test]
+    fn a_kernel_render_is_timed_without_its_probe() {
+        // The time of the render `render_kernel_with` counts, on each
+        // surface the scene may lend (plain, with objects); a view the
+        // kernel cannot take is a one-line error, as the render's is.
+        let camera = Camera::looking([20.0, 30.0, 120.0], 50.0, 10.0);
+        let options = RenderOptions::default();
+        let plain = crate::scene::procedural(128, 3).to_kernel().unwrap();
+        let mut objects = crate::scene::procedural(128, 3);
+        objects.plant_objects(5);
+        let objects = objects.to_kernel().unwrap();
+        assert!(objects.sticks().unwrap().is_some());
+        for scene in [&plain, &objects] {
+            let time = time_kernel(scene, &camera, (64, 48), &options, PixelRays::Fixed).unwrap();
+            assert!(time > 0);
+        }
+        let error = time_kernel(&plain, &camera, (0, 48), &options, PixelRays::Fixed)
+            .unwrap_err()
+            .to_string();
+        let rendered = render_kernel(&plain, &camera, 0, 48, &options)
+            .unwrap_err()
+            .to_string();
+        assert!(error == rendered && !error.contains('\n'), "{error}");
     }
 
     #[test]

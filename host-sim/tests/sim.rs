@@ -191,6 +191,14 @@ fn bench_writes_one_csv_row_per_view_and_setting_and_marks_the_front() {
     let settings = terracast_sim::bench::settings().len();
     assert_eq!(text.lines().count(), 1 + 2 * settings, "{text}");
     assert!(text.starts_with("scene,view,pitch,setting,psnr_db,ssim"));
+    // Every setting is timed: the kernel's without its probe, in renders
+    // of their own (a setting left untimed would show no speed at all).
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let speed = header.iter().position(|&c| c == "mpx_per_s").unwrap();
+    for row in text.lines().skip(1) {
+        let mpx_per_s: f64 = row.split(',').nth(speed).unwrap().parse().unwrap();
+        assert!(mpx_per_s.is_finite() && mpx_per_s > 0.01, "{row}");
+    }
     let fonts = std::path::Path::new("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf").exists();
     if fonts {
         assert_eq!(code, 0, "{err}");
