@@ -423,7 +423,13 @@ fn main() {
                                 &mut air.sink_over_sky(&view, &mut buffer),
                                 &mut NoProbe,
                             ),
-                            None => render(&levels, &view, &default, &mut buffer, &mut NoProbe),
+                            None => render(
+                                &levels,
+                                &view,
+                                &default,
+                                &mut SkyFirst::new(&mut buffer, SIZE.0, SIZE.1, default.sky),
+                                &mut NoProbe,
+                            ),
                         })
                     },
                 );
@@ -800,7 +806,15 @@ fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
                 &mut air.sink_over_sky(&view, &mut buffer),
                 &mut NoProbe,
             ),
-            Some(None) => render(levels, &view, &default, &mut buffer, &mut NoProbe),
+            // The sky drawn first here too, as the atmosphere's sink draws
+            // it: the renders differ by the atmosphere alone.
+            Some(None) => render(
+                levels,
+                &view,
+                &default,
+                &mut SkyFirst::new(&mut buffer, SIZE.0, SIZE.1, default.sky),
+                &mut NoProbe,
+            ),
             None => render(
                 levels,
                 &view,
