@@ -120,6 +120,13 @@ pub fn settings() -> Vec<Setting> {
             },
         ),
         kernel(
+            "kernel level-0 colors",
+            RenderOptions {
+                shading: Shading::LevelZero,
+                ..default
+            },
+        ),
+        kernel(
             "kernel heights on each ray's path",
             RenderOptions {
                 height_path: HeightPath::Ray,

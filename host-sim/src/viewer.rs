@@ -167,10 +167,10 @@ impl Settings {
         }
     }
 
-    /// Subvoxel or nearest shading.
+    /// Subvoxel or nearest shading (from level-0 colors: to nearest).
     pub fn toggle_shading(&mut self) {
         self.options.shading = match self.options.shading {
-            Shading::Subvoxel => Shading::Nearest,
+            Shading::Subvoxel | Shading::LevelZero => Shading::Nearest,
             Shading::Nearest => Shading::Subvoxel,
         };
     }
@@ -209,6 +209,7 @@ impl Settings {
             match options.shading {
                 Shading::Subvoxel => "subvoxel",
                 Shading::Nearest => "nearest",
+                Shading::LevelZero => "level-zero colors",
             },
             match self.rays {
                 PixelRays::Fixed => "1 ray",
@@ -878,6 +879,7 @@ pub fn render_arguments(
         match options.shading {
             Shading::Subvoxel => "subvoxel",
             Shading::Nearest => "nearest",
+            Shading::LevelZero => "level-zero",
         }
     ));
     args.push(format!(

@@ -249,10 +249,12 @@ fn settings() -> Vec<RenderOptions> {
             ..RenderOptions::default()
         });
     }
-    all.push(RenderOptions {
-        shading: Shading::Nearest,
-        ..RenderOptions::default()
-    });
+    for shading in [Shading::Nearest, Shading::LevelZero] {
+        all.push(RenderOptions {
+            shading,
+            ..RenderOptions::default()
+        });
+    }
     all.push(RenderOptions {
         hierarchical_first_hit: false,
         terrain_fit: false,

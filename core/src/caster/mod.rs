@@ -77,6 +77,10 @@ impl Frame {
                 surface.top(),
             ),
         };
+        let lod = match options.shading {
+            Shading::LevelZero => lod.without_far_colors(),
+            Shading::Subvoxel | Shading::Nearest => lod,
+        };
         let (resume, same_schedule) = match options.coherence {
             Coherence::Off => (false, false),
             Coherence::Exact => (true, true),
@@ -368,6 +372,64 @@ mod tests {
             }
         }
         assert!(near > 0 && blended > 0 && far > 0, "{near} {blended} {far}");
+    }
+
+    /// `Shading::LevelZero` keeps a hit on level 0 in level 0's colors at
+    /// any depth, where the default takes the coarse levels' past the
+    /// color reach; nearer hits are shaded alike.
+    #[test]
+    fn level_zero_shading_keeps_far_hits_in_level_0s_colors() {
+        use crate::pyramid::{pyramid_cells, pyramid_points};
+        use crate::{Camera, Terrain};
+        use std::vec;
+        // Flat; level 0 red and blue stripes, the coarse levels (their
+        // storage filled by hand) green. The map is said to be rough, so
+        // the terrain fit keeps the heights on level 0 past the map, while
+        // colors switch by the ratio (4: level 1 from 14 voxels out).
+        let heights = vec![0u16; 64 * 64];
+        let colors: vec::Vec<Rgb> = (0..64 * 64)
+            .map(|i| if i % 2 == 0 { [255, 0, 0] } else { [0, 0, 255] })
+            .collect();
+        let terrain = Terrain::new(64, 64, &heights, &colors).unwrap();
+        let n = pyramid_points(64, 64);
+        let (ph, pc, pb) = (
+            vec![0; n],
+            vec![[0, 255, 0]; n],
+            vec![0; pyramid_cells(64, 64)],
+        );
+        let pyramid = Pyramid::with_roughness(terrain, &ph, &pc, &pb, u8::MAX).unwrap();
+        let view = View::new(&Camera::looking([0.5, 30.2, 3.0], 0.0, 0.0), 64, 48).unwrap();
+        let image = |shading| {
+            let mut pixels = [[0u8; 3]; 64 * 48];
+            let mut frame = Framebuffer::new(&mut pixels, 64, 48).unwrap();
+            let options = RenderOptions {
+                resolution: Resolution::Multi {
+                    pixel_to_voxel: crate::U8F8::from_num(4),
+                },
+                shading,
+                ..RenderOptions::default()
+            };
+            render(&pyramid, &view, &options, &mut frame, &mut crate::NoProbe);
+            pixels
+        };
+        let (footprint, level_zero) = (image(Shading::Subvoxel), image(Shading::LevelZero));
+        let terrain = |p: &Rgb| *p != DEFAULT_SKY;
+        let green = |p: &Rgb| terrain(p) && p[1] > 0;
+        assert!(footprint.iter().any(green), "no far hit");
+        assert!(!level_zero.iter().any(green));
+        let mut near = 0;
+        for (a, b) in footprint.iter().zip(&level_zero) {
+            if terrain(a) && !green(a) {
+                assert_eq!(a, b);
+                near += 1;
+            }
+        }
+        assert!(near > 0);
+        // The same hits: the same pixels are terrain.
+        assert!(footprint
+            .iter()
+            .zip(&level_zero)
+            .all(|(a, b)| terrain(a) == terrain(b)));
     }
 
     /// Nearest shading goes the line caster's way too: at single

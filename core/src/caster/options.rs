@@ -105,6 +105,12 @@ pub enum Shading {
     /// and blockier: the baseline the subvoxel weights are measured
     /// against.
     Nearest,
+    /// As [`Shading::Subvoxel`], but a hit on level 0 takes level 0's
+    /// colors at any depth: no footprint colors past the color reach (a
+    /// hit on a coarse height level still takes its level's). The
+    /// baseline the footprint colors are measured against: far terrain
+    /// aliases, and the host saves their bilinear squares.
+    LevelZero,
 }
 
 /// Where a ray of the line caster reads the terrain's heights.

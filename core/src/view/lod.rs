@@ -37,6 +37,15 @@ impl LodPlan {
         }
     }
 
+    /// This plan with colors that never leave level 0 by depth
+    /// ([`crate::Shading::LevelZero`]).
+    pub fn without_far_colors(self) -> Self {
+        Self {
+            color_level1_depth: i64::MAX,
+            ..self
+        }
+    }
+
     /// The major-axis distance (Q16) where level 1's heights begin for a
     /// ray whose direction's major-axis component is `run` (I32F32 bits):
     /// the depth where they begin times `run`.

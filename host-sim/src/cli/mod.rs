@@ -268,6 +268,9 @@ pub enum ShadingArg {
     Subvoxel,
     /// The nearest voxel, no blend.
     Nearest,
+    /// Subvoxel weights on level 0's colors at any depth: no footprint
+    /// colors past the color reach.
+    LevelZero,
 }
 
 /// How rays cast from the eye find their first hit.
@@ -440,8 +443,9 @@ struct KernelArgs {
     /// longer than wide along its image line).
     #[arg(long, default_value = "1", value_name = "N", value_parser = parse_vertical_samples)]
     vertical_samples: (VerticalSamples, PixelRays),
-    /// Kernel: how a hit is colored: subvoxel weights (the default) or the
-    /// nearest voxel.
+    /// Kernel: how a hit is colored: subvoxel weights (the default), the
+    /// nearest voxel, or subvoxel weights on level 0's colors at any depth
+    /// (`level-zero`: no footprint colors, the far terrain aliased).
     #[arg(long, value_enum, default_value_t = ShadingArg::Subvoxel)]
     shading: ShadingArg,
     /// Kernel (--coherence across-levels, one ray a pixel): read heights
@@ -880,6 +884,7 @@ impl KernelArgs {
             shading: match self.shading {
                 ShadingArg::Subvoxel => Shading::Subvoxel,
                 ShadingArg::Nearest => Shading::Nearest,
+                ShadingArg::LevelZero => Shading::LevelZero,
             },
             terrain_fit: self.terrain_fit == TerrainFitArg::On,
             height_path: self.height_path.into(),
