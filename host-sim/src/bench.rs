@@ -473,6 +473,7 @@ pub fn run(
                         let options = RenderOptions { sky, ..*options };
                         time_kernel(&scene.kernel, &view.camera, size, &options, *rays)?
                     }
+                    // Its render above was its first timed run.
                     _ if round == 0 => continue,
                     _ => render(setting, scene, &view.camera, size, sky)?.1.render_ns,
                 };
@@ -700,17 +701,21 @@ pub fn split_by_map_size(measures: &[Measure], scenes: &[BenchScene]) -> [Vec<Me
     [part(false), part(true)]
 }
 
-/// At pitch 0, the kernel's default against Voxel Space over the same
-/// views, measured in this run: (speed ratio, kernel PSNR, Voxel Space
-/// PSNR), means over the views.
-pub fn kernel_vs_voxel_space_at_pitch_0(measures: &[Measure]) -> Option<(f64, f64, f64)> {
+/// At pitch 0, `setting` against Voxel Space over the same views,
+/// measured in this run: (speed ratio, the setting's PSNR, Voxel Space's
+/// PSNR), means over the views (the speeds harmonic); `None` where the
+/// run has no such views.
+pub fn against_voxel_space_at_pitch_0(
+    measures: &[Measure],
+    setting: &str,
+) -> Option<(f64, f64, f64)> {
     let at = |name: &str| -> Vec<&Measure> {
         measures
             .iter()
             .filter(|m| m.setting == name && m.pitch == 0.0)
             .collect()
     };
-    let (kernel, voxel) = (at("kernel"), at("voxelspace"));
+    let (kernel, voxel) = (at(setting), at("voxelspace"));
     if kernel.is_empty() || kernel.len() != voxel.len() {
         return None;
     }
@@ -791,8 +796,9 @@ mod tests {
                 ("march 2", false)
             ]
         );
-        let (ratio, k, v) = kernel_vs_voxel_space_at_pitch_0(&measures).unwrap();
+        let (ratio, k, v) = against_voxel_space_at_pitch_0(&measures, "kernel").unwrap();
         assert_eq!((ratio, k, v), (0.5, 30.0, 20.0));
+        assert_eq!(against_voxel_space_at_pitch_0(&measures, "no such"), None);
         assert!(csv(&measures).lines().count() == 5);
     }
 

@@ -284,28 +284,37 @@ pub fn time_kernel(
     let pyramid = scene.pyramid_for(options)?;
     let details = scene.details()?;
     let mut buffer = SampleBuffer::new(width, height);
-    let mut timed = |surface: &dyn Fn(&mut SampleBuffer)| {
-        let started = Instant::now();
-        surface(&mut buffer);
-        started.elapsed().as_nanos() as u64
-    };
+    let buffer = &mut buffer;
     Ok(match scene.sticks()? {
-        Some(sticks) => {
-            let surface = WithSticks::new(&pyramid, sticks);
-            timed(&|buffer| {
-                rays.render(&surface, &view, options, buffer, &mut NoProbe);
-            })
-        }
-        None if !details.is_empty() => {
-            let surface = WithDetail::new(&pyramid, &details);
-            timed(&|buffer| {
-                rays.render(&surface, &view, options, buffer, &mut NoProbe);
-            })
-        }
-        None => timed(&|buffer| {
-            rays.render(&pyramid, &view, options, buffer, &mut NoProbe);
-        }),
+        Some(sticks) => time_surface(
+            &WithSticks::new(&pyramid, sticks),
+            &view,
+            options,
+            rays,
+            buffer,
+        ),
+        None if !details.is_empty() => time_surface(
+            &WithDetail::new(&pyramid, &details),
+            &view,
+            options,
+            rays,
+            buffer,
+        ),
+        None => time_surface(&pyramid, &view, options, rays, buffer),
     })
+}
+
+/// The time (ns) of one render of `surface` into `buffer`, no probe.
+fn time_surface<T: Surface + ?Sized>(
+    surface: &T,
+    view: &View,
+    options: &RenderOptions,
+    rays: PixelRays,
+    buffer: &mut SampleBuffer,
+) -> u64 {
+    let started = Instant::now();
+    rays.render(surface, view, options, buffer, &mut NoProbe);
+    started.elapsed().as_nanos() as u64
 }
 
 /// Renders `surface` with the kernel (the camera in the surface's

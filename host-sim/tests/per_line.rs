@@ -140,19 +140,23 @@ fn the_lean_column_caster_draws_the_column_casters_frame() {
         0.0,
         0.0,
     ));
-    for &camera in &cameras {
-        for (width, height) in [SIZE, (97, 61)] {
-            let view = View::new(&camera, width, height).unwrap();
-            let mut columns = SampleBuffer::new(width, height);
-            render_level_columns(&terrain, &view, &single(), &mut columns).unwrap();
-            let mut lean = vec![[1, 2, 3]; (width * height) as usize];
-            render_level_columns_lean(&terrain, &view, &single(), &mut lean).unwrap();
-            let expected = colors(&columns);
+    // Both casters' frames of `camera` over `terrain`.
+    let frames = |terrain: &Terrain<'_>, camera: &Camera, (width, height): (u32, u32)| {
+        let view = View::new(camera, width, height).unwrap();
+        let mut columns = SampleBuffer::new(width, height);
+        render_level_columns(terrain, &view, &single(), &mut columns).unwrap();
+        let mut lean = vec![[1, 2, 3]; (width * height) as usize];
+        render_level_columns_lean(terrain, &view, &single(), &mut lean).unwrap();
+        (colors(&columns), lean)
+    };
+    for camera in &cameras {
+        for size in [SIZE, (97, 61)] {
+            let (expected, lean) = frames(&terrain, camera, size);
             assert!(
                 expected.iter().any(|&c| c != single().sky) && expected.contains(&single().sky),
                 "{camera:?}: the frame shows terrain and sky"
             );
-            assert!(lean == expected, "{camera:?} at {width} x {height}");
+            assert!(lean == expected, "{camera:?} at {size:?}");
         }
     }
     // A wall as high as the map's highest point across a flat map, seen
@@ -174,12 +178,8 @@ fn the_lean_column_caster_draws_the_column_casters_frame() {
     let walled = Terrain::new(side as u32, side as u32, &heights, &checker).unwrap();
     for eye_z in [40.2, 41.5, 47.0] {
         let camera = Camera::looking([32.0, 2.0, eye_z], 90.0, 0.0);
-        let view = View::new(&camera, 64, 48).unwrap();
-        let mut columns = SampleBuffer::new(64, 48);
-        render_level_columns(&walled, &view, &single(), &mut columns).unwrap();
-        let mut lean = vec![[1, 2, 3]; 64 * 48];
-        render_level_columns_lean(&walled, &view, &single(), &mut lean).unwrap();
-        assert!(lean == colors(&columns), "the wall from {eye_z}");
+        let (expected, lean) = frames(&walled, &camera, (64, 48));
+        assert!(lean == expected, "the wall from {eye_z}");
     }
     let view = View::new(&cameras[0], 16, 12).unwrap();
     assert_eq!(

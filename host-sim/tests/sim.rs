@@ -204,7 +204,9 @@ fn bench_writes_one_csv_row_per_view_and_setting_and_marks_the_front() {
         assert_eq!(code, 0, "{err}");
         assert!(image::open(&chart).is_ok());
         assert!(
-            out.contains("| kernel |") && out.contains("pitch 0: the kernel is"),
+            out.contains("| kernel |")
+                && out.contains("pitch 0: the kernel is")
+                && out.contains("pitch 0: kernel level-0 colors is"),
             "{out}"
         );
     }
