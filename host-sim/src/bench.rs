@@ -424,6 +424,44 @@ pub fn bytes_touched(
     })
 }
 
+/// A setting's timed runs on a view add up to this much render time at
+/// least (ns), beyond the `repeats` every setting gets.
+pub const TIMED_NS: u64 = 60_000_000;
+
+/// The timed runs of one setting on one view so far.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Timing {
+    runs: u32,
+    spent_ns: u64,
+    best: u64,
+}
+
+impl Default for Timing {
+    fn default() -> Self {
+        Self {
+            runs: 0,
+            spent_ns: 0,
+            best: u64::MAX,
+        }
+    }
+}
+
+impl Timing {
+    /// With one more run, of `ns`.
+    fn with(self, ns: u64) -> Self {
+        Self {
+            runs: self.runs + 1,
+            spent_ns: self.spent_ns.saturating_add(ns),
+            best: self.best.min(ns),
+        }
+    }
+
+    /// At least `repeats` runs, adding up to [`TIMED_NS`] at least.
+    fn enough(&self, repeats: u32) -> bool {
+        self.runs >= repeats && self.spent_ns >= TIMED_NS
+    }
+}
+
 /// Measures every setting on every view; `progress(done, total)` after
 /// each view.
 pub fn run(
@@ -454,32 +492,43 @@ pub fn run(
         for setting in &settings {
             renders.push(render(setting, scene, &view.camera, size, sky)?);
         }
-        // The timed repeats go round the settings, so that a change in the
+        // The timed runs go round the settings, so that a change in the
         // shared machine's load falls on all of them alike. The kernel's
         // render above counted its work with a probe: its times are
-        // `repeats` renders without one, as a user's render runs.
-        let mut best: Vec<u64> = settings
+        // renders without one, as a user's render runs. Every setting
+        // runs `repeats` times at least, and a fast one until its runs
+        // add up to `TIMED_NS`: a render of a millisecond or two meets
+        // the machine's noise in each of a few runs.
+        let mut timings: Vec<Timing> = settings
             .iter()
             .zip(&renders)
             .map(|(setting, (_, stats))| match setting.method {
-                Method::Kernel(..) => u64::MAX,
-                _ => stats.render_ns,
+                Method::Kernel(..) => Timing::default(),
+                // Its render above was its first timed run.
+                _ => Timing::default().with(stats.render_ns),
             })
             .collect();
-        for round in 0..repeats {
-            for (setting, best) in settings.iter().zip(&mut best) {
+        loop {
+            let mut timed_any = false;
+            for (setting, timing) in settings.iter().zip(&mut timings) {
+                if timing.enough(repeats) {
+                    continue;
+                }
                 let time = match &setting.method {
                     Method::Kernel(options, rays) => {
                         let options = RenderOptions { sky, ..*options };
                         time_kernel(&scene.kernel, &view.camera, size, &options, *rays)?
                     }
-                    // Its render above was its first timed run.
-                    _ if round == 0 => continue,
                     _ => render(setting, scene, &view.camera, size, sky)?.1.render_ns,
                 };
-                *best = (*best).min(time);
+                *timing = timing.with(time);
+                timed_any = true;
+            }
+            if !timed_any {
+                break;
             }
         }
+        let best = timings.iter().map(|t| t.best);
         for ((setting, (frame, stats)), best) in settings.iter().zip(renders).zip(best) {
             let pixels = stats.pixels as f64;
             measures.push(Measure {
@@ -749,6 +798,25 @@ mod tests {
             resident_bytes: 0,
             bytes_touched: 0,
         }
+    }
+
+    #[test]
+    fn a_fast_setting_is_timed_until_its_runs_add_up_and_a_slow_one_repeats_times() {
+        let runs = |ns: u64, repeats: u32| {
+            let mut timing = Timing::default();
+            while !timing.enough(repeats) {
+                timing = timing.with(ns);
+            }
+            timing
+        };
+        // A 2 ms render: 30 runs make the 60 ms.
+        assert_eq!(runs(2_000_000, 3).runs, 30);
+        // A second's render: the repeats alone.
+        assert_eq!(runs(1_000_000_000, 3).runs, 3);
+        assert_eq!(runs(1_000_000_000, 5).runs, 5);
+        // The best is the least.
+        let timing = Timing::default().with(7).with(5).with(9);
+        assert_eq!((timing.runs, timing.best, timing.spent_ns), (3, 5, 21));
     }
 
     #[test]

@@ -3,7 +3,7 @@
 use super::values::{number, size};
 use crate::bench::{
     against_voxel_space_at_pitch_0, csv, flicker, run, split_by_map_size, summarize, summary_table,
-    views, BenchScene, LARGE_MAP_SIDE,
+    views, BenchScene, LARGE_MAP_SIDE, TIMED_NS,
 };
 use crate::chart::draw_bench;
 use crate::error::{Error, Result};
@@ -20,7 +20,8 @@ pub(super) struct BenchArgs {
     /// Image size of every view.
     #[arg(long, default_value = "320x240", value_parser = size, allow_hyphen_values = true, value_name = "WxH")]
     size: (u32, u32),
-    /// Timed runs of each render; the best counts.
+    /// Timed runs of each render at least (a fast render runs until its
+    /// runs take 60 ms); the best counts.
     #[arg(long, default_value_t = 3, value_name = "N", value_parser = number(1u32, 20), allow_hyphen_values = true)]
     repeats: u32,
     /// Only the first scene's pitch-0 and pitch-15 views, and no flicker
@@ -127,12 +128,13 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
     draw_bench(outputs.temporary(chart_out), &summaries)?;
     outputs.commit()?;
     println!(
-        "{} views of {}x{}, {} settings; best of {} runs, one thread",
+        "{} views of {}x{}, {} settings; best of {} runs or more (as many as {} ms of a setting's renders of a view take), one thread",
         suite.len(),
         args.size.0,
         args.size.1,
         summaries.len(),
-        args.repeats
+        args.repeats,
+        TIMED_NS / 1_000_000
     );
     print!("{}", summary_table(&summaries));
     // The same measures split by map size: which setting wins depends on
