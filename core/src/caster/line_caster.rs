@@ -363,6 +363,11 @@ impl<'s, 'v, T: Surface + ?Sized> LineCaster<'s, 'v, T> {
     ) {
         let a = allowances;
         if let Some(px) = pixels.straightened() {
+            // Pixels centered on their line (a level view's columns): each
+            // ray's own path is the line's, and the line's walk reads it.
+            if px.centered() {
+                return self.cast::<_, _, _, _, NEAREST, false>(line, px, sink, probe, a);
+            }
             return self.cast::<_, _, _, _, NEAREST, OWN_PATH>(line, px, sink, probe, a);
         }
         match pixels.narrowed() {
@@ -1251,6 +1256,88 @@ fn align_up(plane: &Plane, k: i64, level: u32) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every sample a line's rays put, in order.
+    #[derive(Default)]
+    struct Recorded(Vec<(u32, u32, Sample)>);
+
+    impl Sink for Recorded {
+        fn put(&mut self, x: u32, y: u32, sample: Sample) {
+            self.0.push((x, y, sample));
+        }
+    }
+
+    /// `cast_line_pixels` walks a line whose pixels are centered on it on
+    /// the line even when each ray reads heights on its own path: a
+    /// centered ray's path is the line's, so the two walks must put the
+    /// same samples. This holds them to it on level views (columns, rolled
+    /// upside down) and on views rolled ±90° (rows).
+    #[test]
+    fn a_centered_lines_rays_read_their_own_paths_on_the_line() {
+        use crate::{Camera, NoProbe, Pyramid, Terrain};
+        let side = 48usize;
+        let heights: Vec<u16> = (0..side * side)
+            .map(|i| {
+                let (x, y) = ((i % side) as f32, (i / side) as f32);
+                (16.0 * (40.0 + 12.0 * (x * 0.37).sin() * (y * 0.23).cos())) as u16
+            })
+            .collect();
+        let colors: Vec<Rgb> = (0..side * side)
+            .map(|i| [(i * 7 % 256) as u8, (i * 13 % 256) as u8, (i % 256) as u8])
+            .collect();
+        let terrain = Terrain::new(side as u32, side as u32, &heights, &colors).unwrap();
+        let pyramid = Pyramid::flat(terrain);
+        let options = RenderOptions {
+            height_path: HeightPath::Ray,
+            ..RenderOptions::default()
+        };
+        for (yaw, roll) in [
+            (30.0, 0.0),
+            (200.0, 0.0),
+            (75.0, 180.0),
+            (10.0, 90.0),
+            (300.0, -90.0),
+        ] {
+            let camera = Camera {
+                roll_deg: roll,
+                ..Camera::looking([3.0, 5.0, 70.0], yaw, 0.0)
+            };
+            let view = View::new(&camera, 41, 30).unwrap();
+            let caster = LineCaster::new(&pyramid, &view, &options);
+            let mut centered = 0;
+            for index in 0..view.lines() {
+                let Some(line) = view.line(index) else {
+                    continue;
+                };
+                let Some(pixels) = line.pixels(view.height()).straightened() else {
+                    continue;
+                };
+                if !pixels.centered() {
+                    continue;
+                }
+                centered += 1;
+                let (mut own, mut on_line) = (Recorded::default(), Recorded::default());
+                let a = &mut Unlimited;
+                caster.cast::<_, _, _, _, false, true>(
+                    &line,
+                    pixels.clone(),
+                    &mut own,
+                    &mut NoProbe,
+                    a,
+                );
+                caster.cast::<_, _, _, _, false, false>(
+                    &line,
+                    pixels,
+                    &mut on_line,
+                    &mut NoProbe,
+                    a,
+                );
+                assert!(!own.0.is_empty(), "yaw {yaw} roll {roll} line {index}");
+                assert!(own.0 == on_line.0, "yaw {yaw} roll {roll} line {index}");
+            }
+            assert!(centered > 0, "yaw {yaw} roll {roll}: no centered line");
+        }
+    }
 
     #[test]
     fn the_aside_in_words_is_the_product_of_the_drift_and_the_distance() {

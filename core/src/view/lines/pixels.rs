@@ -379,6 +379,13 @@ pub(crate) struct StraightPixels {
 }
 
 impl StraightPixels {
+    /// Whether every pixel's center lies on the line: then its ray's
+    /// horizontal direction is the line's own, and it drifts nowhere.
+    #[inline(always)]
+    pub(crate) fn centered(&self) -> bool {
+        self.offset == 0
+    }
+
     /// The image position (x, y from the top) of the pixel at axis
     /// coordinate `s`.
     #[inline(always)]
