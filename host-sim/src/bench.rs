@@ -134,6 +134,14 @@ pub fn settings() -> Vec<Setting> {
             },
         ),
         kernel(
+            "kernel level-0 colors and heights on each ray's path",
+            RenderOptions {
+                shading: Shading::LevelZero,
+                height_path: HeightPath::Ray,
+                ..default
+            },
+        ),
+        kernel(
             "kernel highest quality",
             RenderOptions {
                 resolution: Resolution::Single,
@@ -674,6 +682,16 @@ pub fn flicker(
         .collect())
 }
 
+/// `text` as one CSV field: quoted where it holds a comma, a quote or a
+/// line break (RFC 4180), as a scene named after a file may.
+fn csv_field(text: &str) -> std::borrow::Cow<'_, str> {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\"")).into()
+    } else {
+        text.into()
+    }
+}
+
 /// The measures as CSV, one row per view and setting.
 pub fn csv(measures: &[Measure]) -> String {
     let mut out = String::from(
@@ -683,10 +701,10 @@ pub fn csv(measures: &[Measure]) -> String {
         let _ = writeln!(
             out,
             "{},{},{},{},{:.3},{:.4},{:.4},{:.5},{:.5},{:.3},{:.3},{},{}",
-            m.scene,
-            m.view,
+            csv_field(&m.scene),
+            csv_field(&m.view),
             m.pitch,
-            m.setting,
+            csv_field(m.setting),
             m.psnr.min(99.0),
             m.ssim,
             m.sky_agreement,
@@ -798,6 +816,13 @@ mod tests {
             resident_bytes: 0,
             bytes_touched: 0,
         }
+    }
+
+    #[test]
+    fn a_csv_field_with_a_comma_or_a_quote_is_quoted() {
+        assert_eq!(csv_field("C7W/D7"), "C7W/D7");
+        assert_eq!(csv_field("hills, west"), "\"hills, west\"");
+        assert_eq!(csv_field("the \"big\" map"), "\"the \"\"big\"\" map\"");
     }
 
     #[test]

@@ -206,7 +206,8 @@ fn bench_writes_one_csv_row_per_view_and_setting_and_marks_the_front() {
         assert!(
             out.contains("| kernel |")
                 && out.contains("pitch 0: the kernel is")
-                && out.contains("pitch 0: kernel level-0 colors is"),
+                && out.contains("pitch 0: kernel level-0 colors is")
+                && out.contains("pitch 0: kernel level-0 colors and heights on each ray's path is"),
             "{out}"
         );
     }

@@ -154,6 +154,10 @@ pub(super) fn bench_command(args: BenchArgs) -> Result<()> {
     for (setting, name) in [
         ("kernel", "the kernel"),
         ("kernel level-0 colors", "kernel level-0 colors"),
+        (
+            "kernel level-0 colors and heights on each ray's path",
+            "kernel level-0 colors and heights on each ray's path",
+        ),
     ] {
         if let Some((ratio, kernel, voxel)) = against_voxel_space_at_pitch_0(&measures, setting) {
             println!(
