@@ -277,7 +277,7 @@ impl PreparedAtmosphere {
         let weight = left_after(halvings_q8 as u32);
         table
             .color_lanes
-            .lerp(Lanes::of(sample.color), weight)
+            .lerp_within(Lanes::of(sample.color), weight)
             .rgb()
     }
 
@@ -296,8 +296,14 @@ impl PreparedAtmosphere {
         sample: &Sample,
         slope: i32,
     ) -> Rgb {
-        let Some(table) = self.fog.as_ref().filter(|_| !sample.is_sky()) else {
-            return self.color(frame, x, y, sample);
+        // Sky and a hit without fog decided here, not by `color`: that is
+        // out of line and takes the sample by reference, which makes every
+        // hit of the caster's loop work out and store its elevation.
+        if sample.is_sky() {
+            return self.sky_pixel(frame, &mut SkyCell::default(), x, y);
+        }
+        let Some(table) = self.fog.as_ref() else {
+            return sample.color;
         };
         // A ray with no run (straight down) has no major-axis distance:
         // its length is its height change.
@@ -305,19 +311,20 @@ impl PreparedAtmosphere {
         let distance_q8 = if vertical {
             drop(frame, sample) >> (COORD_FRAC_BITS - Q8)
         } else {
-            // The ray's length a unit of major-axis distance, Q16:
+            // The ray's length a unit of major-axis distance, Q16, within
+            // a word (below 2^30: the slope is below 2^29):
             // `m·√(1 + u²)`, `u` the slope over `m` (Q16, below 2^30), or
             // for a steep ray `|slope|·√(1 + 1/u²)`.
             let u = ((u64::from(slope.unsigned_abs()) * u64::from(line.inverse_m)) >> 20) as u32;
             let length = if u < 1 << 16 {
                 let at = ((u + (1 << 5)) >> 6) as usize;
                 let stretch = STRETCH_FINE.get(at).map_or(0, |&s| u32::from(s)) + (1 << 16);
-                (u64::from(line.m) * u64::from(stretch)) >> 16
+                ((u64::from(line.m) * u64::from(stretch)) >> 16) as u32
             } else {
-                (u64::from(slope.unsigned_abs()) * StretchEntry::steep(u).of_table(&STRETCH_HIGH))
-                    >> 16
+                ((u64::from(slope.unsigned_abs()) * StretchEntry::steep(u).of_table(&STRETCH_HIGH))
+                    >> 16) as u32
             };
-            word((u64::from(sample.distance) * length) >> (16 + 16 - Q8))
+            word((u64::from(sample.distance) * u64::from(length)) >> (16 + 16 - Q8))
         };
         self.fogged(frame, table, sample, distance_q8)
     }

@@ -349,6 +349,16 @@ fn fog_fades_smoothly_with_distance_without_bands() {
 }
 
 #[test]
+fn what_fog_leaves_is_a_blend_weight_from_all_to_nothing() {
+    // The fog's blend takes the weight as it is, unclamped
+    // (`Lanes::lerp_within`): every halving count, in the table and past
+    // it, must give at most 256.
+    assert_eq!(left_after(0), 256);
+    assert!((0..=u32::from(u16::MAX)).all(|halvings| left_after(halvings) <= 256));
+    assert_eq!(left_after(u32::MAX), 0);
+}
+
+#[test]
 fn the_sky_gradient_has_no_bands_from_horizon_to_zenith() {
     let air = Atmosphere {
         fog: None,

@@ -330,6 +330,17 @@ impl Lanes {
         }
     }
 
+    /// [`Lanes::lerp`] by a `t` known to be at most 256 (a weight from a
+    /// table of them), without holding it there.
+    #[inline(always)]
+    pub(crate) fn lerp_within(self, other: Self, t: u32) -> Self {
+        Self {
+            red_blue: ((self.red_blue * (256 - t) + other.red_blue * t + 0x0080_0080) >> 8)
+                & 0x00FF_00FF,
+            green: (self.green * (256 - t) + other.green * t + 128) >> 8,
+        }
+    }
+
     #[inline(always)]
     pub(crate) fn rgb(self) -> Rgb {
         [
