@@ -153,28 +153,42 @@ const LEADER: i32 = 36;
 const LABEL_HEIGHT: i32 = 14;
 
 /// Where each point's label goes, as pixels from the point (its box's top
-/// left corner): beside it, centred; else farther right, one label height
-/// up, one down, two up, two down and so on, at the first place where it
-/// covers no point and no label placed before it (beside it, covering,
-/// when none is free). `sizes` are the labels' boxes; a point covers 10
-/// pixels a side.
-fn place_labels(points: &[(i32, i32)], sizes: &[(i32, i32)]) -> Vec<(i32, i32)> {
+/// left corner): beside it on the right, centred; else farther right, one
+/// label height up, one down, two up, two down and so on; then the same
+/// on the left. The first place where it lies inside `area` (the plot:
+/// left, top, right, bottom) and covers no point and no label placed
+/// before it wins (beside it on the right, covering, when none is free).
+/// `sizes` are the labels' boxes; a point covers 10 pixels a side.
+fn place_labels(
+    points: &[(i32, i32)],
+    sizes: &[(i32, i32)],
+    area: (i32, i32, i32, i32),
+) -> Vec<(i32, i32)> {
     let mut taken: Vec<(i32, i32, i32, i32)> = points
         .iter()
         .map(|&(x, y)| (x - 5, y - 5, x + 5, y + 5))
         .collect();
+    let inside =
+        |b: (i32, i32, i32, i32)| b.0 >= area.0 && b.1 >= area.1 && b.2 <= area.2 && b.3 <= area.3;
     points
         .iter()
         .zip(sizes)
         .map(|(&(px, py), &(width, height))| {
             let label_at =
                 |(dx, dy): (i32, i32)| (px + dx, py + dy, px + dx + width, py + dy + height);
-            let free = |at| !taken.iter().any(|&t| overlap(label_at(at), t));
-            let beside = (LABEL_GAP, -height / 2);
+            let free = |at| {
+                let label = label_at(at);
+                inside(label) && !taken.iter().any(|&t| overlap(label, t))
+            };
             // Pixel y grows downward: -1, 1, -2, 2, ...
-            let shifts = (1..16).map(|k: i32| if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 });
-            let place = std::iter::once(beside)
-                .chain(shifts.map(|shift| (LEADER, -height / 2 + shift * height)))
+            let shifts = || (1..16).map(|k: i32| if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 });
+            let side = |gap: i32, leader: i32| {
+                std::iter::once((gap, -height / 2))
+                    .chain(shifts().map(move |shift| (leader, -height / 2 + shift * height)))
+            };
+            let beside = (LABEL_GAP, -height / 2);
+            let place = side(LABEL_GAP, LEADER)
+                .chain(side(-LABEL_GAP - width, -LEADER - width))
                 .find(|&at| free(at))
                 .unwrap_or(beside);
             taken.push(label_at(place));
@@ -253,14 +267,19 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
             .iter()
             .map(|s| (7 * s.setting.chars().count() as i32, LABEL_HEIGHT))
             .collect();
-        let places = place_labels(&points, &sizes);
-        for (s, (dx, dy)) in summaries.iter().zip(places) {
+        let (across, down) = chart.plotting_area().get_pixel_range();
+        let area = (across.start, down.start, across.end, down.end);
+        let places = place_labels(&points, &sizes, area);
+        for ((s, (dx, dy)), (width, _)) in summaries.iter().zip(places).zip(&sizes) {
             let point = (s.mpx_per_s, s.psnr);
-            // A label moved up or down is tied to its point by a thin line.
-            let leader = if dx == LABEL_GAP {
+            // A label moved up or down is tied to its point by a thin
+            // line, to the near end of the label.
+            let leader = if dx == LABEL_GAP || dx == -LABEL_GAP - width {
                 Vec::new()
-            } else {
+            } else if dx > 0 {
                 vec![(0, 0), (dx - 2, dy + LABEL_HEIGHT / 2)]
+            } else {
+                vec![(0, 0), (dx + width + 2, dy + LABEL_HEIGHT / 2)]
             };
             chart
                 .draw_series([EmptyElement::at(point)
@@ -293,7 +312,7 @@ mod tests {
         let mut points = vec![(300, 200), (302, 203), (304, 206), (301, 210), (303, 214)];
         points.push((600, 400));
         let sizes = vec![(180, LABEL_HEIGHT); points.len()];
-        let places = place_labels(&points, &sizes);
+        let places = place_labels(&points, &sizes, (0, 0, 900, 600));
         let boxes: Vec<_> = points
             .iter()
             .zip(&places)
@@ -315,5 +334,26 @@ mod tests {
         assert_eq!(places[5], (LABEL_GAP, -LABEL_HEIGHT / 2));
         let moved = places[..5].iter().filter(|&&(dx, _)| dx == LEADER).count();
         assert!(moved >= 4, "{places:?}");
+    }
+
+    /// A point near the plot's right edge (the fastest settings) takes
+    /// its label on its left, and a crowd there stays inside the plot.
+    #[test]
+    fn labels_stay_inside_the_plot() {
+        let area = (60, 40, 880, 560);
+        let points = vec![(800, 300), (802, 304), (804, 308), (300, 100)];
+        let sizes = vec![(240, LABEL_HEIGHT); points.len()];
+        let places = place_labels(&points, &sizes, area);
+        for (i, ((&(x, y), &(dx, dy)), &(w, h))) in
+            points.iter().zip(&places).zip(&sizes).enumerate()
+        {
+            let label = (x + dx, y + dy, x + dx + w, y + dy + h);
+            assert!(
+                label.0 >= area.0 && label.2 <= area.2 && label.1 >= area.1 && label.3 <= area.3,
+                "label {i} at {label:?} leaves the plot"
+            );
+        }
+        assert_eq!(places[0], (-LABEL_GAP - 240, -LABEL_HEIGHT / 2));
+        assert_eq!(places[3], (LABEL_GAP, -LABEL_HEIGHT / 2));
     }
 }
