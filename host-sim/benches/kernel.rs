@@ -20,9 +20,11 @@
 //! * `roll`: the default kernel at pitch 10° from the same eye, rolled 0°
 //!   to 90°, each frame's time against the level one's;
 //! * `atmosphere`: the default kernel at pitch 2°, 15° and 45° from the
-//!   same eye without an atmosphere, with fog (the flight's, no sun) and
-//!   with the flight's sky, sun and fog (`Atmosphere::FLIGHT`), each
-//!   frame's time against the one without; and with the least a fog
+//!   same eye without an atmosphere, with the flight's sky and sun but no
+//!   fog, with fog (the flight's, no sun) and with the flight's sky, sun
+//!   and fog (`Atmosphere::FLIGHT`), each frame's time against the one
+//!   without, and the flight's against its sky and sun alone (the fog on
+//!   against off); and with the least a fog
 //!   applied a hit at a time does ([`DistanceFog`]: one lookup by
 //!   distance and one blend), the bound of any such fog's cost.
 //!
@@ -85,15 +87,20 @@ const FIT_BUDGETS: [u64; 3] = [1500, 3000, 6000];
 /// fit needs frames that vary, not settled ones.
 const FIT_SETTLE_FRAMES: usize = 8;
 
-/// The `atmosphere` group's settings: none, fog without the sun, and the
-/// flight's.
-fn atmospheres() -> [(&'static str, Option<PreparedAtmosphere>); 3] {
+/// The `atmosphere` group's settings: none, the flight's sky and sun
+/// without its fog, its fog without the sun, and the flight's whole.
+fn atmospheres() -> [(&'static str, Option<PreparedAtmosphere>); 4] {
+    let clear = Atmosphere {
+        fog: None,
+        ..Atmosphere::FLIGHT
+    };
     let fog = Atmosphere {
         sun: None,
         ..Atmosphere::FLIGHT
     };
     [
         ("off", None),
+        ("clear", Some(clear.prepare().expect("clear"))),
         ("fog", Some(fog.prepare().expect("fog"))),
         (
             "flight",
@@ -794,8 +801,8 @@ fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
     let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
     let airs = atmospheres();
     let weights = distance_fog_weights();
-    println!("\n| pitch | no atmosphere ns/pixel | fog ns/pixel | against none | sky, sun and fog ns/pixel | against none | a lookup and a blend a hit ns/pixel | against none |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("\n| pitch | no atmosphere ns/pixel | sky and sun, no fog ns/pixel | against none | fog ns/pixel | against none | sky, sun and fog ns/pixel | against none | against sky and sun (fog on against off) | a lookup and a blend a hit ns/pixel | against none |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for pitch in ATMOSPHERE_PITCHES {
         let view = View::new(&camera(pitch), SIZE.0, SIZE.1).expect("view");
         let best = best_in_turns(airs.len() + 1, |i| match airs.get(i).map(|(_, air)| air) {
@@ -823,15 +830,19 @@ fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
                 &mut NoProbe,
             ),
         });
-        let [off, fog, flight, floor] = [best[0], best[1], best[2], best[3]];
+        let [off, clear, fog, flight, floor] = [best[0], best[1], best[2], best[3], best[4]];
+        let per_pixel = |time: f64| time / pixels as f64;
         println!(
-            "| {pitch} | {:.1} | {:.1} | {:.2}x | {:.1} | {:.2}x | {:.1} | {:.2}x |",
-            off / pixels as f64,
-            fog / pixels as f64,
+            "| {pitch} | {:.1} | {:.1} | {:.2}x | {:.1} | {:.2}x | {:.1} | {:.2}x | {:.2}x | {:.1} | {:.2}x |",
+            per_pixel(off),
+            per_pixel(clear),
+            clear / off,
+            per_pixel(fog),
             fog / off,
-            flight / pixels as f64,
+            per_pixel(flight),
             flight / off,
-            floor / pixels as f64,
+            flight / clear,
+            per_pixel(floor),
             floor / off
         );
     }
