@@ -58,6 +58,8 @@ mod sink;
 mod sticks;
 mod surface;
 mod terrain;
+#[cfg(test)]
+mod test_scenes;
 pub mod tiles;
 mod view;
 mod warp;

@@ -1275,17 +1275,8 @@ mod tests {
     #[test]
     fn a_centered_lines_rays_read_their_own_paths_on_the_line() {
         use crate::{Camera, NoProbe, Pyramid, Terrain};
-        let side = 48usize;
-        let heights: Vec<u16> = (0..side * side)
-            .map(|i| {
-                let (x, y) = ((i % side) as f32, (i / side) as f32);
-                (16.0 * (40.0 + 12.0 * (x * 0.37).sin() * (y * 0.23).cos())) as u16
-            })
-            .collect();
-        let colors: Vec<Rgb> = (0..side * side)
-            .map(|i| [(i * 7 % 256) as u8, (i * 13 % 256) as u8, (i % 256) as u8])
-            .collect();
-        let terrain = Terrain::new(side as u32, side as u32, &heights, &colors).unwrap();
+        let (heights, colors) = crate::test_scenes::hills(48, 48);
+        let terrain = Terrain::new(48, 48, &heights, &colors).unwrap();
         let pyramid = Pyramid::flat(terrain);
         let options = RenderOptions {
             height_path: HeightPath::Ray,

@@ -515,6 +515,21 @@ mod tests {
     use crate::view::{Camera, View};
     use std::vec;
 
+    /// `lerp_within` is `lerp`'s body without the clamp (kept apart for
+    /// the board's inlining): the two agree on every weight up to 256.
+    #[test]
+    fn a_blend_within_the_weights_is_the_clamped_blend() {
+        let colors: [Rgb; 4] = [[0, 0, 0], [255, 255, 255], [17, 200, 93], [254, 1, 128]];
+        for a in colors {
+            for b in colors {
+                for t in 0..=256 {
+                    let (a, b) = (Lanes::of(a), Lanes::of(b));
+                    assert_eq!(a.lerp_within(b, t), a.lerp(b, t), "{a:?} {b:?} {t}");
+                }
+            }
+        }
+    }
+
     /// The loop's four increments on every level are exactly the difference
     /// between the directly computed positions of successive samples: the
     /// increments double with the level and never drift.

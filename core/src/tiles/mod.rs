@@ -357,6 +357,7 @@ pub fn cut_stick_points<const T: usize>(
 mod tests {
     use super::*;
     use crate::surface::Grid;
+    use crate::test_scenes::hills;
     use crate::{
         pyramid_cells, pyramid_points, render, Camera, CountingProbe, Framebuffer, HeightFilter,
         NoProbe, Pyramid, RenderOptions, Surface, Terrain, View,
@@ -378,22 +379,6 @@ mod tests {
                 .then_some(Tile::<16>::BYTES)
                 .ok_or(TileError::Missing)
         }
-    }
-
-    fn hills(w: u32, d: u32) -> (vec::Vec<u16>, vec::Vec<Rgb>) {
-        let mut heights = vec![0u16; (w * d) as usize];
-        let mut colors = vec![[0u8; 3]; (w * d) as usize];
-        for y in 0..d {
-            for x in 0..w {
-                let (fx, fy) = (x as f32 * 0.09, y as f32 * 0.13);
-                let h = 40.0
-                    + 30.0 * libm::sinf(fx) * libm::cosf(fy)
-                    + 12.0 * libm::sinf(fx * 3.1 + fy);
-                heights[(y * w + x) as usize] = Terrain::quantize_height(h).unwrap();
-                colors[(y * w + x) as usize] = [(x * 3) as u8, (y * 5) as u8, (x ^ y) as u8];
-            }
-        }
-        (heights, colors)
     }
 
     /// A map and the storage of its pyramid.
