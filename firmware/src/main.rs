@@ -15,8 +15,9 @@
 //!    written as `frame-K-from-eye.rgb`: the same rays with many more
 //!    steps, which separates the cost of a step from that of a ray;
 //! 4. renders it again with the flight's sky, sun and fog
-//!    (`Atmosphere::FLIGHT`), written as `frame-K-atmosphere.rgb`: what
-//!    the atmosphere costs a pixel.
+//!    (`Atmosphere::FLIGHT`), written as `frame-K-atmosphere.rgb`, and
+//!    with its sky and sun alone, as `frame-K-clear-air.rgb`: what the
+//!    atmosphere costs a pixel, and what its fog does.
 //!
 //! A scene with objects (`terracast-sim board scene --objects`) renders
 //! them through its stick layer, whose table is decoded into static RAM at
@@ -348,8 +349,12 @@ fn run() -> Result<(), &'static str> {
     let air = Atmosphere::FLIGHT
         .prepare()
         .map_err(|_| "the kernel refused the flight's atmosphere")?;
+    let clear_air = Atmosphere::FLIGHT
+        .without_fog()
+        .prepare()
+        .map_err(|_| "the kernel refused the flight's sky and sun")?;
 
-    let mut results: heapless::String<2048> = heapless::String::new();
+    let mut results: heapless::String<4096> = heapless::String::new();
     let _ = writeln!(
         results,
         "calibration instructions {CALIBRATION_INSTRUCTIONS} ticks {calibration}"
@@ -439,6 +444,7 @@ fn run() -> Result<(), &'static str> {
         options,
         from_eye,
         air,
+        clear_air,
     };
     let views = scene.header.views();
     match objects {
@@ -473,7 +479,7 @@ fn governed_run<T: Surface>(
     views: &[Camera],
     options: &RenderOptions,
     frame: &mut [Rgb; PIXELS],
-    results: &mut heapless::String<2048>,
+    results: &mut heapless::String<4096>,
 ) -> Result<(), &'static str> {
     let (cameras, count) = governed::cameras(views);
     let mut index = 0;
@@ -502,12 +508,13 @@ fn governed_run<T: Surface>(
     Ok(())
 }
 
-/// How each view is rendered: the default, from the eye, and under the
-/// flight's atmosphere.
+/// How each view is rendered: the default, from the eye, under the
+/// flight's atmosphere, and under its sky and sun without the fog.
 struct Renders {
     options: RenderOptions,
     from_eye: RenderOptions,
     air: PreparedAtmosphere,
+    clear_air: PreparedAtmosphere,
 }
 
 impl Renders {
@@ -520,12 +527,13 @@ impl Renders {
         cameras: &[Camera],
         frame: &mut [Rgb; PIXELS],
         capture: &mut [u8; CAPTURE_BYTES],
-        results: &mut heapless::String<2048>,
+        results: &mut heapless::String<4096>,
     ) -> Result<(), &'static str> {
         let Self {
             options,
             from_eye,
             air,
+            clear_air,
         } = self;
         let mut led = FrameLed;
         for (index, camera) in cameras.iter().enumerate() {
@@ -604,24 +612,33 @@ impl Renders {
             let _ = write!(name, "frame-{index}-from-eye.rgb\0");
             write_host_file(&name, frame.as_flattened())?;
 
-            // The same view under the flight's sky, sun and fog.
-            let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
-                .map_err(|_| "framebuffer too small")?;
-            let start = ticks();
-            render(
-                surface,
-                &view,
-                options,
-                &mut air.sink_over_sky(&view, &mut framebuffer),
-                &mut NoProbe,
-            );
-            let atmosphere_ticks = ticks() - start;
-            name.clear();
-            let _ = write!(name, "frame-{index}-atmosphere.rgb\0");
-            write_host_file(&name, frame.as_flattened())?;
+            // The same view under the flight's sky, sun and fog, and under
+            // its sky and sun alone: one sink type, so one compiled caster,
+            // and what the fog costs is the difference.
+            let mut air_ticks = [0u64; 2];
+            for (ticks_of, (air, file)) in air_ticks
+                .iter_mut()
+                .zip([(air, "atmosphere"), (clear_air, "clear-air")])
+            {
+                let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
+                    .map_err(|_| "framebuffer too small")?;
+                let start = ticks();
+                render(
+                    surface,
+                    &view,
+                    options,
+                    &mut air.sink_over_sky(&view, &mut framebuffer),
+                    &mut NoProbe,
+                );
+                *ticks_of = ticks() - start;
+                name.clear();
+                let _ = write!(name, "frame-{index}-{file}.rgb\0");
+                write_host_file(&name, frame.as_flattened())?;
+            }
+            let [atmosphere_ticks, clear_air_ticks] = air_ticks;
             let _ = writeln!(
             results,
-            "frame {index} kernel_ticks {kernel_ticks} display_ticks {display_ticks} from_eye_ticks {from_eye_ticks} atmosphere_ticks {atmosphere_ticks}"
+            "frame {index} kernel_ticks {kernel_ticks} display_ticks {display_ticks} from_eye_ticks {from_eye_ticks} atmosphere_ticks {atmosphere_ticks} clear_air_ticks {clear_air_ticks}"
         );
             hprintln!(
                 "terracast-firmware: frame {} rendered in {} ticks ({} with the display)",

@@ -90,10 +90,7 @@ const FIT_SETTLE_FRAMES: usize = 8;
 /// The `atmosphere` group's settings: none, the flight's sky and sun
 /// without its fog, its fog without the sun, and the flight's whole.
 fn atmospheres() -> [(&'static str, Option<PreparedAtmosphere>); 4] {
-    let clear = Atmosphere {
-        fog: None,
-        ..Atmosphere::FLIGHT
-    };
+    let clear = Atmosphere::FLIGHT.without_fog();
     let fog = Atmosphere {
         sun: None,
         ..Atmosphere::FLIGHT

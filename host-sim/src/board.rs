@@ -134,6 +134,12 @@ pub struct FrameCheck {
     pub atmosphere_differing_pixels: usize,
     /// See `atmosphere_differing_pixels`.
     pub atmosphere_ticks: u64,
+    /// The same view under the flight's sky and sun without its fog
+    /// (`Atmosphere::without_fog`): pixels that differ between board and
+    /// host, and board ticks.
+    pub clear_air_differing_pixels: usize,
+    /// See `clear_air_differing_pixels`.
+    pub clear_air_ticks: u64,
 }
 
 /// The kernel's cost on the board, in instructions: what
@@ -158,6 +164,7 @@ impl FrameCheck {
             && self.display_differing_pixels == 0
             && self.from_eye_differing_pixels == 0
             && self.atmosphere_differing_pixels == 0
+            && self.clear_air_differing_pixels == 0
     }
 }
 
@@ -240,14 +247,14 @@ impl BoardReport {
         let per_tick = self.instructions_per_tick;
         let pixels = f64::from(self.image.0) * f64::from(self.image.1);
         let mut out = String::from(
-            "view  frame       wire       display  steps/px  colors/px  instr/px  instr/step  instr/px with display  from eye: frame  steps/px  colors/px  instr/px  atmosphere: frame  instr/px\n",
+            "view  frame       wire       display  steps/px  colors/px  instr/px  instr/step  instr/px with display  from eye: frame  steps/px  colors/px  instr/px  atmosphere: frame  instr/px  no fog: frame  instr/px\n",
         );
         for f in &self.frames {
             let verdict = |ok: bool| if ok { "identical" } else { "DIFFERENT" };
             let instructions = f.kernel_ticks as f64 * per_tick;
             let _ = writeln!(
                 out,
-                "{:>4}  {:<10}  {:<9}  {:<7}  {:>8.2}  {:>9.2}  {:>8.0}  {:>10.0}  {:>21.0}  {:>15}  {:>8.2}  {:>9.2}  {:>8.0}  {:>17}  {:>8.0}",
+                "{:>4}  {:<10}  {:<9}  {:<7}  {:>8.2}  {:>9.2}  {:>8.0}  {:>10.0}  {:>21.0}  {:>15}  {:>8.2}  {:>9.2}  {:>8.0}  {:>17}  {:>8.0}  {:>13}  {:>8.0}",
                 f.index,
                 verdict(f.differing_pixels == 0),
                 verdict(f.wire_identical),
@@ -267,16 +274,22 @@ impl BoardReport {
                 f.from_eye_ticks as f64 * per_tick / pixels,
                 verdict(f.atmosphere_differing_pixels == 0),
                 f.atmosphere_ticks as f64 * per_tick / pixels,
+                verdict(f.clear_air_differing_pixels == 0),
+                f.clear_air_ticks as f64 * per_tick / pixels,
             );
         }
         let plain: u64 = self.frames.iter().map(|f| f.kernel_ticks).sum();
         let with_air: u64 = self.frames.iter().map(|f| f.atmosphere_ticks).sum();
+        let clear_air: u64 = self.frames.iter().map(|f| f.clear_air_ticks).sum();
         let views = self.frames.len().max(1) as f64;
         let _ = writeln!(
             out,
-            "with the flight's sky, sun and fog: {:.0} instructions a pixel, {:.3}x the default render's",
+            "with the flight's sky, sun and fog: {:.0} instructions a pixel, {:.3}x the default render's; without its fog {:.0}, {:.3}x; fog on against off {:.3}x",
             with_air as f64 * per_tick / pixels / views,
-            with_air as f64 / plain.max(1) as f64
+            with_air as f64 / plain.max(1) as f64,
+            clear_air as f64 * per_tick / pixels / views,
+            clear_air as f64 / plain.max(1) as f64,
+            with_air as f64 / clear_air.max(1) as f64
         );
         let fit = self.cost_fit();
         let _ = writeln!(
@@ -418,6 +431,9 @@ pub struct HostFrame {
     /// The view under the flight's atmosphere: what the board writes as
     /// `frame-K-atmosphere.rgb`.
     pub atmosphere_rgb: Vec<u8>,
+    /// The view under the flight's sky and sun without its fog:
+    /// `frame-K-clear-air.rgb`.
+    pub clear_air_rgb: Vec<u8>,
 }
 
 /// A board scene file read into aligned storage.
@@ -516,6 +532,10 @@ impl SceneFile {
         let air = Atmosphere::FLIGHT
             .prepare()
             .map_err(|e| Error::new(e.to_string()))?;
+        let clear_air = Atmosphere::FLIGHT
+            .without_fog()
+            .prepare()
+            .map_err(|e| Error::new(e.to_string()))?;
         let mut frames = Vec::new();
         for (index, camera) in header.views().iter().enumerate() {
             let view = View::new(camera, width, height)
@@ -545,6 +565,7 @@ impl SceneFile {
             let (rgb, counts) = frame(&options, None)?;
             let (from_eye_rgb, from_eye_counts) = frame(&from_eye, None)?;
             let (atmosphere_rgb, _) = frame(&options, Some(&air))?;
+            let (clear_air_rgb, _) = frame(&options, Some(&clear_air))?;
             frames.push(HostFrame {
                 rgb,
                 wire: display_capture(surface, &view, &options, width, height)?,
@@ -554,6 +575,7 @@ impl SceneFile {
                 from_eye_steps: from_eye_counts.steps,
                 from_eye_color_fetches: from_eye_counts.color_fetches,
                 atmosphere_rgb,
+                clear_air_rgb,
             });
         }
         Ok(frames)
@@ -633,6 +655,8 @@ pub fn verify(scene_path: &Path, from: &Path, height_path: HeightPath) -> Result
             format!("frame-{index}-atmosphere.rgb"),
             &host.atmosphere_rgb,
         )?;
+        let clear_air_differing_pixels =
+            compare(format!("frame-{index}-clear-air.rgb"), &host.clear_air_rgb)?;
         let board_wire = read(&from.join(format!("wire-{index}.bin")))?;
         let mut shown = vec![0u16; pixels];
         decode(&board_wire, &mut shown, width, height)
@@ -642,7 +666,7 @@ pub fn verify(scene_path: &Path, from: &Path, height_path: HeightPath) -> Result
             .zip(host.rgb.chunks_exact(3))
             .filter(|(shown, host)| **shown != rgb565([host[0], host[1], host[2]]))
             .count();
-        let (kernel_ticks, display_ticks, from_eye_ticks, atmosphere_ticks) =
+        let (kernel_ticks, display_ticks, from_eye_ticks, atmosphere_ticks, clear_air_ticks) =
             *results.frames.get(index).ok_or_else(|| {
                 Error::new(format!("board-results.txt has no timing for frame {index}"))
             })?;
@@ -661,6 +685,8 @@ pub fn verify(scene_path: &Path, from: &Path, height_path: HeightPath) -> Result
             from_eye_ticks,
             atmosphere_differing_pixels,
             atmosphere_ticks,
+            clear_air_differing_pixels,
+            clear_air_ticks,
         });
     }
     let mut governed = Vec::new();
@@ -860,8 +886,9 @@ struct BoardResults {
     /// Instructions and ticks of the calibration loop.
     calibration: Option<(u64, u64)>,
     pyramid_ticks: u64,
-    /// Kernel, displayed, from-eye and atmosphere ticks of each frame.
-    frames: Vec<(u64, u64, u64, u64)>,
+    /// Kernel, displayed, from-eye, atmosphere and clear-air ticks of each
+    /// frame.
+    frames: Vec<(u64, u64, u64, u64, u64)>,
     /// Ticks of each frame of the governor's run.
     governed: Vec<u64>,
 }
@@ -880,8 +907,9 @@ impl BoardResults {
 }
 
 /// Reads `board-results.txt`: `calibration instructions N ticks T`,
-/// `pyramid_ticks N` and `frame K kernel_ticks N display_ticks M
-/// from_eye_ticks O` lines.
+/// `pyramid_ticks N`, `frame K kernel_ticks N display_ticks M
+/// from_eye_ticks O atmosphere_ticks A clear_air_ticks C` and `governed K
+/// ticks N` lines.
 fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
     let text =
         std::str::from_utf8(bytes).map_err(|_| Error::new("board-results.txt is not text"))?;
@@ -906,12 +934,14 @@ fn parse_results(bytes: &[u8]) -> Result<BoardResults> {
                 results.calibration = Some((int(n)?, int(t)?));
             }
             ["pyramid_ticks", n] => results.pyramid_ticks = int(n)?,
-            ["frame", k, "kernel_ticks", n, "display_ticks", m, "from_eye_ticks", o, "atmosphere_ticks", a] =>
+            ["frame", k, "kernel_ticks", n, "display_ticks", m, "from_eye_ticks", o, "atmosphere_ticks", a, "clear_air_ticks", c] =>
             {
                 if int(k)? != results.frames.len() as u64 {
                     return Err(bad());
                 }
-                results.frames.push((int(n)?, int(m)?, int(o)?, int(a)?));
+                results
+                    .frames
+                    .push((int(n)?, int(m)?, int(o)?, int(a)?, int(c)?));
             }
             ["governed", k, "ticks", n] => {
                 if int(k)? != results.governed.len() as u64 {
@@ -936,11 +966,11 @@ mod tests {
     #[test]
     fn results_are_read_and_bad_lines_named() {
         let ok = parse_results(
-            b"calibration instructions 400 ticks 10\npyramid_ticks 12\nframe 0 kernel_ticks 5 display_ticks 7 from_eye_ticks 9 atmosphere_ticks 6\nframe 1 kernel_ticks 6 display_ticks 8 from_eye_ticks 10 atmosphere_ticks 7\n",
+            b"calibration instructions 400 ticks 10\npyramid_ticks 12\nframe 0 kernel_ticks 5 display_ticks 7 from_eye_ticks 9 atmosphere_ticks 6 clear_air_ticks 4\nframe 1 kernel_ticks 6 display_ticks 8 from_eye_ticks 10 atmosphere_ticks 7 clear_air_ticks 5\n",
         )
         .unwrap();
         assert_eq!(ok.pyramid_ticks, 12);
-        assert_eq!(ok.frames, vec![(5, 7, 9, 6), (6, 8, 10, 7)]);
+        assert_eq!(ok.frames, vec![(5, 7, 9, 6, 4), (6, 8, 10, 7, 5)]);
         assert_eq!(ok.instructions_per_tick().unwrap(), 40.0);
         let uncalibrated = parse_results(b"pyramid_ticks 12\n").unwrap();
         assert!(uncalibrated.instructions_per_tick().is_err());

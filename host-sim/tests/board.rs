@@ -88,8 +88,13 @@ fn scene_and_board_output_on(
             &frame.atmosphere_rgb,
         )
         .unwrap();
+        std::fs::write(
+            board.join(format!("frame-{k}-clear-air.rgb")),
+            &frame.clear_air_rgb,
+        )
+        .unwrap();
         results += &format!(
-            "frame {k} kernel_ticks {ticks} display_ticks 1100 from_eye_ticks 3000 atmosphere_ticks 1050\n"
+            "frame {k} kernel_ticks {ticks} display_ticks 1100 from_eye_ticks 3000 atmosphere_ticks 1050 clear_air_ticks 1000\n"
         );
     }
     // The governor's run (a bare map's): each frame at 0.95 of its budget,
@@ -185,27 +190,28 @@ fn one_changed_byte_of_a_frame_or_the_wire_fails() {
         "{out}"
     );
 
-    // Restore the wire; a flipped byte in a from-eye frame fails too.
+    // Restore the wire; a flipped byte in a from-eye frame fails too, and
+    // in a frame under the atmosphere, and under its sky and sun alone.
     bytes[last] ^= 0x80;
     std::fs::write(&wire, &bytes).unwrap();
-    let from_eye = board.join("frame-1-from-eye.rgb");
-    let mut bytes = std::fs::read(&from_eye).unwrap();
-    bytes[99] ^= 4;
-    std::fs::write(&from_eye, &bytes).unwrap();
-    let (code, out, err) = board_verify(&scene, &board, &[]);
-    assert_eq!(code, 1, "{out}");
-    assert!(err.contains("differ in view(s) 1"), "{err}");
-
-    // And in a frame under the atmosphere.
-    bytes[99] ^= 4;
-    std::fs::write(&from_eye, &bytes).unwrap();
-    let hazy = board.join("frame-3-atmosphere.rgb");
-    let mut bytes = std::fs::read(&hazy).unwrap();
-    bytes[7] ^= 1;
-    std::fs::write(&hazy, &bytes).unwrap();
-    let (code, out, err) = board_verify(&scene, &board, &[]);
-    assert_eq!(code, 1, "{out}");
-    assert!(err.contains("differ in view(s) 3"), "{err}");
+    for (file, byte, view) in [
+        ("frame-1-from-eye.rgb", 99, 1),
+        ("frame-3-atmosphere.rgb", 7, 3),
+        ("frame-2-clear-air.rgb", 11, 2),
+    ] {
+        let path = board.join(file);
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[byte] ^= 4;
+        std::fs::write(&path, &bytes).unwrap();
+        let (code, out, err) = board_verify(&scene, &board, &[]);
+        assert_eq!(code, 1, "{file}: {out}");
+        assert!(
+            err.contains(&format!("differ in view(s) {view}")),
+            "{file}: {err}"
+        );
+        bytes[byte] ^= 4;
+        std::fs::write(&path, &bytes).unwrap();
+    }
 }
 
 #[test]

@@ -24,9 +24,9 @@ pub struct AtmosphereFrame {
     pub(super) sky: [Rgb; SKY_FINE_STEPS + 1],
     pub(super) sky_weights: [u16; SKY_STEPS + 1],
     /// The fog's halvings a voxel of path (Q31) at the mean density from
-    /// the eye to each height of the fog's tables: a path's length times
-    /// it is the halvings along it.
-    pub(super) rate: [u32; HEIGHT_STEPS + 1],
+    /// the eye to the middle of each voxel of height: a path's length
+    /// times it is the halvings along it.
+    pub(super) rate: [u32; HEIGHT_VOXELS as usize + 1],
     pub(super) grid: PixelGrid,
 }
 

@@ -84,9 +84,10 @@ const SKY_STEPS: usize = 256;
 const SKY_FINE_BITS: u32 = 10;
 const SKY_FINE_STEPS: usize = 1 << SKY_FINE_BITS;
 /// Fog tables by height: an entry every 4 voxels from 0 to 4096 (heights
-/// are U12.4, below 4096).
+/// are U12.4, below 4096); a frame's rate, an entry every voxel.
 const HEIGHT_STEP_BITS: u32 = 2;
-const HEIGHT_STEPS: usize = 4096 >> HEIGHT_STEP_BITS;
+const HEIGHT_VOXELS: u32 = 4096;
+const HEIGHT_STEPS: usize = (HEIGHT_VOXELS >> HEIGHT_STEP_BITS) as usize;
 /// Fixed-point formats: directions Q20, heights and lengths Q8.
 const DIR_BITS: u32 = 20;
 const Q8: u32 = 8;
@@ -270,6 +271,12 @@ impl Atmosphere {
         }),
     };
 
+    /// This atmosphere without its fog: what the fog's cost is measured
+    /// against (fog on against off).
+    pub const fn without_fog(self) -> Self {
+        Self { fog: None, ..self }
+    }
+
     /// The sky's color (no fog) along the unit direction `e`, exact.
     pub fn sky_exact(&self, e: [f64; 3]) -> [f64; 3] {
         let gradient = sky_weight(e[2]);
@@ -374,7 +381,9 @@ impl Atmosphere {
         });
         let fog = self.fog.map(|fog| FogTable {
             fog,
-            color_lanes: Lanes::of(fog.color),
+            toward_fog: core::array::from_fn(|left| {
+                Lanes::of(fog.color).weighted(256 - left as u32)
+            }),
             halvings_q32: to_fixed(fog.halvings_per_voxel(), 32) as u32,
             column: core::array::from_fn(|i| {
                 to_fixed(fog.column((i << HEIGHT_STEP_BITS) as f64), Q8) as u32

@@ -30,8 +30,9 @@ pub(super) struct SunTable {
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct FogTable {
     pub(super) fog: Fog,
-    /// The fog's color as a blend takes it.
-    pub(super) color_lanes: Lanes,
+    /// The fog's color weighted for a blend toward another color that
+    /// keeps `i`/256 of it ([`Lanes::weighted`] by `256 − i`), by `i`.
+    pub(super) toward_fog: [Lanes; 257],
     /// Halvings a voxel at ground density, Q32 (below 1: the visibility
     /// is at least 8 voxels).
     pub(super) halvings_q32: u32,
@@ -87,7 +88,7 @@ impl PreparedAtmosphere {
         // `(F(b) − F(a)) / (b − a)`, the density midway within a voxel of
         // the eye's height.
         let eye_q8 = eye_q16 >> (COORD_FRAC_BITS - Q8);
-        let rate = core::array::from_fn(|i| match &self.fog {
+        let rate_every_step: [u32; HEIGHT_STEPS + 1] = core::array::from_fn(|i| match &self.fog {
             None => 0,
             Some(table) => {
                 let height = (i as i64) << (HEIGHT_STEP_BITS + Q8);
@@ -101,6 +102,12 @@ impl PreparedAtmosphere {
                 // Below 2^31: the halvings a voxel are below 1.
                 ((mean_q16 as u64 * u64::from(table.halvings_q32)) >> 17) as u32
             }
+        });
+        // At the middle of every voxel, linear between the steps, so that a
+        // hit reads its rate without a blend, by its whole voxels.
+        let rate = core::array::from_fn(|i| {
+            let q8 = ((i as u32) << Q8) + (1 << (Q8 - 1));
+            between(&rate_every_step, q8.min(HEIGHT_VOXELS << Q8))
         });
         let (base, per_column, per_row) = (q20(view.base), q20(view.per_column), q20(view.per_row));
         let grid = PixelGrid::new(
@@ -268,16 +275,18 @@ impl PreparedAtmosphere {
         sample: &Sample,
         distance_q8: u32,
     ) -> Rgb {
-        // In words: the height is below 2^20 (Q8); the rate below 2^31,
-        // so the halvings (Q8, rounded) fit a word: one 32 × 32-bit
-        // product.
-        let height_q8 = (sample.elevation >> (COORD_FRAC_BITS - Q8)).max(0) as u32;
-        let rate = between(&frame.rate, height_q8);
+        // The rate at the middle of the voxel of the hit's height (held
+        // past the table's top); below 2^31, so the halvings (Q8,
+        // rounded) fit a word: one 32 × 32-bit product.
+        let voxel = (sample.elevation >> COORD_FRAC_BITS).max(0) as u32;
+        let top = &frame.rate[HEIGHT_VOXELS as usize];
+        let rate = *frame.rate.get(voxel as usize).unwrap_or(top);
         let halvings_q8 = (u64::from(distance_q8) * u64::from(rate) + (1 << 30)) >> 31;
         let weight = left_after(halvings_q8 as u32);
-        table
-            .color_lanes
-            .lerp_within(Lanes::of(sample.color), weight)
+        // `weight` is at most 256: held there, so that no bound is checked.
+        let weight = weight.min(256);
+        table.toward_fog[weight as usize]
+            .plus_weighted(Lanes::of(sample.color), weight)
             .rgb()
     }
 
@@ -311,19 +320,7 @@ impl PreparedAtmosphere {
         let distance_q8 = if vertical {
             drop(frame, sample) >> (COORD_FRAC_BITS - Q8)
         } else {
-            // The ray's length a unit of major-axis distance, Q16, within
-            // a word (below 2^30: the slope is below 2^29):
-            // `m·√(1 + u²)`, `u` the slope over `m` (Q16, below 2^30), or
-            // for a steep ray `|slope|·√(1 + 1/u²)`.
-            let u = ((u64::from(slope.unsigned_abs()) * u64::from(line.inverse_m)) >> 20) as u32;
-            let length = if u < 1 << 16 {
-                let at = ((u + (1 << 5)) >> 6) as usize;
-                let stretch = STRETCH_FINE.get(at).map_or(0, |&s| u32::from(s)) + (1 << 16);
-                ((u64::from(line.m) * u64::from(stretch)) >> 16) as u32
-            } else {
-                ((u64::from(slope.unsigned_abs()) * StretchEntry::steep(u).of_table(&STRETCH_HIGH))
-                    >> 16) as u32
-            };
+            let length = line.ray_length(slope);
             word((u64::from(sample.distance) * u64::from(length)) >> (16 + 16 - Q8))
         };
         self.fogged(frame, table, sample, distance_q8)

@@ -146,6 +146,35 @@ impl LineShade {
     }
 }
 
+impl LineShade {
+    /// The length (Q16) a unit of major-axis distance of the ray of this
+    /// line's plane whose height changes by `slope` (Q16, below 2^29) a
+    /// unit: `√(m² + slope²)`, within a word (below 2^30). For a ray
+    /// shallower than the plane's diagonal `m·√(1 + u²)`, `u` the slope
+    /// over `m` (Q16, below 1), else `|slope|·√(1 + v²)`, `v` the other
+    /// way round, by one 32-bit divide: both from the same table, at the
+    /// entry nearest `u` or `v` (no blend, no branch on the octave).
+    #[inline(always)]
+    pub(super) fn ray_length(&self, slope: i32) -> u32 {
+        let rise = slope.unsigned_abs();
+        let (scale, at) = if rise < self.m {
+            let u = ((u64::from(rise) * u64::from(self.inverse_m)) >> 20) as u32;
+            (self.m, (u + (1 << 5)) >> 6)
+        } else {
+            // `m < 2^17` and `rise < 2^29`: the sum is within a word;
+            // `rise ≥ m`, so the quotient is at most 1024.
+            (
+                rise,
+                ((self.m << 10) + (rise >> 1))
+                    .checked_div(rise)
+                    .unwrap_or(0),
+            )
+        };
+        let stretch = STRETCH_FINE.get(at as usize).map_or(0, |&s| u32::from(s)) + (1 << 16);
+        ((u64::from(scale) * u64::from(stretch)) >> 16) as u32
+    }
+}
+
 /// `⌊2^36 / m⌋` (`1/m` in Q20 for `m` in Q16, `m ≥ 2^16`) by two 32-bit
 /// divides: `2^32 = q·m + r + 1` with `q = ⌊(2^32 − 1)/m⌋`, so
 /// `2^36 / m = 16q + 16(r + 1)/m`.

@@ -108,27 +108,11 @@ pub(super) const STRETCH_LOW: [u32; 257] = {
     table
 };
 
-/// `√(1 + 1/u²)` (Q16) for `u = 2^e·(1 + k/32)`, at entry `32e + k`
-/// (`e` in 0..8, the last entry `u = 256`): a ray's length over its
-/// height change, where its slope is `u` times its line's `m`, 1 or more.
-/// Past 256 it is 1 within 2^−17.
-pub(super) const STRETCH_HIGH: [u32; 257] = {
-    let mut table = [0u32; 257];
-    let mut i = 0;
-    while i < 257 {
-        let (e, k) = ((i / 32) as u32, (i % 32) as u64);
-        // 1/u² = 2^−2e · 32² / (32 + k)², in Q32.
-        let inverse_squared = (1u64 << (42 - 2 * e)) / ((32 + k) * (32 + k));
-        table[i] = ((1u64 << 32) + inverse_squared).isqrt() as u32;
-        i += 1;
-    }
-    table
-};
-
 /// `√(1 + u²) − 1` (Q16) for `u = i/1024`, `i` in 0..=1024: a ray's
-/// length over its horizontal length, as [`STRETCH_LOW`], at the entry
-/// nearest its `u`, without a blend (neighbours differ by under 2^−10 of
-/// the length).
+/// length over its horizontal length, as [`STRETCH_LOW`], or for a ray
+/// steeper than that over its height change, `u` the run over the rise;
+/// at the entry nearest its `u`, without a blend (neighbours differ by
+/// under 2^−10 of the length).
 pub(super) const STRETCH_FINE: [u16; 1025] = {
     let mut table = [0u16; 1025];
     let mut i = 0;
@@ -140,9 +124,8 @@ pub(super) const STRETCH_FINE: [u16; 1025] = {
     table
 };
 
-/// Where a `u` lies in a table by `u` ([`STRETCH_LOW`] below 1,
-/// [`STRETCH_HIGH`] from 1): the entry below it and the fraction (in
-/// 1/256) to the next.
+/// Where a `u` lies in [`STRETCH_LOW`]: the entry below it and the
+/// fraction (in 1/256) to the next.
 #[derive(Clone, Copy)]
 pub(super) struct StretchEntry {
     pub(super) at: usize,
@@ -150,23 +133,6 @@ pub(super) struct StretchEntry {
 }
 
 impl StretchEntry {
-    /// The entry of `u` (Q16, 1 or more) in [`STRETCH_HIGH`].
-    #[inline(always)]
-    pub(super) fn steep(u: u32) -> Self {
-        let top = 31 - u.leading_zeros();
-        if top >= 16 + 8 {
-            // 256 or more: the last entry.
-            return Self {
-                at: 256,
-                fraction: 0,
-            };
-        }
-        Self {
-            at: ((top - 16) * 32 + ((u >> (top - 5)) & 31)) as usize,
-            fraction: ((u >> (top - 13)) & 0xFF) as i32,
-        }
-    }
-
     /// `table` here, blended between its entries.
     #[inline(always)]
     pub(super) fn of_table(&self, table: &[u32; 257]) -> u64 {

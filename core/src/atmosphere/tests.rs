@@ -351,8 +351,9 @@ fn fog_fades_smoothly_with_distance_without_bands() {
 #[test]
 fn what_fog_leaves_is_a_blend_weight_from_all_to_nothing() {
     // The fog's blend takes the weight as it is, unclamped
-    // (`Lanes::lerp_within`): every halving count, in the table and past
-    // it, must give at most 256.
+    // (`Lanes::plus_weighted`, from `FogTable::toward_fog` by the weight):
+    // every halving count, in the table and past it, must give at most
+    // 256.
     assert_eq!(left_after(0), 256);
     assert!((0..=u32::from(u16::MAX)).all(|halvings| left_after(halvings) <= 256));
     assert_eq!(left_after(u32::MAX), 0);
@@ -458,6 +459,33 @@ fn a_lines_shade_is_its_planes_length_and_its_reciprocal() {
         );
     }
     assert_eq!(inverse_q20(1 << 16), 1 << 20);
+}
+
+#[test]
+fn a_rays_length_is_within_a_part_in_2_to_the_11_at_every_slope() {
+    // `√(m² + slope²)` for planes from along an axis to the diagonal, and
+    // slopes from level to the steepest with a run, both signs: the
+    // shallow and the steep branch, and both sides of where they meet.
+    let mut worst: f64 = 0.0;
+    for dminor in [0, 1 << 14, 27_000, 1 << 16] {
+        let shade = LineShade::new(&LinePlane { dminor });
+        let m = f64::from(shade.m);
+        let slopes = (0..4000)
+            .map(|i| (f64::from(i) / 4000.0).powi(4) * f64::from(MAX_SLOPE_Q16 - 1))
+            .map(|s| s as i32)
+            .chain([shade.m as i32 - 1, shade.m as i32, shade.m as i32 + 1]);
+        for slope in slopes.flat_map(|s| [s, -s]) {
+            let exact = (m * m + f64::from(slope).powi(2)).sqrt();
+            let error = (f64::from(shade.ray_length(slope)) - exact).abs() / exact;
+            worst = worst.max(error);
+            assert!(
+                error < 1.0 / 2048.0,
+                "dminor {dminor} slope {slope}: {} against {exact}",
+                shade.ray_length(slope)
+            );
+        }
+    }
+    println!("a ray's length: worst {worst:.2e}");
 }
 
 #[test]

@@ -330,14 +330,26 @@ impl Lanes {
         }
     }
 
-    /// [`Lanes::lerp`] by a `t` known to be at most 256 (a weight from a
-    /// table of them), without holding it there.
+    /// The part of [`Lanes::lerp`] from `self` that does not depend on the
+    /// other color: `self` by `weight` (at most 256), with the blend's
+    /// rounding. A color blended toward many others by a table of weights
+    /// (the fog's) keeps it for every weight.
     #[inline(always)]
-    pub(crate) fn lerp_within(self, other: Self, t: u32) -> Self {
+    pub(crate) fn weighted(self, weight: u32) -> Self {
         Self {
-            red_blue: ((self.red_blue * (256 - t) + other.red_blue * t + 0x0080_0080) >> 8)
-                & 0x00FF_00FF,
-            green: (self.green * (256 - t) + other.green * t + 128) >> 8,
+            red_blue: self.red_blue * weight + 0x0080_0080,
+            green: self.green * weight + 128,
+        }
+    }
+
+    /// The blend [`Lanes::lerp`] gives from a color to `other` by `t`
+    /// (at most 256), `self` that color [`Lanes::weighted`] by `256 − t`:
+    /// a product a lane pair.
+    #[inline(always)]
+    pub(crate) fn plus_weighted(self, other: Self, t: u32) -> Self {
+        Self {
+            red_blue: ((self.red_blue + other.red_blue * t) >> 8) & 0x00FF_00FF,
+            green: (self.green + other.green * t) >> 8,
         }
     }
 
@@ -515,16 +527,20 @@ mod tests {
     use crate::view::{Camera, View};
     use std::vec;
 
-    /// `lerp_within` is `lerp`'s body without the clamp (kept apart for
-    /// the board's inlining): the two agree on every weight up to 256.
+    /// A blend from a color weighted once for its weight is the blend
+    /// `lerp` gives, at every weight up to 256.
     #[test]
-    fn a_blend_within_the_weights_is_the_clamped_blend() {
+    fn a_blend_from_a_weighted_color_is_lerps_blend() {
         let colors: [Rgb; 4] = [[0, 0, 0], [255, 255, 255], [17, 200, 93], [254, 1, 128]];
         for a in colors {
             for b in colors {
                 for t in 0..=256 {
                     let (a, b) = (Lanes::of(a), Lanes::of(b));
-                    assert_eq!(a.lerp_within(b, t), a.lerp(b, t), "{a:?} {b:?} {t}");
+                    assert_eq!(
+                        a.weighted(256 - t).plus_weighted(b, t),
+                        a.lerp(b, t),
+                        "{a:?} {b:?} {t}"
+                    );
                 }
             }
         }
