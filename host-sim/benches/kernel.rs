@@ -607,10 +607,15 @@ fn main() {
 /// the shared machine's load falls on all of them alike: a table's ratios
 /// come from these, not from criterion's estimates of groups run one
 /// after another.
-fn best_in_turns(count: usize, mut render: impl FnMut(usize)) -> Vec<f64> {
-    const ROUNDS: usize = 25;
+fn best_in_turns(count: usize, render: impl FnMut(usize)) -> Vec<f64> {
+    best_in_rounds(25, count, render)
+}
+
+/// [`best_in_turns`] over `rounds` rounds: more, where a table's ratios
+/// are held to a bar that they lie near.
+fn best_in_rounds(rounds: usize, count: usize, mut render: impl FnMut(usize)) -> Vec<f64> {
     let mut best = vec![f64::MAX; count];
-    for _ in 0..ROUNDS {
+    for _ in 0..rounds {
         for (i, best) in best.iter_mut().enumerate() {
             let started = std::time::Instant::now();
             render(i);
@@ -792,7 +797,7 @@ fn host_priced_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
 }
 
 /// The `atmosphere` group as a table: ns a pixel, and the time against
-/// the same frame without an atmosphere ([`best_in_turns`]).
+/// the same frame without an atmosphere ([`best_in_rounds`], 101 rounds).
 fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
     let default = RenderOptions::default();
     let mut buffer = SampleBuffer::new(SIZE.0, SIZE.1);
@@ -802,30 +807,35 @@ fn atmosphere_table(levels: &terracast::Pyramid<'_>, pixels: u64) {
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for pitch in ATMOSPHERE_PITCHES {
         let view = View::new(&camera(pitch), SIZE.0, SIZE.1).expect("view");
-        let best = best_in_turns(airs.len() + 1, |i| match airs.get(i).map(|(_, air)| air) {
-            Some(Some(air)) => render(
-                levels,
-                &view,
-                &default,
-                &mut air.sink_over_sky(&view, &mut buffer),
-                &mut NoProbe,
-            ),
-            // The sky drawn first here too, as the atmosphere's sink draws
-            // it: the renders differ by the atmosphere alone.
-            Some(None) => render(
-                levels,
-                &view,
-                &default,
-                &mut SkyFirst::new(&mut buffer, SIZE.0, SIZE.1, default.sky),
-                &mut NoProbe,
-            ),
-            None => render(
-                levels,
-                &view,
-                &default,
-                &mut DistanceFog::new(&mut buffer, SIZE, &weights),
-                &mut NoProbe,
-            ),
+        // 101 rounds: the fog's cost is held to issue 37's bar of 1.1x,
+        // which it lies near, and 25 rounds move the ratio by a few
+        // hundredths from run to run.
+        let best = best_in_rounds(101, airs.len() + 1, |i| {
+            match airs.get(i).map(|(_, air)| air) {
+                Some(Some(air)) => render(
+                    levels,
+                    &view,
+                    &default,
+                    &mut air.sink_over_sky(&view, &mut buffer),
+                    &mut NoProbe,
+                ),
+                // The sky drawn first here too, as the atmosphere's sink draws
+                // it: the renders differ by the atmosphere alone.
+                Some(None) => render(
+                    levels,
+                    &view,
+                    &default,
+                    &mut SkyFirst::new(&mut buffer, SIZE.0, SIZE.1, default.sky),
+                    &mut NoProbe,
+                ),
+                None => render(
+                    levels,
+                    &view,
+                    &default,
+                    &mut DistanceFog::new(&mut buffer, SIZE, &weights),
+                    &mut NoProbe,
+                ),
+            }
         });
         let [off, clear, fog, flight, floor] = [best[0], best[1], best[2], best[3], best[4]];
         let per_pixel = |time: f64| time / pixels as f64;
