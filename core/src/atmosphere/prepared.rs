@@ -278,9 +278,8 @@ impl PreparedAtmosphere {
         // The rate at the middle of the voxel of the hit's height (held
         // past the table's top); below 2^31, so the halvings (Q8,
         // rounded) fit a word: one 32 × 32-bit product.
-        let voxel = (sample.elevation >> COORD_FRAC_BITS).max(0) as u32;
-        let top = &frame.rate[HEIGHT_VOXELS as usize];
-        let rate = *frame.rate.get(voxel as usize).unwrap_or(top);
+        let voxel = (sample.elevation >> COORD_FRAC_BITS).clamp(0, HEIGHT_VOXELS as i32);
+        let rate = frame.rate[voxel as usize];
         let halvings_q8 = (u64::from(distance_q8) * u64::from(rate) + (1 << 30)) >> 31;
         let weight = left_after(halvings_q8 as u32);
         // `weight` is at most 256: held there, so that no bound is checked.

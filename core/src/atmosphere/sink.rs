@@ -129,24 +129,22 @@ pub struct LineShade {
 impl LineShade {
     /// The shade of `plane`'s rays.
     pub fn new(plane: &LinePlane) -> Self {
-        // `√(1 + u²)` from the stretch table (`u = |dminor|` ≤ 1), and its
+        // `√(1 + u²)` from the stretch table (`u = |dminor|` ≤ 1, Q16:
+        // 64 to an entry), blended between its entries, and its
         // reciprocal by two 32-bit divides: a square root and a 64-bit
         // division a line are library calls on a 32-bit core, about 19
         // instructions a pixel on the board's steep views.
         let u = plane.dminor.unsigned_abs().min(1 << 16);
-        let entry = StretchEntry {
-            at: (u >> 8) as usize,
-            fraction: (u & 0xFF) as i32,
-        };
-        let m = entry.of_table(&STRETCH_LOW) as u32;
+        let at = (u >> 6) as usize;
+        let entry = |i: usize| u32::from(STRETCH_FINE[i.min(1024)]);
+        // The table rises: the step is not negative.
+        let m = (1 << 16) + entry(at) + (((entry(at + 1) - entry(at)) * (u & 63)) >> 6);
         Self {
             m,
             inverse_m: inverse_q20(m),
         }
     }
-}
 
-impl LineShade {
     /// The length (Q16) a unit of major-axis distance of the ray of this
     /// line's plane whose height changes by `slope` (Q16, below 2^29) a
     /// unit: `√(m² + slope²)`, within a word (below 2^30). For a ray

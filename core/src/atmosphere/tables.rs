@@ -95,24 +95,12 @@ pub(super) fn drop(frame: &AtmosphereFrame, sample: &Sample) -> u32 {
 /// A ray's slope at and past which it has no run along the major axis.
 pub(super) const MAX_SLOPE_Q16: u32 = (MAX_RAY_SLOPE as u32) << COORD_FRAC_BITS;
 
-/// `√(1 + u²)` (Q16) for `u` = `i/256`, `i` in 0..=256: a ray's length
-/// over its horizontal length, `u` its slope over its line's `m`, where
-/// that is below 1.
-pub(super) const STRETCH_LOW: [u32; 257] = {
-    let mut table = [0u32; 257];
-    let mut i = 0;
-    while i < 257 {
-        table[i] = ((65536 + (i * i) as u64) << 16).isqrt() as u32;
-        i += 1;
-    }
-    table
-};
-
-/// `√(1 + u²) − 1` (Q16) for `u = i/1024`, `i` in 0..=1024: a ray's
-/// length over its horizontal length, as [`STRETCH_LOW`], or for a ray
-/// steeper than that over its height change, `u` the run over the rise;
-/// at the entry nearest its `u`, without a blend (neighbours differ by
-/// under 2^−10 of the length).
+/// `√(1 + u²) − 1` (Q16) for `u = i/1024`, `i` in 0..=1024: a line's
+/// plane's horizontal length a unit of major-axis distance (`u` its minor
+/// slope), and a ray's length over its horizontal length (`u` its slope
+/// over its line's `m`) or, for a ray steeper than that, over its height
+/// change (`u` the run over the rise). A ray takes the entry nearest its
+/// `u`, without a blend (neighbours differ by under 2^−10 of the length).
 pub(super) const STRETCH_FINE: [u16; 1025] = {
     let mut table = [0u16; 1025];
     let mut i = 0;
@@ -123,25 +111,6 @@ pub(super) const STRETCH_FINE: [u16; 1025] = {
     }
     table
 };
-
-/// Where a `u` lies in [`STRETCH_LOW`]: the entry below it and the
-/// fraction (in 1/256) to the next.
-#[derive(Clone, Copy)]
-pub(super) struct StretchEntry {
-    pub(super) at: usize,
-    pub(super) fraction: i32,
-}
-
-impl StretchEntry {
-    /// `table` here, blended between its entries.
-    #[inline(always)]
-    pub(super) fn of_table(&self, table: &[u32; 257]) -> u64 {
-        let low = table[self.at.min(256)] as i32;
-        let high = table[(self.at + 1).min(256)] as i32;
-        // Entries below 2^21, steps below 2^17: within a word.
-        (low + (((high - low) * self.fraction) >> 8)) as u64
-    }
-}
 
 /// Scales a direction (Q20, at least 1 and below 2^7 long) to unit
 /// length without a division: its squared length's top 32 bits brought

@@ -350,10 +350,10 @@ fn fog_fades_smoothly_with_distance_without_bands() {
 
 #[test]
 fn what_fog_leaves_is_a_blend_weight_from_all_to_nothing() {
-    // The fog's blend takes the weight as it is, unclamped
-    // (`Lanes::plus_weighted`, from `FogTable::toward_fog` by the weight):
-    // every halving count, in the table and past it, must give at most
-    // 256.
+    // Every halving count, in the table and past it, gives a weight from
+    // all of the color (256) to none: the blend holds the weight at 256
+    // only so that its lookup in `FogTable::toward_fog` needs no bound
+    // check, and a larger weight there would leave the color unfogged.
     assert_eq!(left_after(0), 256);
     assert!((0..=u32::from(u16::MAX)).all(|halvings| left_after(halvings) <= 256));
     assert_eq!(left_after(u32::MAX), 0);
