@@ -402,7 +402,10 @@ fn run() -> Result<(), &'static str> {
                 render_pixel_path_lean(
                     pyramid.base(),
                     &view,
-                    &RenderOptions::default(),
+                    &RenderOptions {
+                        shading: SHADING,
+                        ..RenderOptions::default()
+                    },
                     table,
                     frame,
                 )
@@ -758,6 +761,22 @@ fn level_bound(
             render_pixel_path(pyramid.base(), &posed, &single, f);
             Ok(())
         })?;
+        // Under nearest shading: the kernel at single resolution (and the
+        // lean path below, taking one voxel a hit).
+        let nearest = RenderOptions {
+            shading: Shading::Nearest,
+            ..single
+        };
+        let kernel_nearest = ticks_of(&|f| {
+            render(
+                pyramid,
+                &posed,
+                &nearest,
+                &mut sky_first(f, nearest.sky),
+                &mut NoProbe,
+            );
+            Ok(())
+        })?;
         // Its ownership tabled once a frame (the table's build counted).
         let mut framebuffer = Framebuffer::new(frame, IMAGE_WIDTH, IMAGE_HEIGHT)
             .map_err(|_| "framebuffer too small")?;
@@ -787,8 +806,18 @@ fn level_bound(
         )
         .map_err(|_| "the pixel table is too small")?;
         let lean = ticks() - start;
+        let start = ticks();
+        render_pixel_path_lean(
+            pyramid.base(),
+            &posed,
+            &nearest,
+            (&mut *line_of, &mut *order, &mut *starts),
+            frame,
+        )
+        .map_err(|_| "the pixel table is too small")?;
+        let lean_nearest = ticks() - start;
         hprintln!(
-            "posed view {} kernel {} single {} lines {} path {} tabled {} table {} lean {}",
+            "posed view {} kernel {} single {} lines {} path {} tabled {} table {} lean {} nearest {} lean-nearest {}",
             index,
             kernel,
             kernel_single,
@@ -796,7 +825,9 @@ fn level_bound(
             path,
             tabled,
             table_only,
-            lean
+            lean,
+            kernel_nearest,
+            lean_nearest
         );
     }
     Ok(())

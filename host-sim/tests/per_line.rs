@@ -7,8 +7,9 @@
 
 use terracast::{
     render_level_columns, render_level_columns_lean, render_pixel_lines, Camera, Coherence,
-    ColumnsError, RenderOptions, Resolution, Rgb, Terrain, View,
+    ColumnsError, RenderOptions, Resolution, Rgb, Shading, Terrain, View,
 };
+use terracast_sim::camera::ContractCamera;
 use terracast_sim::kernel::{render_kernel_with, PixelRays, SampleBuffer};
 use terracast_sim::metrics::psnr;
 use terracast_sim::reference::{Reference, ReferenceOptions};
@@ -379,6 +380,79 @@ fn the_tabled_per_pixel_paths_draw_the_stepped_ones_frame() {
         &mut [[0; 3]; 127],
     );
     assert_eq!(refused, Err(terracast::TableError::TooSmall));
+}
+
+#[test]
+fn the_lean_path_under_nearest_shading_takes_the_voxel_nearest_the_pixels_ray() {
+    // Colors that name their voxel: red twice its row, green twice its
+    // column. A blend of two voxels can be odd; one voxel's color never is.
+    let mut scene = procedural(128, 2);
+    let side = scene.width as usize;
+    for (i, color) in scene.colors.iter_mut().enumerate() {
+        *color = [(2 * (i / side)) as u8, (2 * (i % side)) as u8, 0];
+    }
+    let kernel_scene = scene.to_kernel().unwrap();
+    let terrain = kernel_scene.terrain().unwrap();
+    let (width, height) = (80u32, 61u32);
+    let pixels = (width * height) as usize;
+    let nearest = RenderOptions {
+        shading: Shading::Nearest,
+        ..single()
+    };
+    // From off the map's west edge, looking east: every line's first
+    // sample, where the path shades, is on the map's first column, and the
+    // voxel it takes is the one nearest to where the pixel's own ray
+    // crosses that column.
+    let eye = [-30.0, 64.0, scene.max_height() + 25.0];
+    let cameras = [
+        (0.0, 0.0, 0.0),
+        (10.0, 0.0, 10.0),
+        (10.0, 30.0, -10.0),
+        (5.0, -60.0, 5.0),
+    ]
+    .map(|(pitch, roll, yaw)| Camera {
+        roll_deg: roll,
+        ..Camera::looking(eye, yaw, pitch)
+    });
+    for camera in cameras {
+        let view = View::new(&camera, width, height).unwrap();
+        let (mut line_of, mut order) = (vec![0u16; pixels], vec![0u32; pixels]);
+        let mut starts = vec![0u32; view.lines() as usize + 1];
+        let mut frame = vec![[1, 2, 3]; pixels];
+        terracast::render_pixel_path_lean(
+            &terrain,
+            &view,
+            &nearest,
+            (&mut line_of, &mut order, &mut starts),
+            &mut frame,
+        )
+        .unwrap();
+        // Rounded to the nearest row: half a row off at most, but for a
+        // few pixels far from their line in a rolled frame's corner,
+        // where the line's color drift is an approximation.
+        let rays = ContractCamera::new(&camera, width, height);
+        let mut off_by_more_than_half = 0;
+        for (i, color) in frame.iter().enumerate() {
+            let (px, py) = ((i % width as usize) as f64, (i / width as usize) as f64);
+            let d = rays.direction(px + 0.5, py + 0.5);
+            let crossing = f64::from(eye[1]) - d[1] / d[0] * f64::from(eye[0]);
+            assert!(
+                color[0] % 2 == 0 && color[1] <= 2,
+                "{camera:?}: pixel {i} {color:?} is no voxel of the first column"
+            );
+            let off = (f64::from(color[0] / 2) - crossing).abs();
+            assert!(
+                off <= 1.5,
+                "{camera:?}: pixel {i} takes row {}, its ray crosses at {crossing:.2}",
+                color[0] / 2
+            );
+            off_by_more_than_half += usize::from(off > 0.51);
+        }
+        assert!(
+            off_by_more_than_half * 100 <= pixels,
+            "{camera:?}: {off_by_more_than_half} pixels more than half a row off"
+        );
+    }
 }
 
 #[test]

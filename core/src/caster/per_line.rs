@@ -60,10 +60,11 @@
 //! of a ray in a word, its slope and drift from one reciprocal of its run,
 //! its hit shaded without a depth or an elevation, its color written
 //! straight into the frame. What is left is what the design's pixel
-//! costs: the table, the ray's set-up, four texels and three blends.
+//! costs: the table, the ray's set-up, four texels and three blends (one
+//! texel under nearest shading).
 
 use super::walk::lerp;
-use super::{crossing_fraction, sky, RenderOptions};
+use super::{crossing_fraction, sky, RenderOptions, Shading};
 use crate::color::Rgb;
 use crate::config::{COORD_FRAC_BITS, HEIGHT_FRAC_BITS, MAX_RAY_SLOPE, WEIGHT_BITS};
 use crate::divide::div_trunc;
@@ -216,9 +217,12 @@ pub fn render_pixel_path_tabled<S: Sink>(
 /// from one reciprocal of its run (one divide, where they divide twice);
 /// its hit is shaded from values in words, with no depth or elevation
 /// made. Its frame is the tabled path's to the rounding of the slope, the
-/// drift and the offset (tested). A measurement, not an image of the
-/// terrain. Never inlined, so that its count does not hang on its
-/// caller's code.
+/// drift and the offset (tested). With `options.shading`
+/// [`Shading::Nearest`] a hit takes the one voxel nearest to where it is
+/// looked up instead of four texels and three blends (and no crossing):
+/// the path under the kernel's nearest shading. A measurement, not an
+/// image of the terrain. Never inlined, so that its count does not hang
+/// on its caller's code.
 #[inline(never)]
 pub fn render_pixel_path_lean(
     terrain: &Terrain<'_>,
@@ -253,21 +257,44 @@ pub fn render_pixel_path_lean(
         }
         let at = LeanAt::new(&lines.start(&plane, &walk), &walk, &plane, eye_z);
         let across = Across::of(plane.across());
-        for &p in pixels {
-            let ray = ray_of(p);
-            let run = if plane.key.forward {
-                ray.major
-            } else {
-                ray.major.wrapping_neg()
-            }
-            .max(0) as u32;
-            let reciprocal = Reciprocal::of_word(run);
-            let dz = reciprocal.slope(ray.up);
-            let drift = across.drift(reciprocal, ray.offset);
-            put(&ray, lines.lean_color(&at, dz, drift));
+        let forward = plane.key.forward;
+        if options.shading == Shading::Nearest {
+            lean_pixels(pixels, &ray_of, forward, &across, |ray, dz, drift| {
+                put(&ray, lines.lean_nearest(&at, dz, drift));
+            });
+        } else {
+            lean_pixels(pixels, &ray_of, forward, &across, |ray, dz, drift| {
+                put(&ray, lines.lean_color(&at, dz, drift));
+            });
         }
     }
     Ok(())
+}
+
+/// Each of a line's tabled `pixels`, its ray set up in words: its words
+/// (`ray_of`), its slope (Q16) and its color drift, from one reciprocal of
+/// its run (toward the line's direction, `forward`), handed to `shade`.
+#[inline(always)]
+fn lean_pixels(
+    pixels: &[u32],
+    ray_of: &impl Fn(u32) -> RayWords,
+    forward: bool,
+    across: &Across,
+    mut shade: impl FnMut(RayWords, i32, i32),
+) {
+    for &p in pixels {
+        let ray = ray_of(p);
+        let run = if forward {
+            ray.major
+        } else {
+            ray.major.wrapping_neg()
+        }
+        .max(0) as u32;
+        let reciprocal = Reciprocal::of_word(run);
+        let dz = reciprocal.slope(ray.up);
+        let drift = across.drift(reciprocal, ray.offset);
+        shade(ray, dz, drift);
+    }
 }
 
 /// A ray's run (its direction's major-axis component toward its plane's
@@ -873,6 +900,39 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         let above = z.wrapping_sub(dz).wrapping_sub(at.before);
         let below = z.wrapping_sub(at.height);
         lerp(before, on_hit, crossing_fraction(above, below))
+    }
+
+    /// [`FrameCaster::lean_color`] for [`Shading::Nearest`]: the voxel
+    /// nearest to where the hit sample, looked up `drift` aside, crosses
+    /// its minor grid line, as the kernel's nearest shading takes it. The
+    /// ray's height at the sample (what its walk resumes with) is worked
+    /// out as for the blend, and kept from the optimizer: the walk needs
+    /// it, and the nearest color does not.
+    #[inline(always)]
+    fn lean_nearest(&self, at: &LeanAt, dz: i32, drift: i32) -> Rgb {
+        let z = at
+            .eye_z
+            .wrapping_add(((i64::from(at.delta0) * i64::from(dz)) >> COORD_FRAC_BITS) as i32)
+            .wrapping_add(at.k.wrapping_mul(dz));
+        core::hint::black_box(z);
+        let aside = ((i64::from(drift) * i64::from(at.distance)) >> COORD_FRAC_BITS) as i32;
+        let minor = at.minor.wrapping_add(aside);
+        let minor = if minor as u32 <= at.minor_max as u32 {
+            minor
+        } else if minor < 0 {
+            0
+        } else {
+            at.minor_max
+        };
+        let cell = at
+            .index
+            .wrapping_add(at.across.wrapping_mul((minor >> COORD_FRAC_BITS) as usize));
+        let nearest = if minor & 0xFFFF < 0x8000 {
+            cell
+        } else {
+            cell.wrapping_add(at.across)
+        };
+        self.colors.get(nearest).copied().unwrap_or(self.sky.color)
     }
 
     /// The two voxels across the minor grid line at `minor` (Q16, kept
