@@ -501,6 +501,34 @@ impl LeanAt {
             before: at.height as i32 + (1 << COORD_FRAC_BITS),
         }
     }
+
+    /// The height (Q16) at this sample of a ray of slope `dz` (Q16 a
+    /// sample), in a word: what its walk resumes with.
+    #[inline(always)]
+    fn ray_height(&self, dz: i32) -> i32 {
+        self.eye_z
+            .wrapping_add(((i64::from(self.delta0) * i64::from(dz)) >> COORD_FRAC_BITS) as i32)
+            .wrapping_add(self.k.wrapping_mul(dz))
+    }
+
+    /// How far aside (Q16) a ray drifting `drift` looks its colors up at
+    /// this sample: the drift times the sample's distance.
+    #[inline(always)]
+    fn aside(&self, drift: i32) -> i32 {
+        ((i64::from(drift) * i64::from(self.distance)) >> COORD_FRAC_BITS) as i32
+    }
+
+    /// Minor coordinate `minor` (Q16) kept inside the map.
+    #[inline(always)]
+    fn inside(&self, minor: i32) -> i32 {
+        if minor as u32 <= self.minor_max as u32 {
+            minor
+        } else if minor < 0 {
+            0
+        } else {
+            self.minor_max
+        }
+    }
 }
 
 /// How a line's walk moves through the grid.
@@ -886,11 +914,8 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
     /// elevation made.
     #[inline(always)]
     fn lean_color(&self, at: &LeanAt, dz: i32, drift: i32) -> Rgb {
-        let z = at
-            .eye_z
-            .wrapping_add(((i64::from(at.delta0) * i64::from(dz)) >> COORD_FRAC_BITS) as i32)
-            .wrapping_add(at.k.wrapping_mul(dz));
-        let aside = ((i64::from(drift) * i64::from(at.distance)) >> COORD_FRAC_BITS) as i32;
+        let z = at.ray_height(dz);
+        let aside = at.aside(drift);
         let on_hit = self.lean_texels(at, at.index, at.minor.wrapping_add(aside));
         let before = self.lean_texels(
             at,
@@ -910,20 +935,8 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
     /// it, and the nearest color does not.
     #[inline(always)]
     fn lean_nearest(&self, at: &LeanAt, dz: i32, drift: i32) -> Rgb {
-        let z = at
-            .eye_z
-            .wrapping_add(((i64::from(at.delta0) * i64::from(dz)) >> COORD_FRAC_BITS) as i32)
-            .wrapping_add(at.k.wrapping_mul(dz));
-        core::hint::black_box(z);
-        let aside = ((i64::from(drift) * i64::from(at.distance)) >> COORD_FRAC_BITS) as i32;
-        let minor = at.minor.wrapping_add(aside);
-        let minor = if minor as u32 <= at.minor_max as u32 {
-            minor
-        } else if minor < 0 {
-            0
-        } else {
-            at.minor_max
-        };
+        core::hint::black_box(at.ray_height(dz));
+        let minor = at.inside(at.minor.wrapping_add(at.aside(drift)));
         let cell = at
             .index
             .wrapping_add(at.across.wrapping_mul((minor >> COORD_FRAC_BITS) as usize));
@@ -940,13 +953,7 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
     /// the subvoxel weight.
     #[inline(always)]
     fn lean_texels(&self, at: &LeanAt, index: usize, minor: i32) -> Rgb {
-        let minor = if minor as u32 <= at.minor_max as u32 {
-            minor
-        } else if minor < 0 {
-            0
-        } else {
-            at.minor_max
-        };
+        let minor = at.inside(minor);
         // The sample before the first may lie off the map (an index below
         // 0, as a huge one), which the lookup's `get` then refuses.
         self.lean_color_at(index as isize, at.across as isize, minor)
