@@ -152,6 +152,16 @@ const LEADER: i32 = 36;
 /// A label's height, pixels.
 const LABEL_HEIGHT: i32 = 14;
 
+/// Where a point's label goes ([`place_labels`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct LabelPlace {
+    /// The label box's top left corner, pixels from the point.
+    at: (i32, i32),
+    /// For a label moved up or down, the near end of the line that ties
+    /// it to its point (pixels from the point); `None` beside it.
+    leader: Option<(i32, i32)>,
+}
+
 /// Where each point's label goes, as pixels from the point (its box's top
 /// left corner): beside it on the right, centred; else farther right, one
 /// label height up, one down, two up, two down and so on; then the same
@@ -163,7 +173,7 @@ fn place_labels(
     points: &[(i32, i32)],
     sizes: &[(i32, i32)],
     area: (i32, i32, i32, i32),
-) -> Vec<(i32, i32)> {
+) -> Vec<LabelPlace> {
     let mut taken: Vec<(i32, i32, i32, i32)> = points
         .iter()
         .map(|&(x, y)| (x - 5, y - 5, x + 5, y + 5))
@@ -176,22 +186,36 @@ fn place_labels(
         .map(|(&(px, py), &(width, height))| {
             let label_at =
                 |(dx, dy): (i32, i32)| (px + dx, py + dy, px + dx + width, py + dy + height);
-            let free = |at| {
-                let label = label_at(at);
+            let free = |place: &LabelPlace| {
+                let label = label_at(place.at);
                 inside(label) && !taken.iter().any(|&t| overlap(label, t))
             };
             // Pixel y grows downward: -1, 1, -2, 2, ...
             let shifts = || (1..16).map(|k: i32| if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 });
-            let side = |gap: i32, leader: i32| {
-                std::iter::once((gap, -height / 2))
-                    .chain(shifts().map(move |shift| (leader, -height / 2 + shift * height)))
+            // Beside the point at `gap`, else moved up or down at `moved`,
+            // tied by a line to the label's end `near_end` across from it.
+            let side = |gap: i32, moved: i32, near_end: i32| {
+                let beside = LabelPlace {
+                    at: (gap, -height / 2),
+                    leader: None,
+                };
+                std::iter::once(beside).chain(shifts().map(move |shift| {
+                    let dy = -height / 2 + shift * height;
+                    LabelPlace {
+                        at: (moved, dy),
+                        leader: Some((near_end, dy + height / 2)),
+                    }
+                }))
             };
-            let beside = (LABEL_GAP, -height / 2);
-            let place = side(LABEL_GAP, LEADER)
-                .chain(side(-LABEL_GAP - width, -LEADER - width))
-                .find(|&at| free(at))
+            let beside = LabelPlace {
+                at: (LABEL_GAP, -height / 2),
+                leader: None,
+            };
+            let place = side(LABEL_GAP, LEADER, LEADER - 2)
+                .chain(side(-LABEL_GAP - width, -LEADER - width, -LEADER + 2))
+                .find(|place| free(place))
                 .unwrap_or(beside);
-            taken.push(label_at(place));
+            taken.push(label_at(place.at));
             place
         })
         .collect()
@@ -270,24 +294,18 @@ pub fn draw_bench(path: &Path, summaries: &[Summary]) -> Result<()> {
         let (across, down) = chart.plotting_area().get_pixel_range();
         let area = (across.start, down.start, across.end, down.end);
         let places = place_labels(&points, &sizes, area);
-        for ((s, (dx, dy)), (width, _)) in summaries.iter().zip(places).zip(&sizes) {
+        for (s, place) in summaries.iter().zip(places) {
             let point = (s.mpx_per_s, s.psnr);
             // A label moved up or down is tied to its point by a thin
             // line, to the near end of the label.
-            let leader = if dx == LABEL_GAP || dx == -LABEL_GAP - width {
-                Vec::new()
-            } else if dx > 0 {
-                vec![(0, 0), (dx - 2, dy + LABEL_HEIGHT / 2)]
-            } else {
-                vec![(0, 0), (dx + width + 2, dy + LABEL_HEIGHT / 2)]
-            };
+            let leader = place.leader.map_or(Vec::new(), |end| vec![(0, 0), end]);
             chart
                 .draw_series([EmptyElement::at(point)
                     + Circle::new((0, 0), 5, color_of(s.setting).filled())
                     + PathElement::new(leader, color_of(s.setting).mix(0.6))
                     + Text::new(
                         s.setting.to_string(),
-                        (dx, dy),
+                        place.at,
                         ("sans-serif", 13).into_font(),
                     )])
                 .map_err(|e| failed(&e))?;
@@ -317,7 +335,10 @@ mod tests {
             .iter()
             .zip(&places)
             .zip(&sizes)
-            .map(|((&(x, y), &(dx, dy)), &(w, h))| (x + dx, y + dy, x + dx + w, y + dy + h))
+            .map(|((&(x, y), place), &(w, h))| {
+                let (dx, dy) = place.at;
+                (x + dx, y + dy, x + dx + w, y + dy + h)
+            })
             .collect();
         for (i, a) in boxes.iter().enumerate() {
             for &(x, y) in &points {
@@ -331,9 +352,22 @@ mod tests {
             }
         }
         // The lone point's label is beside it; in the crowd, labels moved.
-        assert_eq!(places[5], (LABEL_GAP, -LABEL_HEIGHT / 2));
-        let moved = places[..5].iter().filter(|&&(dx, _)| dx == LEADER).count();
-        assert!(moved >= 4, "{places:?}");
+        assert_eq!(
+            places[5],
+            LabelPlace {
+                at: (LABEL_GAP, -LABEL_HEIGHT / 2),
+                leader: None
+            }
+        );
+        // A moved label's line runs to its left end, two pixels short.
+        let moved: Vec<_> = places[..5].iter().filter(|p| p.at.0 == LEADER).collect();
+        assert!(moved.len() >= 4, "{places:?}");
+        for place in moved {
+            assert_eq!(
+                place.leader,
+                Some((LEADER - 2, place.at.1 + LABEL_HEIGHT / 2))
+            );
+        }
     }
 
     /// A point near the plot's right edge (the fastest settings) takes
@@ -344,16 +378,23 @@ mod tests {
         let points = vec![(800, 300), (802, 304), (804, 308), (300, 100)];
         let sizes = vec![(240, LABEL_HEIGHT); points.len()];
         let places = place_labels(&points, &sizes, area);
-        for (i, ((&(x, y), &(dx, dy)), &(w, h))) in
-            points.iter().zip(&places).zip(&sizes).enumerate()
-        {
+        for (i, ((&(x, y), place), &(w, h))) in points.iter().zip(&places).zip(&sizes).enumerate() {
+            let (dx, dy) = place.at;
             let label = (x + dx, y + dy, x + dx + w, y + dy + h);
             assert!(
                 label.0 >= area.0 && label.2 <= area.2 && label.1 >= area.1 && label.3 <= area.3,
                 "label {i} at {label:?} leaves the plot"
             );
         }
-        assert_eq!(places[0], (-LABEL_GAP - 240, -LABEL_HEIGHT / 2));
-        assert_eq!(places[3], (LABEL_GAP, -LABEL_HEIGHT / 2));
+        assert_eq!(places[0].at, (-LABEL_GAP - 240, -LABEL_HEIGHT / 2));
+        assert_eq!(places[3].at, (LABEL_GAP, -LABEL_HEIGHT / 2));
+        // Moved on the left, a label's line runs to its right end.
+        for place in &places[1..3] {
+            assert_eq!(place.at.0, -LEADER - 240, "{places:?}");
+            assert_eq!(
+                place.leader,
+                Some((-LEADER + 2, place.at.1 + LABEL_HEIGHT / 2))
+            );
+        }
     }
 }
