@@ -1330,6 +1330,61 @@ mod tests {
         }
     }
 
+    /// A walk on each ray's own path starts on it: the height a ray's walk
+    /// starts with (`LineCaster::start`, which a line's first ray and
+    /// every stretch's first ray take) is the terrain's at the line's
+    /// minor coordinate moved by the ray's drift times the sample's
+    /// distance. On a ramp across the lines, worked out apart in `f64`.
+    #[test]
+    fn an_own_path_walk_starts_on_the_rays_path() {
+        use crate::{Camera, NoProbe, Pyramid, Terrain};
+        // Four voxels of height a voxel of y (U12.4), the same along x.
+        let side = 64u32;
+        let heights: Vec<u16> = (0..side * side).map(|i| (i / side * 64) as u16).collect();
+        let colors = vec![[0u8; 3]; heights.len()];
+        let terrain = Terrain::new(side, side, &heights, &colors).unwrap();
+        let pyramid = Pyramid::flat(terrain);
+        let options = RenderOptions {
+            height_path: HeightPath::Ray,
+            ..RenderOptions::default()
+        };
+        let camera = Camera::looking([2.0, 30.0, 300.0], 0.0, 20.0);
+        let view = View::new(&camera, 40, 30).unwrap();
+        let caster = LineCaster::new(&pyramid, &view, &options);
+        let mut checked = 0;
+        for index in 0..view.lines() {
+            let Some(line) = view.line(index) else {
+                continue;
+            };
+            let walk = caster.line_walk(&line);
+            if walk.first > walk.last || !walk.plane.key.x_major {
+                continue;
+            }
+            for drift in [-3000, -700, 0, 900, 4000] {
+                for from in [walk.first, (walk.first + walk.last) / 2, walk.last] {
+                    // A ray at height 0: below the terrain's top from the
+                    // eye on, so it starts where it is asked to.
+                    let Some(at) = caster.start::<_, true>(&walk, from, 0, 0, drift, &mut NoProbe)
+                    else {
+                        continue;
+                    };
+                    let one = f64::from(1 << COORD_FRAC_BITS);
+                    let distance = (f64::from(walk.delta0) + f64::from(at.k) * one) / one;
+                    let minor = f64::from(at.minor) / one + f64::from(drift) / one * distance;
+                    let expected = 4.0 * minor.clamp(0.0, f64::from(side - 1));
+                    let got = f64::from(at.height) / one;
+                    assert!(
+                        (got - expected).abs() < 0.01,
+                        "line {index}, drift {drift}, sample {}: height {got}, on the ray's path {expected}",
+                        at.k
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 100, "{checked} starts checked");
+    }
+
     #[test]
     fn the_aside_in_words_is_the_product_of_the_drift_and_the_distance() {
         let distance_product = |delta0: i32, k: i32, drift: i32| {
