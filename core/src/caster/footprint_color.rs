@@ -132,6 +132,7 @@ pub(super) fn levels_color<T: Surface + ?Sized, P: Probe>(
 /// ray, or `distance / σ` on a surface steeper than the ray by `σ > 1`
 /// (the clearances change by `σ` voxels a voxel between the two samples
 /// `steps` apart).
+#[inline]
 pub(super) fn narrower_side(
     distance: i64,
     steps: i32,
@@ -158,6 +159,7 @@ pub(super) fn narrower_side(
 /// into level `l` by `t`/256, from 0 at `reach << (l − 1)` to 1 at
 /// `reach << l`; past level `top`'s end, `(top, 256)`. `None` before
 /// `reach` (level 0 alone) and when there is no level 1.
+#[inline]
 pub(super) fn color_level(width: i64, reach: i64, top: u8) -> Option<(u8, u32)> {
     if width < reach || top == 0 {
         return None;

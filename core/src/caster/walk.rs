@@ -299,35 +299,40 @@ pub(crate) fn lerp(a: Rgb, b: Rgb, t: u32) -> Rgb {
     Lanes::of(a).lerp(Lanes::of(b), t).rgb()
 }
 
-/// A color in 16-bit lanes, red and blue side by side in one word and
-/// green in another, as [`lerp`] blends it: a chain of blends (a bilinear
-/// square, two levels' squares) stays in lanes and unpacks once.
+/// A color in 16-bit lanes, as [`lerp`] blends it: a chain of blends (a
+/// bilinear square, two levels' squares) stays in lanes and unpacks once.
+/// A lane's sum in a blend is at most 255 · 256 + 128 < 2^16, so no carry
+/// crosses lanes, and every channel is rounded as on its own.
+///
+/// On a 64-bit machine the three channels share one word, so a blend is
+/// two products; on a 32-bit one red and blue share a word and green has
+/// its own (a 64-bit product there costs two). The results are the same
+/// bit for bit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Lanes {
-    red_blue: u32,
-    green: u32,
-}
+pub(crate) struct Lanes(LaneWord);
 
+/// Red, green and blue in lanes 0, 1 and 2 of one word.
+#[cfg(target_pointer_width = "64")]
+type LaneWord = u64;
+/// Red and blue in lanes 1 and 0 of the first word, green in the second.
+#[cfg(not(target_pointer_width = "64"))]
+type LaneWord = (u32, u32);
+
+#[cfg(target_pointer_width = "64")]
 impl Lanes {
+    const HALF: u64 = 0x0080_0080_0080;
+    const MASK: u64 = 0x00FF_00FF_00FF;
+
     #[inline(always)]
     pub(crate) fn of(c: Rgb) -> Self {
-        Self {
-            red_blue: (u32::from(c[0]) << 16) | u32::from(c[2]),
-            green: u32::from(c[1]),
-        }
+        Self(u64::from(c[0]) | (u64::from(c[1]) << 16) | (u64::from(c[2]) << 32))
     }
 
-    /// Blends toward `other` by `t`/256, each channel rounded as on its
-    /// own: a lane's sum is at most 255 · 256 + 128 < 2^16, so no carry
-    /// crosses lanes (two products fewer than three channels apart).
+    /// Blends toward `other` by `t`/256.
     #[inline(always)]
     pub(crate) fn lerp(self, other: Self, t: u32) -> Self {
-        let t = t.min(256);
-        Self {
-            red_blue: ((self.red_blue * (256 - t) + other.red_blue * t + 0x0080_0080) >> 8)
-                & 0x00FF_00FF,
-            green: (self.green * (256 - t) + other.green * t + 128) >> 8,
-        }
+        let t = u64::from(t.min(256));
+        Self(((self.0 * (256 - t) + other.0 * t + Self::HALF) >> 8) & Self::MASK)
     }
 
     /// The part of [`Lanes::lerp`] from `self` that does not depend on the
@@ -336,30 +341,67 @@ impl Lanes {
     /// (the fog's) keeps it for every weight.
     #[inline(always)]
     pub(crate) fn weighted(self, weight: u32) -> Self {
-        Self {
-            red_blue: self.red_blue * weight + 0x0080_0080,
-            green: self.green * weight + 128,
-        }
+        Self(self.0 * u64::from(weight) + Self::HALF)
     }
 
     /// The blend [`Lanes::lerp`] gives from a color to `other` by `t`
     /// (at most 256), `self` that color [`Lanes::weighted`] by `256 − t`:
-    /// a product a lane pair.
+    /// one product.
     #[inline(always)]
     pub(crate) fn plus_weighted(self, other: Self, t: u32) -> Self {
-        Self {
-            red_blue: ((self.red_blue + other.red_blue * t) >> 8) & 0x00FF_00FF,
-            green: (self.green + other.green * t) >> 8,
-        }
+        Self(((self.0 + other.0 * u64::from(t)) >> 8) & Self::MASK)
     }
 
     #[inline(always)]
     pub(crate) fn rgb(self) -> Rgb {
-        [
-            (self.red_blue >> 16) as u8,
-            self.green as u8,
-            self.red_blue as u8,
-        ]
+        [self.0 as u8, (self.0 >> 16) as u8, (self.0 >> 32) as u8]
+    }
+}
+
+#[cfg(not(target_pointer_width = "64"))]
+impl Lanes {
+    #[inline(always)]
+    pub(crate) fn of(c: Rgb) -> Self {
+        Self(((u32::from(c[0]) << 16) | u32::from(c[2]), u32::from(c[1])))
+    }
+
+    /// Blends toward `other` by `t`/256.
+    #[inline(always)]
+    pub(crate) fn lerp(self, other: Self, t: u32) -> Self {
+        let t = t.min(256);
+        let (Self((red_blue, green)), Self((other_red_blue, other_green))) = (self, other);
+        Self((
+            ((red_blue * (256 - t) + other_red_blue * t + 0x0080_0080) >> 8) & 0x00FF_00FF,
+            (green * (256 - t) + other_green * t + 128) >> 8,
+        ))
+    }
+
+    /// The part of [`Lanes::lerp`] from `self` that does not depend on the
+    /// other color: `self` by `weight` (at most 256), with the blend's
+    /// rounding. A color blended toward many others by a table of weights
+    /// (the fog's) keeps it for every weight.
+    #[inline(always)]
+    pub(crate) fn weighted(self, weight: u32) -> Self {
+        let Self((red_blue, green)) = self;
+        Self((red_blue * weight + 0x0080_0080, green * weight + 128))
+    }
+
+    /// The blend [`Lanes::lerp`] gives from a color to `other` by `t`
+    /// (at most 256), `self` that color [`Lanes::weighted`] by `256 − t`:
+    /// a product a word.
+    #[inline(always)]
+    pub(crate) fn plus_weighted(self, other: Self, t: u32) -> Self {
+        let (Self((red_blue, green)), Self((other_red_blue, other_green))) = (self, other);
+        Self((
+            ((red_blue + other_red_blue * t) >> 8) & 0x00FF_00FF,
+            (green + other_green * t) >> 8,
+        ))
+    }
+
+    #[inline(always)]
+    pub(crate) fn rgb(self) -> Rgb {
+        let Self((red_blue, green)) = self;
+        [(red_blue >> 16) as u8, green as u8, red_blue as u8]
     }
 }
 

@@ -59,6 +59,7 @@ impl LodPlan {
 
     /// The major-axis distance (Q16) where colors begin to come from level
     /// 1 for a ray of major-axis component `run` (see [`Ray::color_reach`](super::ray::Ray::color_reach)).
+    #[inline]
     pub fn color_reach(&self, run: i64) -> i64 {
         match self.color_level1_depth {
             i64::MAX => i64::MAX,
