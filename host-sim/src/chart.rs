@@ -194,12 +194,12 @@ fn place_labels(
             let shifts = || (1..16).map(|k: i32| if k % 2 == 0 { k / 2 } else { -(k + 1) / 2 });
             // Beside the point at `gap`, else moved up or down at `moved`,
             // tied by a line to the label's end `near_end` across from it.
+            let beside = |gap: i32| LabelPlace {
+                at: (gap, -height / 2),
+                leader: None,
+            };
             let side = |gap: i32, moved: i32, near_end: i32| {
-                let beside = LabelPlace {
-                    at: (gap, -height / 2),
-                    leader: None,
-                };
-                std::iter::once(beside).chain(shifts().map(move |shift| {
+                std::iter::once(beside(gap)).chain(shifts().map(move |shift| {
                     let dy = -height / 2 + shift * height;
                     LabelPlace {
                         at: (moved, dy),
@@ -207,14 +207,10 @@ fn place_labels(
                     }
                 }))
             };
-            let beside = LabelPlace {
-                at: (LABEL_GAP, -height / 2),
-                leader: None,
-            };
             let place = side(LABEL_GAP, LEADER, LEADER - 2)
                 .chain(side(-LABEL_GAP - width, -LEADER - width, -LEADER + 2))
                 .find(|place| free(place))
-                .unwrap_or(beside);
+                .unwrap_or(beside(LABEL_GAP));
             taken.push(label_at(place.at));
             place
         })

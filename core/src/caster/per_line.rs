@@ -940,7 +940,8 @@ impl<'t, 'v> FrameCaster<'t, 'v> {
         let cell = at
             .index
             .wrapping_add(at.across.wrapping_mul((minor >> COORD_FRAC_BITS) as usize));
-        let nearest = if minor & 0xFFFF < 0x8000 {
+        let half = 1 << (COORD_FRAC_BITS - 1);
+        let nearest = if minor & ((half << 1) - 1) < half {
             cell
         } else {
             cell.wrapping_add(at.across)
